@@ -1,0 +1,261 @@
+// SPDX-License-Identifier: Apache-2.0
+// `impulse render`, `impulse scenes`, `impulse info`.
+
+#include "app/commands.h"
+
+#include <tbb/global_control.h>
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <regex>
+#include <sstream>
+
+#include "render/render.h"
+#include "scenes/scenes.h"
+#include "util/errors.h"
+
+namespace impulse::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::atomic<bool> g_interrupted{false};
+extern "C" void on_sigint(int) { g_interrupted.store(true); }
+
+/// Progress on a terminal: frames done, rate, time left. Silent when not a terminal or -q.
+class Progress {
+public:
+    Progress(long long total, bool quiet) : m_total(total), m_on(!quiet && ::isatty(2)) {
+        m_start = std::chrono::steady_clock::now();
+    }
+    void update(long long done) {
+        if (!m_on) return;
+        const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - m_start).count();
+        const double rate = el > 0 ? done / el : 0.0;
+        const double left = rate > 0 ? (m_total - done) / rate : 0.0;
+        const int width = 30;
+        const int fill = static_cast<int>(width * double(done) / std::max<long long>(1, m_total));
+        std::fprintf(stderr, "\r[%s%s] %lld/%lld frames  %.1f fps  %d:%02d left ",
+                     std::string(fill, '#').c_str(), std::string(width - fill, '.').c_str(), done,
+                     m_total, rate, int(left) / 60, int(left) % 60);
+        std::fflush(stderr);
+    }
+    void done() {
+        if (m_on) std::fprintf(stderr, "\n");
+    }
+
+private:
+    long long m_total;
+    bool m_on;
+    std::chrono::steady_clock::time_point m_start;
+};
+
+std::vector<std::string> overrides_for(const std::vector<std::string>& sets, const std::string& size,
+                                       long long seed) {
+    std::vector<std::string> o = sets;
+    if (!size.empty()) {
+        static const std::regex re(R"((\d+)x(\d+))");
+        std::smatch m;
+        if (!std::regex_match(size, m, re))
+            throw ValueError("--size " + size + ": expected WxH in pixels, e.g. 1920x1080");
+        o.push_back("output.size=[" + m[1].str() + "," + m[2].str() + "]");
+    }
+    if (seed >= 0) o.push_back("seed=" + std::to_string(seed));
+    return o;
+}
+
+void ensure_directory(const std::string& path) {
+    const fs::path dir = fs::path(path).parent_path();
+    std::error_code ec;
+    if (!dir.empty() && !fs::is_directory(dir, ec))
+        throw IoError(path + ": output directory " + dir.string() + " does not exist");
+    const std::string d = dir.empty() ? "." : dir.string();
+    if (::access(d.c_str(), W_OK) != 0)
+        throw IoError(path + ": output directory " + d + " is not writable");
+}
+
+/// Grey display values -> RGB triples for the video encoder.
+void to_rgb(const render::Frame& f, const render::ValueMapping& m, std::vector<float>& rgb) {
+    rgb.resize(f.data.size() * 3);
+    const double s = 1.0 / (m.hi - m.lo);
+    for (size_t i = 0; i < f.data.size(); ++i) {
+        const float v = static_cast<float>(std::clamp((f.data[i] - m.lo) * s, 0.0, 1.0));
+        rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = v;
+    }
+}
+
+}  // namespace
+
+std::string expand_pattern(const std::string& pattern, long long frame) {
+    static const std::regex hashes("#+");
+    static const std::regex printf_like("%0?(\\d*)d");
+    std::smatch m;
+    if (std::regex_search(pattern, m, hashes)) {
+        std::ostringstream s;
+        s << std::setw(static_cast<int>(m.length(0))) << std::setfill('0') << frame;
+        return m.prefix().str() + s.str() + m.suffix().str();
+    }
+    if (std::regex_search(pattern, m, printf_like)) {
+        const int w = m[1].length() ? std::stoi(m[1].str()) : 0;
+        std::ostringstream s;
+        s << std::setw(w) << std::setfill('0') << frame;
+        return m.prefix().str() + s.str() + m.suffix().str();
+    }
+    return "";
+}
+
+std::pair<long long, long long> parse_frame_range(const std::string& text, long long frames) {
+    static const std::regex re(R"((\d+)(?:-(\d+))?)");
+    std::smatch m;
+    if (!std::regex_match(text, m, re))
+        throw ValueError("--frames " + text + ": expected A-B or A (inclusive, 0-based frame numbers)");
+    const long long a = std::stoll(m[1].str());
+    const long long b = m[2].matched ? std::stoll(m[2].str()) : a;
+    if (a > b) throw ValueError("--frames " + text + ": expected A <= B");
+    if (b >= frames)
+        throw ValueError("--frames " + text + ": outside [0, " + std::to_string(frames) +
+                         ") (the scene has output.frames = " + std::to_string(frames) + ")");
+    return {a, b};
+}
+
+int run_render(const RenderOptions& opt) {
+    std::unique_ptr<tbb::global_control> threads;
+    if (opt.threads > 0)
+        threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                        opt.threads);
+    const std::string path = scenes::resolve_scene(opt.scene);
+    auto overrides = overrides_for(opt.sets, opt.size, opt.seed);
+    if (!opt.codec.empty()) overrides.push_back("output.codec=\"" + opt.codec + "\"");
+    scenes::Scene scene = scenes::load_scene(path, overrides);
+    for (const auto& w : scene.warnings) std::cerr << w << "\n";
+    const auto& out = scene.output;
+    long long first = 0, last = out.frames - 1;
+    if (!opt.frames.empty()) std::tie(first, last) = parse_frame_range(opt.frames, out.frames);
+
+    const bool video = render::is_video_path(opt.output);
+    const bool sequence = !video && !expand_pattern(opt.output, 0).empty();
+    if (!video && !sequence) {
+        if (!render::is_image_path(opt.output))
+            throw ValueError(opt.output + ": unknown output type: expected an image (.exr .png .tif), "
+                             "a pattern (frame_####.png) or a video (.mp4 .mov .mkv .webm)");
+        if (last != first)
+            throw ValueError(opt.output + ": one image but " + std::to_string(last - first + 1) +
+                             " frames requested: use a pattern like frame_####.png, a video, or --frames N");
+    }
+    if (opt.resume && video)
+        throw ValueError("--resume: applies to image sequences; a video is always written whole");
+    ensure_directory(sequence ? expand_pattern(opt.output, first) : opt.output);
+
+    scenes::Renderer renderer(std::move(scene));
+    const scenes::Scene& sc = renderer.scene();
+    const render::ValueMapping mapping = renderer.mapping();
+    render::EvalOptions eo;
+    eo.tile_size = opt.tile;
+
+    render::Metadata meta = {{"seed", std::to_string(sc.layers.front().process.seed)},
+                             {"scene", sc.path},
+                             {"scene_hash", sc.hash},
+                             {"fps", std::to_string(out.fps)},
+                             {"range", std::to_string(mapping.lo) + " " + std::to_string(mapping.hi)}};
+
+    render::VideoWriter writer;
+    if (video) {
+        render::VideoOptions vo;
+        vo.width = out.width, vo.height = out.height, vo.fps = out.fps;
+        vo.codec = render::video_codec_from_string(out.codec);
+        vo.crf = out.crf, vo.preset = out.preset;
+        vo.metadata = meta;
+        writer.open(opt.output, vo);
+    }
+
+    g_interrupted = false;
+    auto previous = std::signal(SIGINT, on_sigint);
+    Progress progress(last - first + 1, opt.quiet);
+    render::Frame frame;
+    std::vector<float> rgb;
+    long long written = 0, skipped = 0;
+    for (long long f = first; f <= last; ++f) {
+        if (g_interrupted) break;
+        const std::string target = sequence ? expand_pattern(opt.output, f) : opt.output;
+        if (sequence && opt.resume && fs::exists(target)) {
+            ++skipped;
+            continue;
+        }
+        renderer.render(f, frame, eo);
+        const double t = (std::llround(out.start_s * out.fps) + f) / out.fps;
+        if (video) {
+            to_rgb(frame, mapping, rgb);
+            writer.write_frame(rgb.data());
+        } else {
+            render::Metadata m = meta;
+            m.emplace_back("frame", std::to_string(f));
+            m.emplace_back("time", std::to_string(t));
+            render::write_image(target, frame, mapping, m, out.bits == 16);
+        }
+        ++written;
+        progress.update(written + skipped);
+    }
+    progress.done();
+    std::signal(SIGINT, previous);
+    if (video) writer.close();  // on interruption too: what was encoded stays playable
+    if (g_interrupted) {
+        std::cerr << "interrupted: " << written << " frames written to " << opt.output << "\n";
+        return 130;
+    }
+    std::cout << "wrote " << opt.output << " (" << written << " frame" << (written == 1 ? "" : "s");
+    if (skipped) std::cout << ", " << skipped << " already present";
+    std::cout << ", " << out.width << "x" << out.height << ")\n";
+    return 0;
+}
+
+int run_scenes() {
+    namespace fs = std::filesystem;
+    std::vector<fs::path> files;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(scenes::builtin_scene_dir(), ec))
+        if (e.path().extension() == ".toml") files.push_back(e.path());
+    std::sort(files.begin(), files.end());
+    for (const auto& p : files) {
+        // The first comment line of a scene file is its one-line description.
+        std::ifstream in(p);
+        std::string line, desc;
+        while (std::getline(in, line))
+            if (line.rfind("# ", 0) == 0) {
+                desc = line.substr(2);
+                break;
+            }
+        std::printf("%-10s %s\n", p.stem().c_str(), desc.c_str());
+    }
+    return 0;
+}
+
+int run_info(const InfoOptions& opt) {
+    const std::string path = scenes::resolve_scene(opt.scene);
+    scenes::Scene scene = scenes::load_scene(path, overrides_for(opt.sets, opt.size, -1));
+    for (const auto& w : scene.warnings) std::cerr << w << "\n";
+    scenes::Renderer r(scene);
+    const auto t = scenes::scene_theory(scene);
+    std::printf("scene      %s (hash %s)\n", path.c_str(), scene.hash.c_str());
+    std::printf("output     %dx%d, %lld frames at %g fps\n", scene.output.width, scene.output.height,
+                static_cast<long long>(scene.output.frames), scene.output.fps);
+    std::printf("mean       %.6g\nvariance   %.6g (Campbell's theorem)\n", t.mean, t.variance);
+    for (size_t i = 0; i < scene.layers.size(); ++i) {
+        const auto& l = scene.layers[i];
+        const auto lt = scenes::layer_theory(l);
+        std::printf("layer[%zu]   %s r=%g density=%g lambda=%.4g/unit^2 variance=%.6g%s\n", i,
+                    std::string(kernels::to_string(l.kernel.type)).c_str(), l.kernel.radius,
+                    l.density, l.process.intensity, lt.variance,
+                    l.process.lifetime_s > 0 ? " (animated)" : " (still)");
+    }
+    std::printf("impulses   ~%.3g per frame, ~%.0f MiB\n", r.estimated_impulses(), r.estimated_memory_mib());
+    return 0;
+}
+
+}  // namespace impulse::app

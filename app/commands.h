@@ -1,0 +1,35 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// The commands of the `impulse` tool (internal to app/).
+
+#include <string>
+#include <vector>
+
+namespace impulse::app {
+
+struct RenderOptions {
+    std::string scene, output, frames, size, codec;
+    std::vector<std::string> sets;
+    long long seed = -1;  ///< -1: the scene's own
+    int threads = 0;
+    int tile = 64;
+    bool resume = false;
+    bool quiet = false;
+};
+
+struct InfoOptions {
+    std::string scene, size;
+    std::vector<std::string> sets;
+};
+
+int run_render(const RenderOptions& options);
+int run_scenes();
+int run_info(const InfoOptions& options);
+
+/// Expand a sequence pattern: "####" or "%04d" -> zero-padded frame number. Returns "" if the
+/// path is not a pattern.
+std::string expand_pattern(const std::string& pattern, long long frame);
+/// Parse "A-B" or "A" into an inclusive range; throws ValueError.
+std::pair<long long, long long> parse_frame_range(const std::string& text, long long frames);
+
+}  // namespace impulse::app

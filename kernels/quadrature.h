@@ -1,0 +1,17 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// Gauss–Legendre quadrature used for kernel statistics (internal to impulse::kernels).
+
+#include <functional>
+
+namespace impulse::kernels::detail {
+
+/// Integral of f over [a, b] with `panels` composite 16-point Gauss–Legendre panels.
+double integrate(const std::function<double(double)>& f, double a, double b, int panels);
+
+/// Nodes (on [-1, 1]) and weights of the 16-point Gauss–Legendre rule.
+const double* gl_nodes();
+const double* gl_weights();
+inline constexpr int kGlPoints = 16;
+
+}  // namespace impulse::kernels::detail

@@ -1,0 +1,4 @@
+// SPDX-License-Identifier: Apache-2.0
+// Baseline x86-64 build of the evaluator's inner loops.
+#define IMPULSE_EVAL_NAME eval_tile_base
+#include "render/eval_loops.inc"

@@ -1,0 +1,41 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// The vectorised inner loops of the tiled evaluator (internal to impulse::render). The same
+// source is compiled twice, for baseline x86-64 and for AVX2; with FMA contraction off both
+// round identically, so the CPU that renders never changes a bit.
+
+#include <cstddef>
+#include <cstdint>
+
+namespace impulse::render::detail {
+
+/// The kernel as the inner loop sees it, in pixel units.
+struct LoopKernel {
+    float radius_px = 1;      ///< support radius in pixels
+    float inv_r2 = 1;         ///< 1 / radius_px^2
+    float aspect2 = 1;        ///< aspect^2
+    float freq_cpp = 0;       ///< carrier frequency, cycles per pixel
+    float phase_cycles = 0;   ///< carrier phase / (2 pi)
+    bool general = false;     ///< rotated/elliptical or carrier: the general loop
+    bool carrier = false;
+    const float* coeffs = nullptr;  ///< Chebyshev coefficients of the envelope in q
+    int ncoeffs = 0;                ///< odd, 5 .. 41
+};
+
+/// Prepared impulses in pixel coordinates (pixel i's centre is at i), structure of arrays.
+struct LoopImpulses {
+    const float* px = nullptr;
+    const float* py = nullptr;
+    const float* w = nullptr;
+    const float* cos_t = nullptr;  ///< cos of total orientation
+    const float* sin_t = nullptr;
+};
+
+/// Adds the impulses idx[0..n) to the tile covering pixels [tx0, tx0+tw) x [ty0, ty0+th);
+/// `acc` is tw*th floats, row-major. Impulses are summed in the order given.
+void eval_tile_base(const LoopKernel& k, const LoopImpulses& p, const uint32_t* idx, size_t n,
+                    int tx0, int ty0, int tw, int th, float* acc);
+void eval_tile_avx2(const LoopKernel& k, const LoopImpulses& p, const uint32_t* idx, size_t n,
+                    int tx0, int ty0, int tw, int th, float* acc);
+
+}  // namespace impulse::render::detail

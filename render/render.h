@@ -1,0 +1,91 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// impulse::render — frame evaluation: tiled sparse convolution of the live impulses with the
+// kernel (Lewis 1986 eq. 2), the naive per-pixel reference, the value mapping to display, and
+// image and video output. Depends on kernels and sim; knows nothing of scene files or the CLI.
+
+#include <cstdint>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "kernels/kernels.h"
+#include "render/video.h"
+#include "sim/sim.h"
+
+namespace impulse::render {
+
+/// Orthographic view: pixel (i, j) (row j from the top) has its centre at texture point
+/// (x0 + (i + 0.5) * scale, y0 + (j + 0.5) * scale).
+struct View {
+    int width = 0;
+    int height = 0;
+    double x0 = 0.0, y0 = 0.0;
+    double scale = 1.0;  ///< texture units per pixel, > 0
+    /// Texture-space box covered by the pixels.
+    sim::Box box() const { return {x0, y0, x0 + width * scale, y0 + height * scale}; }
+};
+
+/// A single-channel float frame, row-major, top row first.
+struct Frame {
+    int width = 0, height = 0;
+    std::vector<float> data;
+    void resize(int w, int h) { width = w, height = h, data.assign(size_t(w) * h, 0.0f); }
+    float at(int x, int y) const { return data[size_t(y) * width + x]; }
+};
+
+struct EvalOptions {
+    int tile_size = 64;  ///< square tiles in pixels, >= 8; the result does not depend on it
+    bool parallel = true;  ///< false: the serial path through the same code (debugging)
+    bool use_avx2 = true;  ///< false: baseline SSE2 loops (bit-identical; for tests)
+};
+
+/// Adds sum_k w_k h_{theta_k}(x - x_k) to `out` (sized to the view; not cleared) for every
+/// pixel centre. Deterministic: each pixel sums its impulses in their canonical order, so the
+/// bits do not depend on the thread count or the tile size. Uses AVX2 where the CPU has it,
+/// with the same arithmetic (no FMA contraction) as the baseline path.
+void accumulate(const kernels::Kernel& kernel, const sim::Impulses& impulses, const View& view,
+                Frame& out, const EvalOptions& options = {});
+
+/// Evaluates only the pixel rectangle [x0, x0+w) x [y0, y0+h) of the view into `tile`
+/// (w*h floats, added to). Equal bits to the same pixels of `accumulate` (tiling independence).
+void accumulate_region(const kernels::Kernel& kernel, const sim::Impulses& impulses,
+                       const View& view, int x0, int y0, int w, int h, float* tile,
+                       const EvalOptions& options = {});
+
+/// The naive reference (Lewis 1989 §4.1, and how shading-language sparse convolution noise
+/// works): for every pixel, regenerate the impulses of the 3x3 neighbouring cells from the
+/// counter-based generator and evaluate the kernel exactly in double. Still processes only;
+/// needs config.cell_size >= kernel radius. Adds to `out`.
+void accumulate_naive(const kernels::Kernel& kernel, const sim::ProcessConfig& config,
+                      const View& view, Frame& out);
+
+// ---------------------------------------------------------------------------------------------
+// Output
+
+/// Linear map from field values to display [0, 1]: v -> (v - lo) / (hi - lo), then clamped to
+/// [0, 1] and quantised with rounding for 8/16-bit formats. EXR stores the raw values.
+struct ValueMapping {
+    double lo = -1.0, hi = 1.0;
+};
+
+/// Metadata written into images and videos.
+using Metadata = std::vector<std::pair<std::string, std::string>>;
+
+/// Writes a frame with OpenImageIO, format from the extension (.exr float; .png 8-bit, or
+/// 16-bit when `bits16`; .tif/.tiff 16-bit). The file is written to a temporary name in the
+/// same directory and renamed, so a partial file never appears under `path`. Throws IoError
+/// with OIIO's message.
+void write_image(const std::string& path, const Frame& frame, const ValueMapping& mapping,
+                 const Metadata& metadata, bool bits16 = false);
+/// Same for an RGB float frame (3 floats per pixel, display values in [0, 1] already mapped).
+void write_rgb_image(const std::string& path, int width, int height, const std::vector<float>& rgb,
+                     const Metadata& metadata, bool bits16 = false);
+/// Reads an image as single-channel float (luminance of RGB; raw floats for EXR, [0,1] for
+/// integer formats). Throws IoError.
+Frame read_image(const std::string& path);
+
+/// True for extensions OIIO writes here (.exr .png .tif .tiff .jpg .jpeg).
+bool is_image_path(const std::string& path);
+
+}  // namespace impulse::render

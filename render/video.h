@@ -1,0 +1,84 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// Video output through FFmpeg's libav*: H.264/MP4 (default), ProRes 4444/MOV, FFV1/MKV, VP9/WebM.
+// Part of impulse::render; included by render/render.h.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace impulse::render {
+
+/// Codec choices. `Auto` picks from the container: .mp4 -> h264, .mov -> prores,
+/// .mkv -> ffv1, .webm -> vp9.
+enum class VideoCodec { Auto, H264, ProRes, FFV1, VP9 };
+
+/// Options for a video file. Validated by `VideoWriter::open`, which throws `IoError`
+/// or `ValueError` with a one-line message.
+struct VideoOptions {
+    int width = 0;             ///< frame width in pixels, > 0 (h264/vp9 need even sizes: odd sizes are refused)
+    int height = 0;            ///< frame height in pixels, > 0
+    double fps = 30.0;         ///< frames per second, > 0 (rational approximation with denominator <= 1001)
+    VideoCodec codec = VideoCodec::Auto;
+    int crf = 18;              ///< constant rate factor for h264 (0..51) and vp9 (0..63)
+    std::string preset = "medium";  ///< x264 preset: ultrafast .. veryslow
+    int threads = 0;           ///< encoder threads, 0 = libav default
+    std::vector<std::pair<std::string, std::string>> metadata;  ///< container metadata (seed, scene hash ...)
+};
+
+/// Parse a codec name ("auto", "h264", "prores", "ffv1", "vp9"); throws ValueError listing the
+/// valid names.
+VideoCodec video_codec_from_string(const std::string& name);
+/// True when `path` ends in a video container extension (.mp4 .mov .mkv .webm), case-insensitive.
+bool is_video_path(const std::string& path);
+
+/// Writes frames of RGB float data (linear [0,1] values, 3 floats per pixel, row-major, top row
+/// first) to a video file. The file is written to a temporary name beside `path` and renamed
+/// on `close()`, so an interrupted run never leaves a half-written file under the final name,
+/// but `close()` is also called by `finish_partial()` for Ctrl-C: it flushes the encoder and
+/// writes the trailer so what was encoded stays playable, then renames.
+class VideoWriter {
+public:
+    VideoWriter();
+    ~VideoWriter();  ///< if open and not closed: aborts (removes the temporary file)
+    VideoWriter(const VideoWriter&) = delete;
+    VideoWriter& operator=(const VideoWriter&) = delete;
+
+    /// Open `path` for writing. Throws IoError (with av_strerror text) if the directory does not
+    /// exist or is not writable, ValueError for an unknown container/codec combination.
+    void open(const std::string& path, const VideoOptions& options);
+    /// Encode one frame: `rgb` has width*height*3 floats, clamped to [0,1] and quantised with
+    /// rounding (the documented display mapping); throws IoError on encoder failure.
+    void write_frame(const float* rgb);
+    /// Flush, write the trailer, rename the temporary file to the final path.
+    void close();
+    /// Close what was written so far into a playable file (used on interruption).
+    void finish_partial() { close(); }
+    /// Remove the temporary file without producing output.
+    void abort();
+    int frames_written() const;
+    bool is_open() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+};
+
+/// What `probe_video` found in a file (used by tests and `impulse analyze`).
+struct VideoInfo {
+    int width = 0, height = 0;
+    int frame_count = 0;      ///< frames actually decoded
+    double fps = 0.0;         ///< average frame rate from the stream
+    std::string codec_name;   ///< libav codec name, e.g. "h264"
+    std::string pixel_format; ///< e.g. "yuv420p"
+};
+
+/// Decode a whole video and report its properties; throws IoError on failure.
+VideoInfo probe_video(const std::string& path);
+
+/// Decode every frame of a video to grey (luma, [0,1] floats); one vector per frame.
+/// Used by `impulse analyze` on videos and by tests.
+std::vector<std::vector<float>> decode_video_luma(const std::string& path, int& width, int& height);
+
+}  // namespace impulse::render

@@ -1,0 +1,381 @@
+// SPDX-License-Identifier: Apache-2.0
+// Scene files -> typed configuration (schema: docs/scenes.md).
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+#include <sstream>
+
+#include "scenes/reader.h"
+#include "scenes/scenes.h"
+#include "util/errors.h"
+
+namespace impulse::scenes {
+namespace {
+
+namespace fs = std::filesystem;
+using detail::Reader;
+using detail::Source;
+
+const auto kPositive = [](double v) { return v > 0.0; };
+const auto kNonNegative = [](double v) { return v >= 0.0; };
+
+std::string fnv1a_hex(std::string_view text) {
+    uint64_t h = 1469598103934665603ull;
+    for (unsigned char c : text) h = (h ^ c) * 1099511628211ull;
+    std::ostringstream s;
+    s << std::hex << h;
+    return s.str();
+}
+
+/// Mix the scene-wide seed into a layer's seed (splitmix64 finaliser).
+uint64_t mix_seed(uint64_t global, uint64_t layer) {
+    uint64_t z = layer + 0x9E3779B97F4A7C15ull * (global + 1);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+}
+
+bool whole_frames(double seconds, double fps) {
+    const double f = seconds * fps;
+    return std::abs(f - std::round(f)) < 1e-6;
+}
+
+/// Apply one "--set a.b.0.c=value" to the document.
+void apply_override(toml::table& root, const std::string& text, Source& src) {
+    const size_t eq = text.find('=');
+    if (eq == std::string::npos || eq == 0)
+        throw SceneError("--set " + text + ": expected key=value (e.g. layer.0.kernel.radius=8)");
+    const std::string key = text.substr(0, eq), value = text.substr(eq + 1);
+    std::vector<std::string> parts;
+    std::stringstream ss(key);
+    for (std::string p; std::getline(ss, p, '.');) parts.push_back(p);
+    toml::table* t = &root;
+    std::string shown;  // the Reader's spelling of the path: layer[0].kernel.radius
+    for (size_t i = 0; i + 1 < parts.size(); ++i) {
+        const std::string& p = parts[i];
+        const bool index = !p.empty() && std::all_of(p.begin(), p.end(), ::isdigit);
+        if (index) {
+            throw SceneError("--set " + text + ": index " + p + " must follow an array name");
+        }
+        toml::node* child = t->get(p);
+        shown += (shown.empty() ? "" : ".") + p;
+        if (child && child->is_array() && i + 2 < parts.size() + 1) {
+            const std::string& ix = parts[i + 1];
+            if (ix.empty() || !std::all_of(ix.begin(), ix.end(), ::isdigit))
+                throw SceneError("--set " + text + ": " + p + " is an array: give an index (" + p + ".0...)");
+            const size_t n = std::stoul(ix);
+            toml::array* a = child->as_array();
+            if (n >= a->size() || !(*a)[n].is_table())
+                throw SceneError("--set " + text + ": " + p + " has " + std::to_string(a->size()) +
+                                 " elements, no index " + ix);
+            t = (*a)[n].as_table();
+            shown += "[" + ix + "]";
+            ++i;
+            if (i + 1 >= parts.size())
+                throw SceneError("--set " + text + ": expected a key after the index");
+            continue;
+        }
+        if (child && child->is_table()) {
+            t = child->as_table();
+            if (p == "layer") shown += "[0]";
+            if (i + 1 < parts.size() && parts[i + 1] == "0" && p == "layer") ++i;
+            continue;
+        }
+        if (child) throw SceneError("--set " + text + ": " + p + " is not a table");
+        t = t->insert_or_assign(p, toml::table{}).first->second.as_table();
+    }
+    const std::string& last = parts.back();
+    shown += (shown.empty() ? "" : ".") + last;
+    toml::node_view<toml::node> parsed;
+    toml::table doc;
+    try {
+        doc = toml::parse("v = " + value);
+    } catch (const toml::parse_error&) {
+        doc = toml::table{};
+        doc.insert("v", value);  // a bare word is a string: --set layer.0.kernel.type=gabor
+    }
+    t->insert_or_assign(last, *doc.get("v"));
+    src.overrides[shown] = text;
+}
+
+CameraConfig read_camera(std::optional<Reader> r, int width, int height) {
+    CameraConfig c;
+    c.center_x = sim::Keyframed(width / 2.0);
+    c.center_y = sim::Keyframed(height / 2.0);
+    if (!r) return c;
+    if (auto ct = r->node("center")) {
+        if (ct->is_array()) {
+            auto p = r->pair("center", "[x, y] in texture units");
+            c.center_x = sim::Keyframed((*p)[0]);
+            c.center_y = sim::Keyframed((*p)[1]);
+        } else {
+            r->fail(ct, "center", "expected [x, y] in texture units");
+        }
+    }
+    if (r->has("center_x")) c.center_x = r->keyframed("center_x", width / 2.0);
+    if (r->has("center_y")) c.center_y = r->keyframed("center_y", height / 2.0);
+    c.zoom = r->keyframed("zoom", 1.0, kPositive, "a number > 0 (pixels per texture unit)");
+    r->string("type", "orthographic");
+    if (r->string("type", "orthographic") != "orthographic")
+        r->fail(r->node("type"), "type", "expected one of orthographic");
+    r->finish();
+    return c;
+}
+
+std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& process,
+                                      const fs::path& base) {
+    auto list = layer.tables("flow");
+    if (list.empty()) return nullptr;
+    if (process.lifetime_s <= 0)
+        layer.fail(layer.node("flow"), "flow",
+                   "a flow moves particles that are born and die: set lifetime > 0 in this layer");
+    auto sum = std::make_shared<sim::FlowSum>();
+    const std::array<std::string_view, 6> types = {"uniform", "shear", "vortex", "source", "curl", "image"};
+    for (auto& f : list) {
+        if (!f.has("type")) f.fail(nullptr, "type", "missing: expected one of uniform, shear, vortex, source, curl, image");
+        const size_t type = f.choice("type", types, 0);
+        auto center = [&](sim::Keyframed& x, sim::Keyframed& y) {
+            const toml::node* n = f.node("center");
+            if (!n) {
+                x = f.keyframed("center_x", 0.0);
+                y = f.keyframed("center_y", 0.0);
+                return;
+            }
+            auto p = f.pair("center", "[x, y] in texture units");
+            x = sim::Keyframed((*p)[0]);
+            y = sim::Keyframed((*p)[1]);
+            f.node("center_x"), f.node("center_y");
+        };
+        switch (type) {
+            case 0: {  // uniform
+                sim::Keyframed vx(0.0), vy(0.0);
+                if (f.node("velocity")) {
+                    auto v = f.pair("velocity", "[vx, vy] in units per second");
+                    vx = sim::Keyframed((*v)[0]);
+                    vy = sim::Keyframed((*v)[1]);
+                }
+                if (f.has("vx")) vx = f.keyframed("vx", 0.0);
+                if (f.has("vy")) vy = f.keyframed("vy", 0.0);
+                sum->push(sim::make_uniform_flow(vx, vy));
+                break;
+            }
+            case 1: {  // shear
+                auto rate = f.keyframed("rate", 0.1);
+                sim::Keyframed cx, cy;
+                center(cx, cy);
+                const double angle = f.number("angle", 0.0);
+                sum->push(sim::make_shear_flow(rate, cx.value(0), cy.value(0), angle));
+                break;
+            }
+            case 2: {  // vortex
+                sim::Keyframed cx, cy;
+                center(cx, cy);
+                auto gamma = f.keyframed("circulation", 2000.0);
+                const double core = f.number("core", 40.0, kPositive, "a radius > 0");
+                const auto model = static_cast<sim::VortexModel>(f.choice("model", sim::kVortexModelNames, 0));
+                sum->push(sim::make_vortex_flow(model, cx, cy, gamma, core));
+                break;
+            }
+            case 3: {  // source / sink
+                sim::Keyframed cx, cy;
+                center(cx, cy);
+                auto rate = f.keyframed("rate", 0.1);
+                const double radius = f.number("radius", 0.0, kNonNegative, "a radius >= 0 (0: everywhere)");
+                sum->push(sim::make_source_flow(cx, cy, rate, radius));
+                break;
+            }
+            case 4: {  // curl noise
+                const double scale = f.number("scale", 64.0, kPositive, "a length > 0");
+                auto speed = f.keyframed("speed", 10.0, kNonNegative, "a speed >= 0");
+                const uint64_t seed = static_cast<uint64_t>(f.integer("seed", 1, 0, INT64_MAX));
+                sum->push(sim::make_curl_noise_flow(mix_seed(process.seed, seed), scale, speed, process.period));
+                break;
+            }
+            case 5: {  // image
+                const toml::node* pn = f.node("path");
+                const std::string rel = f.string("path", "");
+                if (rel.empty()) f.fail(pn, "path", "expected the path of a 2-channel velocity image");
+                const fs::path p = fs::path(rel).is_absolute() ? fs::path(rel) : base / rel;
+                auto in = OIIO::ImageInput::open(p.string());
+                if (!in) f.fail(pn, "path", "cannot read: " + OIIO::geterror());
+                const auto& spec = in->spec();
+                if (spec.nchannels < 2)
+                    f.fail(pn, "path", "expected an image with 2 or more channels (vx, vy), found " +
+                                           std::to_string(spec.nchannels));
+                std::vector<float> px(size_t(spec.width) * spec.height * spec.nchannels);
+                if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data()))
+                    f.fail(pn, "path", "cannot read: " + in->geterror());
+                sim::VectorGrid g;
+                g.width = spec.width, g.height = spec.height;
+                // Integer images store [0, 1]: map to [-1, 1] so grey means still.
+                const bool unsigned_data = spec.format != OIIO::TypeDesc::FLOAT &&
+                                           spec.format != OIIO::TypeDesc::HALF;
+                for (size_t i = 0; i < size_t(g.width) * g.height; ++i) {
+                    float vx = px[i * spec.nchannels], vy = px[i * spec.nchannels + 1];
+                    if (unsigned_data) vx = 2 * vx - 1, vy = 2 * vy - 1;
+                    g.vx.push_back(vx), g.vy.push_back(vy);
+                }
+                g.spacing = f.number("spacing", 1.0, kPositive, "texture units per image pixel, > 0");
+                if (auto o = f.pair("origin", "[x, y] in texture units")) g.origin_x = (*o)[0], g.origin_y = (*o)[1];
+                auto gain = f.keyframed("gain", 1.0);
+                sum->push(sim::make_grid_flow(std::move(g), gain));
+                break;
+            }
+        }
+        f.finish();
+    }
+    return sum;
+}
+
+kernels::KernelParams read_kernel(std::optional<Reader> r) {
+    kernels::KernelParams k;
+    if (!r) return k;
+    k.type = static_cast<kernels::KernelType>(r->choice("type", kernels::kKernelTypeNames, 0));
+    k.radius = r->number("radius", k.radius, kPositive, "a radius > 0 (texture units)");
+    k.sigma = r->number("sigma", k.sigma, kPositive, "a standard deviation > 0");
+    k.frequency = r->number("frequency", k.frequency, kNonNegative, "a frequency >= 0 (cycles per unit)");
+    k.bandwidth = r->number("bandwidth", k.bandwidth, kNonNegative, "a bandwidth >= 0 (0: from radius)");
+    k.phase = r->number("phase", k.phase);
+    k.orientation = r->number("orientation", k.orientation);
+    k.aspect = r->number("aspect", k.aspect, [](double v) { return v >= 1.0; }, "a ratio >= 1");
+    if (k.type != kernels::KernelType::Gaussian && r->has("sigma"))
+        r->warn("sigma", "ignored for kernel type " + std::string(kernels::to_string(k.type)));
+    if (k.type != kernels::KernelType::Gabor)
+        for (const char* g : {"frequency", "bandwidth", "phase"})
+            if (r->has(g)) r->warn(g, "ignored for kernel type " + std::string(kernels::to_string(k.type)));
+    r->finish();
+    return k;
+}
+
+Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
+    Scene s;
+    Reader top(root, "", src);
+    const uint64_t global_seed = static_cast<uint64_t>(top.integer("seed", 0, 0, INT64_MAX));
+
+    if (auto o = top.table("output")) {
+        if (const toml::node* n = o->node("size")) {
+            const toml::array* a = n->as_array();
+            if (!a || a->size() != 2 || !(*a)[0].is_integer() || !(*a)[1].is_integer())
+                o->fail(n, "size", "expected [width, height] in whole pixels");
+            const int64_t w = (*a)[0].value<int64_t>().value_or(0), h = (*a)[1].value<int64_t>().value_or(0);
+            if (w < 1 || h < 1 || w > 32768 || h > 32768)
+                o->fail(n, "size", "expected [width, height] with each in [1, 32768]");
+            s.output.width = static_cast<int>(w), s.output.height = static_cast<int>(h);
+        }
+        s.output.frames = o->integer("frames", 1, 1, 100000000);
+        s.output.fps = o->number("fps", 30.0, [](double v) { return v > 0 && v <= 1000; }, "frames per second in (0, 1000]");
+        s.output.start_s = o->number("start", 0.0, kNonNegative, "a time >= 0 in seconds");
+        if (!whole_frames(s.output.start_s, s.output.fps))
+            o->fail(o->node("start"), "start", "expected a whole number of frames at fps = " + std::to_string(s.output.fps));
+        const std::array<std::string_view, 5> codecs = {"auto", "h264", "prores", "ffv1", "vp9"};
+        s.output.codec = std::string(codecs[o->choice("codec", codecs, 0)]);
+        s.output.crf = static_cast<int>(o->integer("crf", 18, 0, 63));
+        const std::array<std::string_view, 9> presets = {"ultrafast", "superfast", "veryfast", "faster", "fast",
+                                                         "medium", "slow", "slower", "veryslow"};
+        s.output.preset = std::string(presets[o->choice("preset", presets, 5)]);
+        s.output.range = o->pair("range", "[low, high] field values mapped to black and white");
+        if (s.output.range && !((*s.output.range)[1] > (*s.output.range)[0]))
+            o->fail(o->node("range"), "range", "expected low < high");
+        s.output.bits = static_cast<int>(o->integer("bits", 8, 8, 16));
+        if (s.output.bits != 8 && s.output.bits != 16) o->fail(o->node("bits"), "bits", "expected 8 or 16");
+        o->finish();
+    }
+    s.camera = read_camera(top.table("camera"), s.output.width, s.output.height);
+    if (auto l = top.table("limits")) {
+        s.limits.max_impulses = l->number("max_impulses", s.limits.max_impulses, kPositive, "a count > 0");
+        s.limits.max_memory_mib = l->number("max_memory_mib", s.limits.max_memory_mib, kPositive, "MiB > 0");
+        l->finish();
+    }
+
+    auto layers = top.tables("layer");
+    if (layers.empty()) top.fail(nullptr, "layer", "a scene needs at least one [[layer]]");
+    for (size_t i = 0; i < layers.size(); ++i) {
+        Reader& r = layers[i];
+        LayerConfig L;
+        L.kernel = read_kernel(r.table("kernel"));
+        if (!r.has("kernel")) r.node("kernel");
+        sim::ProcessConfig& p = L.process;
+        p.layer = static_cast<uint32_t>(i);
+        p.seed = mix_seed(global_seed, static_cast<uint64_t>(r.integer("seed", 1, 0, INT64_MAX)));
+        L.density = r.number("density", 16.0, kPositive, "a density > 0 (impulses per kernel area)");
+        p.amplitude = static_cast<sim::Amplitude>(r.choice("amplitude", sim::kAmplitudeNames, 0));
+        L.mean = r.number("mean", 0.0);
+        L.gain = r.number("gain", 1.0);
+        p.period = r.pair("period", "[width, height] > 0 of the periodic domain", kPositive);
+        p.lifetime_s = r.number("lifetime", 0.0, kNonNegative, "a lifetime >= 0 in seconds (0: still)");
+        p.envelope = static_cast<sim::Envelope>(r.choice("envelope", sim::kEnvelopeNames, 0));
+        p.loop_s = r.number("loop", 0.0, kNonNegative, "a period >= 0 in seconds (0: no loop)");
+        if (p.loop_s > 0) {
+            if (p.lifetime_s <= 0)
+                r.fail(r.node("loop"), "loop", "a loop needs moving particles: set lifetime > 0");
+            if (p.loop_s < p.lifetime_s)
+                r.fail(r.node("loop"), "loop",
+                       "a loop shorter than the lifetime (" + std::to_string(p.lifetime_s) +
+                           " s) cannot repeat its births: expected loop >= lifetime");
+            if (!whole_frames(p.loop_s, s.output.fps))
+                r.fail(r.node("loop"), "loop", "expected a whole number of frames at fps = " + std::to_string(s.output.fps));
+        }
+        p.integrator = static_cast<sim::Integrator>(r.choice("integrator", sim::kIntegratorNames, 0));
+        p.substeps = static_cast<int>(r.integer("substeps", 2, 1, 64));
+        p.jacobian = r.boolean("jacobian", true);
+        p.orientation = static_cast<sim::OrientationMode>(r.choice("orientation", sim::kOrientationModeNames, 0));
+        p.max_travel = r.number("max_travel", 4096.0, kPositive, "a distance > 0 in texture units");
+        p.cell_size = L.kernel.radius;
+        const kernels::Kernel k(L.kernel);
+        p.intensity = L.density / k.support_area();
+        L.flow = read_flows(r, p, base);
+        if (L.density < 1.0)
+            r.warn("density", "below 1 impulse per kernel area the noise is lumpy, see Lewis 1989 §4.1");
+        r.finish();
+        s.layers.push_back(std::move(L));
+    }
+    top.finish();
+    return s;
+}
+
+}  // namespace
+
+Scene load_scene_string(std::string_view text, const std::string& name,
+                        const std::vector<std::string>& overrides) {
+    Source src;
+    src.file = name;
+    std::vector<std::string> warnings;
+    src.warnings = &warnings;
+    toml::table root;
+    try {
+        root = toml::parse(text, name);
+    } catch (const toml::parse_error& e) {
+        std::ostringstream s;
+        s << name << ':' << e.source().begin.line << ':' << e.source().begin.column << ": "
+          << e.description();
+        throw SceneError(s.str());
+    }
+    std::string all(text);
+    for (const auto& o : overrides) {
+        apply_override(root, o, src);
+        all += "\n--set " + o;
+    }
+    fs::path base = fs::path(name).parent_path();
+    Scene s = read_scene(root, src, base);
+    s.path = name;
+    s.hash = fnv1a_hex(all);
+    s.warnings = std::move(warnings);
+    return s;
+}
+
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError(path + ": cannot open scene file: " + std::strerror(errno));
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return load_scene_string(ss.str(), path, overrides);
+}
+
+}  // namespace impulse::scenes

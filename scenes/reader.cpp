@@ -1,0 +1,261 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "scenes/reader.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "util/errors.h"
+
+namespace impulse::scenes::detail {
+
+size_t edit_distance(std::string_view a, std::string_view b) {
+    std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
+    for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+    for (size_t i = 1; i <= a.size(); ++i) {
+        cur[0] = i;
+        for (size_t j = 1; j <= b.size(); ++j)
+            cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] != b[j - 1])});
+        std::swap(prev, cur);
+    }
+    return prev[b.size()];
+}
+
+std::optional<std::string> nearest(std::string_view word, const std::vector<std::string>& cands) {
+    std::optional<std::string> best;
+    size_t best_d = std::max<size_t>(2, word.size() / 3) + 1;
+    for (const auto& c : cands) {
+        const size_t d = edit_distance(word, c);
+        if (d < best_d) best_d = d, best = c;
+    }
+    return best;
+}
+
+std::string value_text(const toml::node& n) {
+    std::ostringstream s;
+    if (auto v = n.as_string()) {
+        s << '"' << v->get() << '"';
+    } else if (auto f = n.as_floating_point()) {
+        s << f->get();
+    } else {
+        n.visit([&](auto&& x) { s << x; });
+    }
+    std::string t = s.str();
+    std::replace(t.begin(), t.end(), '\n', ' ');
+    return t;
+}
+
+std::string type_name(const toml::node& n) {
+    switch (n.type()) {
+        case toml::node_type::table: return "table";
+        case toml::node_type::array: return "array";
+        case toml::node_type::string: return "string";
+        case toml::node_type::integer: return "integer";
+        case toml::node_type::floating_point: return "float";
+        case toml::node_type::boolean: return "boolean";
+        default: return "date/time";
+    }
+}
+
+Reader::Reader(const toml::table& table, std::string path, const Source& source,
+               const toml::node* self)
+    : m_table(table), m_path(std::move(path)), m_source(source), m_self(self ? self : &table) {}
+
+std::string Reader::key_path(std::string_view key) const {
+    return m_path.empty() ? std::string(key) : m_path + "." + std::string(key);
+}
+
+bool Reader::has(std::string_view key) {
+    m_known.insert(std::string(key));
+    return m_table.contains(key);
+}
+
+const toml::node* Reader::node(std::string_view key) {
+    m_known.insert(std::string(key));
+    return m_table.get(key);
+}
+
+std::string Reader::location(const toml::node* n, std::string_view key) const {
+    auto it = m_source.overrides.find(key_path(key));
+    if (it != m_source.overrides.end()) return "--set " + it->second;
+    const toml::node* at = n ? n : m_self;
+    const auto& src = at->source();
+    std::ostringstream s;
+    s << m_source.file;
+    if (src.begin.line) s << ':' << src.begin.line << ':' << src.begin.column;
+    return s.str();
+}
+
+void Reader::fail(const toml::node* n, std::string_view key, const std::string& what) const {
+    std::ostringstream s;
+    s << location(n, key) << ": " << key_path(key);
+    if (n) s << " = " << value_text(*n);
+    s << ": " << what;
+    throw SceneError(s.str());
+}
+
+void Reader::warn(std::string_view key, const std::string& what) const {
+    if (!m_source.warnings) return;
+    const toml::node* n = m_table.get(key);
+    m_source.warnings->push_back(location(n, key) + ": warning: " + key_path(key) + ": " + what);
+}
+
+double Reader::number(std::string_view key, double fallback) {
+    const toml::node* n = node(key);
+    if (!n) return fallback;
+    if (!n->is_number()) fail(n, key, "expected a number, found " + type_name(*n));
+    const double v = n->value<double>().value_or(0.0);
+    if (!std::isfinite(v)) fail(n, key, "expected a finite number");
+    return v;
+}
+
+double Reader::number(std::string_view key, double fallback, const std::function<bool(double)>& ok,
+                      const char* expected) {
+    const double v = number(key, fallback);
+    if (m_table.contains(key) && ok && !ok(v)) fail(node(key), key, std::string("expected ") + expected);
+    return v;
+}
+
+int64_t Reader::integer(std::string_view key, int64_t fallback, int64_t lo, int64_t hi) {
+    const toml::node* n = node(key);
+    if (!n) return fallback;
+    if (!n->is_integer()) fail(n, key, "expected an integer, found " + type_name(*n));
+    const int64_t v = n->value<int64_t>().value_or(0);
+    if (v < lo || v > hi)
+        fail(n, key, "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    return v;
+}
+
+bool Reader::boolean(std::string_view key, bool fallback) {
+    const toml::node* n = node(key);
+    if (!n) return fallback;
+    if (!n->is_boolean()) fail(n, key, "expected true or false, found " + type_name(*n));
+    return n->value<bool>().value_or(fallback);
+}
+
+std::string Reader::string(std::string_view key, const std::string& fallback) {
+    const toml::node* n = node(key);
+    if (!n) return fallback;
+    if (!n->is_string()) fail(n, key, "expected a string, found " + type_name(*n));
+    return std::string(n->value<std::string_view>().value_or(""));
+}
+
+size_t Reader::choice_impl(std::string_view key, const std::vector<std::string_view>& names,
+                           size_t fallback) {
+    const toml::node* n = node(key);
+    if (!n) return fallback;
+    if (!n->is_string()) fail(n, key, "expected a string, found " + type_name(*n));
+    const std::string v = string(key, "");
+    for (size_t i = 0; i < names.size(); ++i)
+        if (names[i] == v) return i;
+    std::string list;
+    for (size_t i = 0; i < names.size(); ++i) list += (i ? ", " : "") + std::string(names[i]);
+    fail(n, key, "expected one of " + list);
+}
+
+std::optional<std::array<double, 2>> Reader::pair(std::string_view key, const char* expected,
+                                                  const std::function<bool(double)>& ok) {
+    const toml::node* n = node(key);
+    if (!n) return std::nullopt;
+    const toml::array* a = n->as_array();
+    if (!a || a->size() != 2 || !(*a)[0].is_number() || !(*a)[1].is_number())
+        fail(n, key, std::string("expected ") + expected);
+    std::array<double, 2> v{(*a)[0].value<double>().value_or(0), (*a)[1].value<double>().value_or(0)};
+    for (double x : v)
+        if (!std::isfinite(x) || (ok && !ok(x))) fail(n, key, std::string("expected ") + expected);
+    return v;
+}
+
+sim::Keyframed Reader::keyframed(std::string_view key, double fallback,
+                                 const std::function<bool(double)>& ok, const char* expected) {
+    const toml::node* n = node(key);
+    if (!n) return sim::Keyframed(fallback);
+    auto check = [&](double v) {
+        if (!std::isfinite(v) || (ok && !ok(v)))
+            fail(n, key, std::string("expected ") + (ok ? expected : "finite values"));
+    };
+    if (n->is_number()) {
+        const double v = n->value<double>().value_or(0);
+        check(v);
+        return sim::Keyframed(v);
+    }
+    const toml::table* t = n->as_table();
+    if (!t)
+        fail(n, key, "expected a number or { keys = [[t, v], ...], ease = \"linear\" }, found " +
+                         type_name(*n));
+    Reader r(*t, key_path(key), m_source, n);
+    sim::Keyframed k;
+    k.ease = static_cast<sim::Ease>(r.choice("ease", sim::kEaseNames, 0));
+    const toml::node* kn = r.node("keys");
+    const toml::array* ka = kn ? kn->as_array() : nullptr;
+    if (!ka || ka->empty()) r.fail(kn, "keys", "expected a non-empty array of [time_s, value] pairs");
+    for (const auto& e : *ka) {
+        const toml::array* p = e.as_array();
+        if (!p || p->size() != 2 || !(*p)[0].is_number() || !(*p)[1].is_number())
+            r.fail(&e, "keys", "expected [time_s, value] pairs of numbers");
+        const double t_s = (*p)[0].value<double>().value_or(0), v = (*p)[1].value<double>().value_or(0);
+        if (!std::isfinite(t_s)) r.fail(&e, "keys", "expected finite key times");
+        check(v);
+        if (!k.keys.empty() && !(t_s > k.keys.back().first)) {
+            std::ostringstream s;
+            s << "keyframes out of order: time " << t_s << " follows " << k.keys.back().first
+              << " (times must increase)";
+            r.fail(&e, "keys", s.str());
+        }
+        k.keys.emplace_back(t_s, v);
+    }
+    r.finish();
+    return k;
+}
+
+std::optional<Reader> Reader::table(std::string_view key) {
+    const toml::node* n = node(key);
+    if (!n) return std::nullopt;
+    const toml::table* t = n->as_table();
+    if (!t) fail(n, key, "expected a table, found " + type_name(*n));
+    return Reader(*t, key_path(key), m_source, n);
+}
+
+std::vector<Reader> Reader::tables(std::string_view key) {
+    std::vector<Reader> out;
+    const toml::node* n = node(key);
+    if (!n) return out;
+    if (const toml::table* t = n->as_table()) {  // a single [layer] table is one layer
+        out.emplace_back(*t, key_path(key) + "[0]", m_source, n);
+        return out;
+    }
+    const toml::array* a = n->as_array();
+    if (!a) fail(n, key, "expected an array of tables ([[" + std::string(key) + "]]), found " + type_name(*n));
+    for (size_t i = 0; i < a->size(); ++i) {
+        const toml::table* t = (*a)[i].as_table();
+        if (!t) fail(&(*a)[i], key, "expected tables in [[" + std::string(key) + "]]");
+        out.emplace_back(*t, key_path(key) + "[" + std::to_string(i) + "]", m_source, &(*a)[i]);
+    }
+    return out;
+}
+
+void Reader::finish() const {
+    std::vector<std::string> known(m_known.begin(), m_known.end());
+    for (auto&& [k, v] : m_table) {
+        if (m_known.count(k.str())) continue;
+        std::ostringstream s;
+        const auto& src = k.source().begin.line ? k.source() : v.source();
+        auto it = m_source.overrides.find(key_path(k.str()));
+        if (it != m_source.overrides.end())
+            s << "--set " << it->second;
+        else {
+            s << m_source.file;
+            if (src.begin.line) s << ':' << src.begin.line << ':' << src.begin.column;
+        }
+        s << ": unknown key \"" << k.str() << "\"" << (m_path.empty() ? "" : " in " + m_path);
+        if (auto near = nearest(k.str(), known)) s << " (did you mean \"" << *near << "\"?)";
+        else if (!known.empty()) {
+            s << " (valid keys:";
+            for (const auto& c : known) s << ' ' << c;
+            s << ")";
+        }
+        throw SceneError(s.str());
+    }
+}
+
+}  // namespace impulse::scenes::detail

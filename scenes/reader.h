@@ -1,0 +1,90 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// Typed, position-aware reading of a TOML table that records which keys were read and
+// reports the rest as unknown (pbrt ReportUnused, Mitsuba's queried-key tracking).
+// Internal to impulse::scenes.
+
+#include <toml++/toml.h>
+
+#include <array>
+#include <functional>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "sim/sim.h"
+
+namespace impulse::scenes::detail {
+
+/// Where values came from: the file name and the `--set` overrides by key path.
+struct Source {
+    std::string file;
+    std::map<std::string, std::string> overrides;  ///< "layer[0].kernel.radius" -> "layer.0...=8"
+    std::vector<std::string>* warnings = nullptr;
+};
+
+/// Levenshtein distance (for "did you mean").
+size_t edit_distance(std::string_view a, std::string_view b);
+/// The nearest of `candidates` to `word`, if close enough to be a plausible typo.
+std::optional<std::string> nearest(std::string_view word, const std::vector<std::string>& candidates);
+
+class Reader {
+public:
+    Reader(const toml::table& table, std::string path, const Source& source,
+           const toml::node* self = nullptr);
+
+    /// "layer[0].kernel" + "." + key
+    std::string key_path(std::string_view key) const;
+    bool has(std::string_view key);
+    const toml::node* node(std::string_view key);
+
+    double number(std::string_view key, double fallback);
+    /// Number constrained by `ok`; `expected` completes "expected ..." in the message.
+    double number(std::string_view key, double fallback, const std::function<bool(double)>& ok,
+                  const char* expected);
+    int64_t integer(std::string_view key, int64_t fallback, int64_t lo, int64_t hi);
+    bool boolean(std::string_view key, bool fallback);
+    std::string string(std::string_view key, const std::string& fallback);
+    /// String that must be one of `names`; returns its index.
+    template <size_t N>
+    size_t choice(std::string_view key, const std::array<std::string_view, N>& names, size_t fallback) {
+        return choice_impl(key, std::vector<std::string_view>(names.begin(), names.end()), fallback);
+    }
+    size_t choice_impl(std::string_view key, const std::vector<std::string_view>& names, size_t fallback);
+    /// Array of exactly two numbers.
+    std::optional<std::array<double, 2>> pair(std::string_view key, const char* expected,
+                                              const std::function<bool(double)>& ok = {});
+    /// A number, or { keys = [[t, v], ...], ease = "linear" } with increasing times.
+    sim::Keyframed keyframed(std::string_view key, double fallback,
+                             const std::function<bool(double)>& ok = {}, const char* expected = "");
+    /// Sub-table (inline or standard); nullopt when absent.
+    std::optional<Reader> table(std::string_view key);
+    /// Array of tables ([[layer]]); empty when absent.
+    std::vector<Reader> tables(std::string_view key);
+
+    /// Throws for every key present but never read.
+    void finish() const;
+    /// One-line error at `n` (or the table) for `key`.
+    [[noreturn]] void fail(const toml::node* n, std::string_view key, const std::string& what) const;
+    void warn(std::string_view key, const std::string& what) const;
+    const Source& source() const { return m_source; }
+
+private:
+    std::string location(const toml::node* n, std::string_view key) const;
+
+    const toml::table& m_table;
+    std::string m_path;
+    const Source& m_source;
+    const toml::node* m_self;
+    std::set<std::string, std::less<>> m_known;
+};
+
+/// Text of a node's value as written (for messages).
+std::string value_text(const toml::node& n);
+/// TOML type name of a node ("string", "integer", ...).
+std::string type_name(const toml::node& n);
+
+}  // namespace impulse::scenes::detail

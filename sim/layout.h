@@ -1,0 +1,60 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// How a process is cut into seeding cells in space and time (internal to impulse::sim).
+
+#include <cmath>
+#include <cstdint>
+
+#include "sim/sim.h"
+
+namespace impulse::sim::detail {
+
+inline int64_t floor_div(int64_t a, int64_t b) {
+    const int64_t q = a / b;
+    return (a % b != 0 && ((a < 0) != (b < 0))) ? q - 1 : q;
+}
+inline int64_t floor_mod(int64_t a, int64_t b) { return a - floor_div(a, b) * b; }
+
+/// Cell sizes, periods in cells and the expected count per space-time cell.
+struct Layout {
+    double cell_x = 1, cell_y = 1;
+    int64_t period_cells_x = 0, period_cells_y = 0;  ///< 0: not periodic
+    double time_cell_s = 0;                          ///< 0: still process
+    int64_t loop_cells = 0;                          ///< time cells per loop, 0: no loop
+    double mean_per_cell = 0;
+
+    explicit Layout(const ProcessConfig& c) {
+        cell_x = cell_y = c.cell_size;
+        if (c.period) {
+            period_cells_x = std::max<int64_t>(1, static_cast<int64_t>((*c.period)[0] / c.cell_size));
+            period_cells_y = std::max<int64_t>(1, static_cast<int64_t>((*c.period)[1] / c.cell_size));
+            cell_x = (*c.period)[0] / period_cells_x;
+            cell_y = (*c.period)[1] / period_cells_y;
+        }
+        mean_per_cell = c.intensity * cell_x * cell_y;
+        if (c.lifetime_s > 0) {
+            // Four time cells per lifetime keeps the live set close to what is alive; a loop
+            // needs a whole number of time cells per period.
+            time_cell_s = c.lifetime_s / 4.0;
+            if (c.loop_s > 0) {
+                loop_cells = std::max<int64_t>(1, std::llround(c.loop_s / time_cell_s));
+                time_cell_s = c.loop_s / loop_cells;
+            }
+            // births per unit area per second beta = lambda / T (expected live = beta T)
+            mean_per_cell *= time_cell_s / c.lifetime_s;
+        }
+    }
+};
+
+/// A birth time kept in loop-reduced form so looped copies have bit-identical arithmetic:
+/// time = phase_s + loop_index * loop_s.
+struct BirthTime {
+    double phase_s = 0;
+    int64_t loop_index = 0;
+};
+
+/// cell_impulses with the birth times in reduced form (used by the simulator).
+void generate_cell(const ProcessConfig& config, const Layout& layout, int64_t cx, int64_t cy,
+                   int64_t ct, CellImpulses& out, std::vector<BirthTime>* births);
+
+}  // namespace impulse::sim::detail

@@ -1,0 +1,223 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// impulse::sim — the shaped Poisson point process as a particle system (Lewis 1986 §3.1):
+// consistent cell-seeded births in space and time, flows, integration, the Jacobian
+// compensation and orientation, and the set of live impulses at any frame.
+// Knows nothing of rendering, cameras or the command line.
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace impulse::sim {
+
+// ---------------------------------------------------------------------------------------------
+// Amplitudes and temporal envelopes
+
+enum class Amplitude { Normal, Uniform, Sign };
+inline constexpr std::array<std::string_view, 3> kAmplitudeNames = {"normal", "uniform", "sign"};
+std::optional<Amplitude> amplitude_from_string(std::string_view name);
+/// E[a^2]: normal 1, uniform on [-1, 1] 1/3, sign 1.
+double amplitude_second_moment(Amplitude a);
+/// E[a^4]: normal 3, uniform 1/5, sign 1.
+double amplitude_fourth_moment(Amplitude a);
+
+/// Temporal envelope w(age) of a particle living T seconds: the time half of a space-time kernel.
+enum class Envelope { Hann, Box };
+inline constexpr std::array<std::string_view, 2> kEnvelopeNames = {"hann", "box"};
+std::optional<Envelope> envelope_from_string(std::string_view name);
+/// w(age): hann sin^2(pi age / T), box 1, both 0 outside [0, T).
+double envelope_weight(Envelope e, double age_s, double lifetime_s);
+/// int_0^T w^2 dt: hann 3T/8, box T.
+double envelope_sq_integral(Envelope e, double lifetime_s);
+/// int_0^T w dt: hann T/2, box T.
+double envelope_integral(Envelope e, double lifetime_s);
+
+// ---------------------------------------------------------------------------------------------
+// Keyframed parameters
+
+enum class Ease { Linear, Smooth, Step };
+inline constexpr std::array<std::string_view, 3> kEaseNames = {"linear", "smooth", "step"};
+std::optional<Ease> ease_from_string(std::string_view name);
+
+/// A scalar that may vary in time: constant, or keys (t_s, value) with strictly increasing
+/// times, held constant before the first and after the last key. `smooth` eases with
+/// smoothstep between keys; `step` holds each key's value until the next.
+struct Keyframed {
+    std::vector<std::pair<double, double>> keys;  ///< (time in seconds, value)
+    Ease ease = Ease::Linear;
+
+    Keyframed() = default;
+    Keyframed(double constant) : keys{{0.0, constant}} {}  // NOLINT: implicit by design
+    double value(double t_s) const;
+    double max_abs() const;  ///< max |value| over all time
+    bool is_constant() const { return keys.size() <= 1; }
+};
+
+// ---------------------------------------------------------------------------------------------
+// Geometry
+
+/// Axis-aligned box in texture space.
+struct Box {
+    double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+    Box expanded(double m) const { return {x0 - m, y0 - m, x1 + m, y1 + m}; }
+    double area() const { return (x1 - x0) * (y1 - y0); }
+};
+
+// ---------------------------------------------------------------------------------------------
+// Flows
+
+/// A velocity field v(x, t) in texture units per second with its divergence and vorticity
+/// (curl, counter-clockwise positive). Implementations accumulate (+=) into the outputs so
+/// a sum of flows is a loop over its terms. Evaluation is deterministic and thread-safe once
+/// `prepare` has run.
+class Flow {
+public:
+    virtual ~Flow() = default;
+    /// Add v, div v and curl v at n points (x[i], y[i]) at time t.
+    virtual void add(double t_s, size_t n, const double* x, const double* y, double* vx,
+                     double* vy, double* div, double* curl) const = 0;
+    /// Upper bound of |v| over `region` and all time.
+    virtual double max_speed(const Box& region) const = 0;
+    /// Called (single-threaded) before a frame is integrated over `region`; lets a flow build
+    /// caches. Default: nothing.
+    virtual void prepare(const Box& region) { (void)region; }
+};
+
+/// Sum of flow primitives (scene `[[layer.flow]]` list).
+class FlowSum final : public Flow {
+public:
+    void push(std::unique_ptr<Flow> f) { m_terms.push_back(std::move(f)); }
+    bool empty() const { return m_terms.empty(); }
+    void add(double t_s, size_t n, const double* x, const double* y, double* vx, double* vy,
+             double* div, double* curl) const override;
+    double max_speed(const Box& region) const override;
+    void prepare(const Box& region) override;
+
+private:
+    std::vector<std::unique_ptr<Flow>> m_terms;
+};
+
+/// Uniform wind (vx, vy).
+std::unique_ptr<Flow> make_uniform_flow(Keyframed vx, Keyframed vy);
+/// Shear: velocity `rate * (p - c) . n_perp` along direction `angle`, where n_perp is the unit
+/// normal to that direction; curl = -rate.
+std::unique_ptr<Flow> make_shear_flow(Keyframed rate, double cx, double cy, double angle_rad);
+enum class VortexModel { LambOseen, Rankine };
+inline constexpr std::array<std::string_view, 2> kVortexModelNames = {"lamb-oseen", "rankine"};
+std::optional<VortexModel> vortex_model_from_string(std::string_view name);
+/// Vortex of circulation `circulation` (units^2/s, positive counter-clockwise) and core radius.
+std::unique_ptr<Flow> make_vortex_flow(VortexModel model, Keyframed cx, Keyframed cy,
+                                       Keyframed circulation, double core_radius);
+/// Source (rate > 0) or sink (rate < 0): v = rate (x - c) g(r), g = exp(-r^2 / radius^2)
+/// (radius = 0: g = 1, a uniform divergence 2 rate). div v = rate g (2 - 2 r^2 / radius^2).
+std::unique_ptr<Flow> make_source_flow(Keyframed cx, Keyframed cy, Keyframed rate, double radius);
+/// Divergence-free curl noise: v = (d psi/dy, -d psi/dx) of a sparse-convolution potential psi
+/// with compact kernel (1 - r^2/s^2)^3 of radius `scale`; consistent (counter-based per cell)
+/// and periodic when `period` is given (a multiple of the cell size is chosen). `speed` is the
+/// RMS speed.
+std::unique_ptr<Flow> make_curl_noise_flow(uint64_t seed, double scale, Keyframed speed,
+                                           std::optional<std::array<double, 2>> period);
+/// A field sampled from a 2-channel grid (vx, vy in units per second), bilinear, clamped at the
+/// edges; grid pixel (i, j) sits at texture point origin + (i + 0.5, j + 0.5) * spacing.
+struct VectorGrid {
+    int width = 0, height = 0;
+    std::vector<float> vx, vy;
+    double origin_x = 0, origin_y = 0, spacing = 1.0;
+};
+std::unique_ptr<Flow> make_grid_flow(VectorGrid grid, Keyframed gain);
+
+// ---------------------------------------------------------------------------------------------
+// The point process of one layer
+
+enum class Integrator { RK2, RK4 };
+inline constexpr std::array<std::string_view, 2> kIntegratorNames = {"rk2", "rk4"};
+std::optional<Integrator> integrator_from_string(std::string_view name);
+
+/// How a particle's kernel rotation theta evolves.
+enum class OrientationMode { Fixed, Random, Flow, Vorticity };
+inline constexpr std::array<std::string_view, 4> kOrientationModeNames = {"fixed", "random", "flow",
+                                                                          "vorticity"};
+std::optional<OrientationMode> orientation_mode_from_string(std::string_view name);
+
+/// Everything that defines a layer's impulses. Validated by the scene loader.
+struct ProcessConfig {
+    uint64_t seed = 1;           ///< user seed
+    uint32_t layer = 0;          ///< layer index (part of the generator key)
+    double intensity = 0.02;     ///< lambda: expected live impulses per unit area, > 0
+    Amplitude amplitude = Amplitude::Normal;
+    double cell_size = 16.0;     ///< spatial cell edge used for seeding, > 0
+    /// Periodic domain (tileable output, Lewis 1986 §3.2): cell keys wrap with this period.
+    std::optional<std::array<double, 2>> period;
+
+    double lifetime_s = 0.0;     ///< 0: a still process (no births in time, no motion)
+    Envelope envelope = Envelope::Hann;
+    double loop_s = 0.0;         ///< > 0: births periodic in time with this period
+    Integrator integrator = Integrator::RK2;
+    int substeps = 2;            ///< integration steps per frame, >= 1
+    bool jacobian = true;        ///< scale amplitudes by sqrt(J) (design.md §1)
+    OrientationMode orientation = OrientationMode::Fixed;
+    double max_travel = 4096.0;  ///< refuse flows that carry particles further in one lifetime
+};
+
+/// Frame timing: frame f is at time (start_frame + f) / fps seconds.
+struct Timing {
+    double fps = 30.0;
+    int64_t start_frame = 0;
+};
+
+/// The live impulses of a layer at one frame, in canonical order (by time cell, spatial cell,
+/// index), structure of arrays. weight = a * w(age) * sqrt(J); theta = rotation added to the
+/// kernel's own orientation (radians).
+struct Impulses {
+    std::vector<double> x, y;
+    std::vector<float> weight, theta;
+    size_t size() const { return x.size(); }
+    void clear();
+};
+
+/// Impulses of one seeding cell before any motion (for consistency tests).
+struct CellImpulses {
+    std::vector<double> x, y, birth_s;
+    std::vector<float> amplitude, theta0;
+};
+/// Impulses born in spatial cell (cx, cy) and time cell ct (ct = 0 for a still process) of a
+/// process; a pure function of (config, cx, cy, ct).
+void cell_impulses(const ProcessConfig& config, int64_t cx, int64_t cy, int64_t ct,
+                   CellImpulses& out);
+
+/// Expected number of impulses generated for `region` (before culling): the budget estimate.
+double expected_impulses(const ProcessConfig& config, const Box& region);
+
+/// Produces the live impulses of one layer at any frame. Sequential calls (frame f then f+1)
+/// reuse the previous state and step it; any other call integrates from birth. Both paths do the
+/// same floating-point operations per particle, so results are bit-identical (design.md §3).
+class LayerSimulator {
+public:
+    /// `flow` may be null (no motion). Throws ValueError if the flow's speed bound times the
+    /// lifetime exceeds config.max_travel.
+    LayerSimulator(ProcessConfig config, std::shared_ptr<Flow> flow, Timing timing,
+                   double support_radius);
+    ~LayerSimulator();
+    LayerSimulator(LayerSimulator&&) noexcept;
+
+    /// Impulses whose support can touch `view` (texture-space box) at frame `frame`.
+    void impulses_at(int64_t frame, const Box& view, Impulses& out);
+    /// The birth region used for `view`: expanded by support radius + travel bound.
+    Box birth_region(const Box& view) const;
+    /// Travel bound (max speed * lifetime) for `view`, in texture units.
+    double travel_bound(const Box& view) const;
+    const ProcessConfig& config() const;
+    /// Forget the cached state (the next call integrates from birth).
+    void reset();
+
+private:
+    struct State;
+    std::unique_ptr<State> m_state;
+};
+
+}  // namespace impulse::sim
