@@ -135,9 +135,8 @@ int run_render(const RenderOptions& opt) {
     if (!opt.codec.empty()) overrides.push_back("output.codec=\"" + opt.codec + "\"");
     scenes::Scene scene = scenes::load_scene(path, overrides);
     for (const auto& w : scene.warnings) std::cerr << w << "\n";
-    const auto& out = scene.output;
-    long long first = 0, last = out.frames - 1;
-    if (!opt.frames.empty()) std::tie(first, last) = parse_frame_range(opt.frames, out.frames);
+    long long first = 0, last = scene.output.frames - 1;
+    if (!opt.frames.empty()) std::tie(first, last) = parse_frame_range(opt.frames, scene.output.frames);
 
     const bool video = render::is_video_path(opt.output);
     const bool sequence = !video && !expand_pattern(opt.output, 0).empty();
@@ -155,6 +154,7 @@ int run_render(const RenderOptions& opt) {
 
     scenes::Renderer renderer(std::move(scene));
     const scenes::Scene& sc = renderer.scene();
+    const scenes::OutputConfig& out = sc.output;
     const render::ValueMapping mapping = renderer.mapping();
     render::EvalOptions eo;
     eo.tile_size = opt.tile;
@@ -167,6 +167,7 @@ int run_render(const RenderOptions& opt) {
 
     render::VideoWriter writer;
     if (video) {
+        render::quiet_video_logs();
         render::VideoOptions vo;
         vo.width = out.width, vo.height = out.height, vo.fps = out.fps;
         vo.codec = render::video_codec_from_string(out.codec);

@@ -56,6 +56,9 @@ void write_pixels(const std::string& path, int width, int height, int channels,
     for (const auto& [k, v] : metadata) spec.attribute("impulse:" + k, v);
     spec.attribute("Software", "impulse");
     if (ext == ".exr") spec.attribute("compression", "zip");
+    // OIIO stamps files with the wall-clock time unless told otherwise; a frame must be a pure
+    // function of the scene (design.md §4), so the stamp is a fixed value.
+    spec.attribute("DateTime", "1970:01:01 00:00:00");
     if (!out->open(tmp, spec)) {
         std::string err = out->geterror();
         throw IoError(path + ": cannot write: " + (err.empty() ? OIIO::geterror() : err));

@@ -101,9 +101,9 @@ AvBuffer alloc_buffer(size_t bytes) {
     return buf;
 }
 
-/// A swscale context with explicit ranges and BT.709 coefficients. The ranges are set before
-/// sws_init_context: setting them afterwards through sws_setColorspaceDetails does not undo an
-/// unscaled "plain copy" path chosen at init time (e.g. yuv420p -> gray8).
+/// A swscale context with explicit ranges and BT.709 coefficients. The ranges are options set
+/// before sws_init_context, so the path chosen at init (unscaled copies included) already knows
+/// them; sws_setColorspaceDetails then installs the BT.709 tables.
 SwsPtr make_sws(int width, int height, AVPixelFormat src, bool src_full_range, AVPixelFormat dst,
                 bool dst_full_range, const std::string& path) {
     SwsPtr sws(sws_alloc_context());
@@ -729,5 +729,7 @@ std::vector<std::vector<float>> decode_video_luma(const std::string& path, int& 
     });
     return frames;
 }
+
+void quiet_video_logs() { av_log_set_level(AV_LOG_ERROR); }
 
 }  // namespace impulse::render

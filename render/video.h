@@ -65,6 +65,10 @@ private:
     std::unique_ptr<Impl> m_impl;
 };
 
+/// Limit libav's console logging to errors (x264 and the muxers are chatty at info level).
+/// Process-wide; the CLI calls it once at start.
+void quiet_video_logs();
+
 /// What `probe_video` found in a file (used by tests and `impulse analyze`).
 struct VideoInfo {
     int width = 0, height = 0;
