@@ -126,7 +126,7 @@ Kernel::Kernel(const KernelParams& params) : m_params(params) {
     }
 
     // Chebyshev fit of the envelope in q (interpolation at Chebyshev nodes), raising the degree
-    // until the float evaluation is within 2e-7 of e(0) on a dense grid.
+    // until the float evaluation is within 1e-6 of e(0) on a dense grid.
     const double e0 = envelope(0.0);
     for (int degree = 4;; degree += 2) {
         const int n = degree + 1;
@@ -147,7 +147,7 @@ Kernel::Kernel(const KernelParams& params) : m_params(params) {
             err = std::max(err, std::abs(m_poly.evaluate(static_cast<float>(q)) - envelope(q)));
         }
         m_poly.max_error = err;
-        if (err < 2e-7 * e0 || degree >= 40) break;
+        if (err < 1e-6 * e0 || degree >= 40) break;
     }
 }
 

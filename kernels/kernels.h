@@ -44,7 +44,7 @@ void validate(const KernelParams& params);
 
 /// Chebyshev fit of an envelope e(q) on q in [0, 1], for fast evaluation in float with
 /// Clenshaw's recurrence (Lewis 1989 §4.1: a kernel tabulated in r^2 avoids the square root).
-/// The degree is chosen so the maximum error is below 2e-7 of e(0).
+/// The degree is chosen so the maximum error is below 1e-6 of e(0).
 struct EnvelopePolynomial {
     std::vector<float> coefficients;  ///< c_0 .. c_n of sum c_j T_j(2q - 1)
     double max_error = 0.0;           ///< measured on a dense grid

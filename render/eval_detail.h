@@ -18,6 +18,10 @@ struct LoopKernel {
     float phase_cycles = 0;   ///< carrier phase / (2 pi)
     bool general = false;     ///< rotated/elliptical or carrier: the general loop
     bool carrier = false;
+    /// Isotropic Gaussian envelope exp(-gauss_g r^2) (gaussian, isotropic gabor): evaluated as a
+    /// product of per-column and per-row factors (separable), a few operations per pixel.
+    bool separable = false;
+    float gauss_g = 0;
     const float* coeffs = nullptr;  ///< Chebyshev coefficients of the envelope in q
     int ncoeffs = 0;                ///< odd, 5 .. 41
 };

@@ -38,6 +38,15 @@ LoopKernel loop_kernel(const kernels::Kernel& k, const View& view) {
     lk.freq_cpp = static_cast<float>(p.frequency * view.scale);
     lk.phase_cycles = static_cast<float>(p.phase / (2.0 * std::numbers::pi));
     lk.general = lk.carrier || p.aspect != 1.0;
+    // Isotropic Gaussian envelopes (gaussian; gabor with aspect 1) take the separable path.
+    if (p.aspect == 1.0 && p.type != kernels::KernelType::Cosine) {
+        lk.separable = true;
+        const double s = view.scale;  // texture units per pixel
+        lk.gauss_g = static_cast<float>(
+            p.type == kernels::KernelType::Gaussian
+                ? s * s / (2.0 * p.sigma * p.sigma)
+                : std::numbers::pi * k.gabor_a() * k.gabor_a() * s * s);
+    }
     lk.coeffs = k.polynomial().coefficients.data();
     lk.ncoeffs = static_cast<int>(k.polynomial().coefficients.size());
     return lk;

@@ -1,0 +1,8 @@
+#!/usr/bin/env bash
+# Sets everything up, then renders the default scene (flowing clouds) to out/clouds.mp4.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh
+mkdir -p out
+./build/app/impulse render clouds -o out/clouds.mp4
+echo "output: $(pwd)/out/clouds.mp4"
