@@ -184,38 +184,44 @@ public:
     void add(double t, size_t n, const double* x, const double* y, double* vx, double* vy, double*,
              double* curl) const override {
         const double amp = m_speed.value(t) * m_norm;
-        const double s = m_layout->cell_x;  // kernel radius = cell size (cells are square
-                                            // unless a period forces otherwise)
+        const double s = m_layout->cell_x;  // kernel radius = cell size
         const double inv_s2 = 1.0 / (s * s);
-        CellImpulses scratch;
+        thread_local CellImpulses scratch;
         for (size_t i = 0; i < n; ++i) {
-            double gx = 0, gy = 0, lap = 0;
             const int64_t ci = static_cast<int64_t>(std::floor(x[i] / m_layout->cell_x));
             const int64_t cj = static_cast<int64_t>(std::floor(y[i] / m_layout->cell_y));
-            for (int64_t dj = -1; dj <= 1; ++dj)
-                for (int64_t di = -1; di <= 1; ++di) {
-                    const int64_t gi = ci + di - m_gx0, gj = cj + dj - m_gy0;
-                    auto accumulate = [&](double px, double py, double a) {
-                        const double dx = x[i] - px, dy = y[i] - py;
-                        const double q = (dx * dx + dy * dy) * inv_s2;
-                        if (q >= 1.0) return;
-                        const double u = 1.0 - q;
-                        const double d = -6.0 * u * u * inv_s2 * a;  // dphi/dq * 2 / s^2
-                        gx += d * dx;
-                        gy += d * dy;
-                        lap += a * inv_s2 * (-12.0 * u * u + 24.0 * q * u);
-                    };
-                    if (gi >= 0 && gj >= 0 && gi < m_gw && gj < m_gh) {
-                        const size_t c = static_cast<size_t>(gj * m_gw + gi);
-                        for (size_t k = m_start[c]; k < m_start[c + 1]; ++k)
-                            accumulate(m_px[k], m_py[k], m_pa[k]);
-                    } else {  // outside the prepared grid: generate the cell (same impulses)
+            double gx = 0, gy = 0, lap = 0;
+            const double xi = x[i], yi = y[i];
+            auto segment = [&](const double* px, const double* py, const float* pa, size_t len) {
+                for (size_t k = 0; k < len; ++k) {
+                    const double dx = xi - px[k], dy = yi - py[k];
+                    const double q = (dx * dx + dy * dy) * inv_s2;
+                    if (q >= 1.0) continue;
+                    const double u = 1.0 - q;
+                    const double a = pa[k];
+                    const double d = -6.0 * u * u * inv_s2 * a;  // 2 phi'(q) / s^2
+                    gx += d * dx;
+                    gy += d * dy;
+                    lap += a * inv_s2 * (-12.0 * u * u + 24.0 * q * u);
+                }
+            };
+            const int64_t gi = ci - 1 - m_gx0, gj = cj - 1 - m_gy0;
+            if (gi >= 0 && gj >= 0 && gi + 2 < m_gw && gj + 2 < m_gh) {
+                // Three cells of a row are contiguous in the prepared arrays.
+                for (int64_t r = 0; r < 3; ++r) {
+                    const size_t c0 = static_cast<size_t>((gj + r) * m_gw + gi);
+                    const size_t k0 = m_start[c0], k1 = m_start[c0 + 3];
+                    segment(m_px.data() + k0, m_py.data() + k0, m_pa.data() + k0, k1 - k0);
+                }
+            } else {  // outside the prepared grid: generate the cells (the same impulses)
+                for (int64_t dj = -1; dj <= 1; ++dj)
+                    for (int64_t di = -1; di <= 1; ++di) {
                         detail::generate_cell(m_config, *m_layout, ci + di, cj + dj, 0, scratch,
                                               nullptr);
-                        for (size_t k = 0; k < scratch.x.size(); ++k)
-                            accumulate(scratch.x[k], scratch.y[k], scratch.amplitude[k]);
+                        segment(scratch.x.data(), scratch.y.data(), scratch.amplitude.data(),
+                                scratch.x.size());
                     }
-                }
+            }
             vx[i] += amp * gy;
             vy[i] -= amp * gx;
             curl[i] -= amp * lap;

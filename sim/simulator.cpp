@@ -6,7 +6,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <sstream>
 #include <tuple>
 
@@ -22,6 +21,12 @@ using detail::Layout;
 struct BlockKey {
     int64_t ct, cy, cx;
     auto operator<=>(const BlockKey&) const = default;
+};
+
+/// A seeding cell's particles in the live set: [start, start + count).
+struct Block {
+    BlockKey key;
+    size_t start, count;
 };
 
 /// Particle state, structure of arrays. `step` is the grid step at which (x, y, lnj, th) hold
@@ -69,7 +74,7 @@ struct LayerSimulator::State {
     int64_t substeps = 1;
 
     Particles live, next;
-    std::map<BlockKey, std::pair<size_t, size_t>> blocks, next_blocks;
+    std::vector<Block> blocks, next_blocks;  // sorted by key (canonical order)
     int64_t last_step = 0;
     bool valid = false;
     CellImpulses cell;
@@ -228,6 +233,7 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
 
     // Reuse the previous frame's particles only when moving forward in time.
     const bool reuse = S.valid && !still && S.last_step <= target;
+    size_t cursor = 0;  // both block lists are in canonical order: merge instead of search
     const int64_t cx0 = static_cast<int64_t>(std::floor(region.x0 / L.cell_x));
     const int64_t cx1 = static_cast<int64_t>(std::floor(region.x1 / L.cell_x));
     const int64_t cy0 = static_cast<int64_t>(std::floor(region.y0 / L.cell_y));
@@ -247,10 +253,10 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
             for (int64_t cx = cx0; cx <= cx1; ++cx) {
                 const BlockKey key{ct, cy, cx};
                 const size_t start = P.size();
-                auto it = reuse ? S.blocks.find(key) : S.blocks.end();
-                if (it != S.blocks.end()) {
-                    for (size_t i = it->second.first; i < it->second.first + it->second.second; ++i)
-                        P.copy_from(S.live, i);
+                while (reuse && cursor < S.blocks.size() && S.blocks[cursor].key < key) ++cursor;
+                if (reuse && cursor < S.blocks.size() && S.blocks[cursor].key == key) {
+                    const Block& b = S.blocks[cursor];
+                    for (size_t i = b.start; i < b.start + b.count; ++i) P.copy_from(S.live, i);
                 } else {
                     detail::generate_cell(c, L, cx, cy, ct, S.cell, &S.births);
                     for (size_t k = 0; k < S.cell.x.size(); ++k) {
@@ -267,7 +273,7 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
                         P.amp.push_back(S.cell.amplitude[k]);
                     }
                 }
-                S.next_blocks[key] = {start, P.size() - start};
+                S.next_blocks.push_back({key, start, P.size() - start});
             }
 
     // Age in grid steps (exact integer part) so looped copies agree bit for bit.

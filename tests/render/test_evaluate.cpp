@@ -241,14 +241,23 @@ core = 20.0
 }
 
 TEST_CASE("the tiled evaluator agrees with the naive double-precision reference", "[render]") {
-    // The two differ only in arithmetic: the tiled path rounds impulse positions to float pixel
-    // coordinates (|dp| <= 2^-24 * 400 px = 2.4e-5 px), evaluates the envelope as a float
-    // Chebyshev polynomial (error <= 2e-7) and the carrier with a float cos (~1e-6), and takes
-    // cos/sin of the orientation in float. With kernel slopes below 2 pi f + |e'| <= 0.7 per
-    // pixel the per-impulse error is < 2e-5 |a|; about 16 impulses (the density) overlap a
-    // pixel, so even if every error had the same sign the sum stays below 16 * 2e-5 * E|a|,
-    // i.e. < 3e-4 for these amplitudes, and with random signs ~ 4 * 2e-5 = 8e-5 RMS.
-    // Bound: max |diff| <= 1e-4 sd (sd = 1.66 and 0.92 here) and RMS well below that.
+    // The two differ only in arithmetic. The tiled path rounds each impulse position to float
+    // pixel coordinates once: an error d per coordinate, uniform within half an ulp, so
+    // E[d^2] <= ulp^2 / 12 with ulp = 2^-15 px for coordinates below 512 px. The frame error
+    // sum_k a_k grad h(x - x_k) . d_k is itself shot noise, so by Campbell's theorem
+    //     rms_pos^2 = lambda E[a^2] int |grad h|^2 dA * (ulp * scale)^2 / 12
+    // (int |grad h|^2 by finite differences of Kernel::evaluate). The float envelope polynomial
+    // (2e-7), the float carrier cosine and sin/cos of the orientation add relative errors below
+    // 1e-6 per term: rms_eval <= 1e-6 sd. With rms_model = sqrt(rms_pos^2 + rms_eval^2) the
+    // measured RMS must be below it, and the maximum over ~5e4 roughly Gaussian pixel errors
+    // below 6 rms_model (4.4 expected) — and below the product promise of 1e-4 sd.
+    //
+    // A kernel that jumps at its support edge (Gabor: 1 % envelope at R) adds a rare, larger
+    // difference: a pixel centre within ~|d| of an impulse's edge can fall on the other side of
+    // q < 1 in float. The band around the ellipse has area ~ perimeter * E|d| ~ 60 px * 4e-6 px
+    // per impulse, times ~2800 impulses: 0.7 such pixels expected. They are allowed (at most
+    // 4: Poisson(0.7) exceeds 4 with probability 6e-4) if bounded by one impulse's edge value,
+    // 0.01 max|a| + the band.
     for (const Case& c : {cosine_case(), gabor_case()}) {
         CAPTURE(c.name);
         const Kernel k(c.kernel);
@@ -257,18 +266,44 @@ TEST_CASE("the tiled evaluator agrees with the naive double-precision reference"
         Frame naive;
         impulse::render::accumulate_naive(k, c.process, c.view, naive);
         REQUIRE(naive.data.size() == tiled.data.size());
+
+        // int |grad h|^2 over the support box, central differences with step e = 0.01 R on a
+        // grid of 0.02 R (the jump of a truncated kernel adds ~1 %: conservative).
+        const double R = c.kernel.radius, g = 0.02 * R, e = 0.01 * R;
+        double grad2 = 0.0;
+        for (double y = -R - g; y <= R + g; y += g)
+            for (double x = -R - g; x <= R + g; x += g) {
+                const double hx = (k.evaluate(x + e, y) - k.evaluate(x - e, y)) / (2 * e);
+                const double hy = (k.evaluate(x, y + e) - k.evaluate(x, y - e)) / (2 * e);
+                grad2 += (hx * hx + hy * hy) * g * g;
+            }
+        const double ea2 = impulse::sim::amplitude_second_moment(c.process.amplitude);
+        const double sd = theory_sd(c);
+        const double ulp = std::ldexp(1.0, -15) * c.view.scale;
+        const double rms_pos = std::sqrt(c.process.intensity * ea2 * grad2 * ulp * ulp / 12.0);
+        const double rms_model = std::hypot(rms_pos, 1e-6 * sd);
+
         double worst = 0.0, s2 = 0.0, f2 = 0.0;
+        int edge_pixels = 0;
+        double worst_edge = 0.0;
+        const double band = std::min(6.0 * rms_model, 1e-4 * sd);
         for (size_t i = 0; i < tiled.data.size(); ++i) {
             const double d = double(tiled.data[i]) - naive.data[i];
+            if (std::abs(d) > band && k.has_carrier()) {
+                ++edge_pixels;
+                worst_edge = std::max(worst_edge, std::abs(d));
+                continue;
+            }
             worst = std::max(worst, std::abs(d));
             s2 += d * d;
             f2 += double(naive.data[i]) * naive.data[i];
         }
-        const double sd = theory_sd(c);
         const double rms = std::sqrt(s2 / tiled.data.size());
-        CAPTURE(sd, worst, rms, std::sqrt(f2 / tiled.data.size()));
-        CHECK(worst < 1e-4 * sd);
-        CHECK(rms < 2e-5 * sd);
+        CAPTURE(sd, rms_pos, rms_model, rms, worst, edge_pixels, worst_edge);
+        CHECK(rms < rms_model);
+        CHECK(worst <= band);
+        CHECK(edge_pixels <= 4);
+        CHECK(worst_edge <= 0.01 * 1.0 + band);  // uniform amplitudes: |a| <= 1
         CHECK(std::sqrt(f2 / tiled.data.size()) > 0.5 * sd);  // not two empty frames
     }
 }
