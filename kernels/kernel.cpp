@@ -49,7 +49,9 @@ double hankel(const G& g, double radius, double k) {
 
 }  // namespace
 
-std::string_view to_string(KernelType type) { return kKernelTypeNames[static_cast<int>(type)]; }
+std::string_view to_string(KernelType type) {
+    return type == KernelType::Sampled ? "sampled" : kKernelTypeNames[static_cast<int>(type)];
+}
 
 std::optional<KernelType> kernel_type_from_string(std::string_view name) {
     for (size_t i = 0; i < kKernelTypeNames.size(); ++i)
@@ -68,6 +70,17 @@ void validate(const KernelParams& p) {
         throw ValueError(s.str());
     }
     if (p.type == KernelType::Gaussian) require_positive("sigma", p.sigma);
+    if (p.type == KernelType::Sampled) {
+        if (!p.sampled || p.sampled->n < 4)
+            throw ValueError("sampled kernel: expected at least 4 samples per axis");
+        const size_t want = p.sampled->radial ? size_t(p.sampled->n)
+                                              : size_t(p.sampled->n) * size_t(p.sampled->n);
+        if (p.sampled->values.size() != want)
+            throw ValueError("sampled kernel: expected " + std::to_string(want) + " values, found " +
+                             std::to_string(p.sampled->values.size()));
+        for (double v : p.sampled->values)
+            if (!std::isfinite(v)) throw ValueError("sampled kernel: values must be finite");
+    }
     if (p.type == KernelType::Gabor) {
         require_finite("frequency", p.frequency);
         if (p.frequency < 0.0) {
@@ -111,6 +124,35 @@ Kernel::Kernel(const KernelParams& params) : m_params(params) {
     // 1/aspect. The Gabor carrier cos(2 pi f u + phi) averages as below (cos^2 = 1/2 + 1/2 cos 2x,
     // cos^4 = 3/8 + 1/2 cos 2x + 1/8 cos 4x); each cosine term is the envelope power's
     // transform at the harmonic (the integral of e(x) cos(2 pi k u + c) is cos(c) E(k)).
+    if (is_grid()) {
+        // Exact integrals of the bilinear interpolant: tensor products of the 1-D rules
+        // int lerp = (a + b)/2 and int lerp^2 = (a^2 + ab + b^2)/3 per cell; h^4 by the
+        // trapezoid rule on the samples (an approximation, O(spacing^2)).
+        const SampledKernel& sk = *params.sampled;
+        const int n = sk.n;
+        const double d = 2.0 * R / (n - 1);
+        auto val = [&](int i, int j) { return sk.values[size_t(j) * n + i]; };
+        double i1 = 0, i2 = 0, i4 = 0;
+        for (int j = 0; j + 1 < n; ++j)
+            for (int i = 0; i + 1 < n; ++i) {
+                const double c[2][2] = {{val(i, j), val(i + 1, j)}, {val(i, j + 1), val(i + 1, j + 1)}};
+                const double M[2][2] = {{1.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 3}};
+                double sq = 0;
+                for (int a = 0; a < 2; ++a)
+                    for (int b = 0; b < 2; ++b)
+                        for (int e = 0; e < 2; ++e)
+                            for (int f = 0; f < 2; ++f) sq += M[a][e] * M[b][f] * c[a][b] * c[e][f];
+                i1 += 0.25 * (c[0][0] + c[0][1] + c[1][0] + c[1][1]);
+                i2 += sq;
+                i4 += 0.25 * (std::pow(c[0][0], 4) + std::pow(c[0][1], 4) + std::pow(c[1][0], 4) +
+                              std::pow(c[1][1], 4));
+            }
+        m_integral = inv_aspect * i1 * d * d;
+        m_integral_sq = inv_aspect * i2 * d * d;
+        m_integral_4 = inv_aspect * i4 * d * d;
+        m_grid.assign(sk.values.begin(), sk.values.end());
+        return;
+    }
     if (!has_carrier()) {
         m_integral = inv_aspect * hankel(env_r, R, 0.0);
         m_integral_sq = inv_aspect * hankel(env_pow(2), R, 0.0);
@@ -147,7 +189,15 @@ Kernel::Kernel(const KernelParams& params) : m_params(params) {
             err = std::max(err, std::abs(m_poly.evaluate(static_cast<float>(q)) - envelope(q)));
         }
         m_poly.max_error = err;
-        if (err < 1e-6 * e0 || degree >= 40) break;
+        if (err < 1e-6 * std::abs(e0) || degree >= 40) break;
+    }
+    if (!(m_poly.max_error < 1e-6 * std::abs(e0))) {
+        // The polynomial cannot follow this envelope (e.g. an oscillating sampled profile):
+        // tabulate it in q for linear interpolation instead (4097 entries: error
+        // ~ e''(q) / 8 / 4096^2 relative).
+        m_table.resize(4097);
+        for (size_t i = 0; i < m_table.size(); ++i)
+            m_table[i] = static_cast<float>(envelope(std::min(i / 4096.0, 1.0 - 1e-12)));
     }
 }
 
@@ -161,8 +211,37 @@ double Kernel::envelope(double q) const {
             return std::exp(-q * R * R / (2.0 * m_params.sigma * m_params.sigma));
         case KernelType::Gabor:
             return std::exp(-kPi * m_gabor_a * m_gabor_a * R * R * q);  // Lagae 2009 eq. 1
+        case KernelType::Sampled: {
+            const SampledKernel& sk = *m_params.sampled;
+            if (!sk.radial) return 0.0;
+            // Catmull–Rom in r; even extension at r = 0, zero beyond the last sample.
+            const int n = sk.n;
+            const double x = std::sqrt(q) * (n - 1);
+            const int i = std::min(static_cast<int>(x), n - 2);
+            const double t = x - i;
+            auto v = [&](int j) {
+                if (j < 0) j = -j;
+                return j < n ? sk.values[j] : 0.0;
+            };
+            const double p0 = v(i - 1), p1 = v(i), p2 = v(i + 1), p3 = v(i + 2);
+            return p1 + 0.5 * t * (p2 - p0 + t * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3 +
+                                                  t * (3.0 * (p1 - p2) + p3 - p0)));
+        }
     }
     return 0.0;
+}
+
+double Kernel::grid_value(double u, double v) const {
+    // Bilinear in the grid over [-R, R]^2; zero outside.
+    const SampledKernel& sk = *m_params.sampled;
+    const double R = m_params.radius;
+    const double gx = (u + R) / (2.0 * R) * (sk.n - 1), gy = (v + R) / (2.0 * R) * (sk.n - 1);
+    if (!(gx >= 0.0) || !(gy >= 0.0) || gx > sk.n - 1 || gy > sk.n - 1) return 0.0;
+    const int i = std::min(static_cast<int>(gx), sk.n - 2), j = std::min(static_cast<int>(gy), sk.n - 2);
+    const double a = gx - i, b = gy - j;
+    const double* r0 = sk.values.data() + size_t(j) * sk.n;
+    const double* r1 = r0 + sk.n;
+    return (1 - b) * ((1 - a) * r0[i] + a * r0[i + 1]) + b * ((1 - a) * r1[i] + a * r1[i + 1]);
 }
 
 double Kernel::evaluate(double dx, double dy, double theta) const {
@@ -170,6 +249,7 @@ double Kernel::evaluate(double dx, double dy, double theta) const {
     const double c = std::cos(o), s = std::sin(o);
     const double u = c * dx + s * dy, v = -s * dx + c * dy;
     const double R = m_params.radius;
+    if (is_grid()) return grid_value(u, m_params.aspect * v);
     const double q = (u * u + m_params.aspect * m_params.aspect * v * v) / (R * R);
     double h = envelope(q);
     if (has_carrier() && h != 0.0)
@@ -190,6 +270,28 @@ double Kernel::power_spectrum(double kx, double ky) const {
     const double ku = c * kx + s * ky, kv = -s * kx + c * ky;
     const double a = m_params.aspect;
     // Transform of e(u, a v) at (ku, kv) is (1/a) E(sqrt(ku^2 + (kv/a)^2)).
+    if (is_grid()) {
+        // FT of the bilinear interpolant: d^2 sinc^2(ku d) sinc^2(kv' d) sum v_ij e^{-2 pi i k.x_ij},
+        // in the kernel frame with the aspect squeeze (v' = kv / a, Jacobian 1/a).
+        const SampledKernel& sk = *m_params.sampled;
+        const int n = sk.n;
+        const double R = m_params.radius, d = 2.0 * R / (n - 1);
+        const double kv2 = kv / a;
+        auto sinc = [](double x) { return x == 0.0 ? 1.0 : std::sin(kPi * x) / (kPi * x); };
+        double re = 0.0, im = 0.0;
+        for (int j = 0; j < n; ++j) {
+            const double y = -R + j * d;
+            for (int i = 0; i < n; ++i) {
+                const double x = -R + i * d;
+                const double ph = -2.0 * kPi * (ku * x + kv2 * y);
+                const double v = sk.values[size_t(j) * n + i];
+                re += v * std::cos(ph);
+                im += v * std::sin(ph);
+            }
+        }
+        const double f = d * d * std::pow(sinc(ku * d) * sinc(kv2 * d), 2) / a;
+        return f * f * (re * re + im * im);
+    }
     auto E = [&](double u, double v) {
         return envelope_transform(std::sqrt(u * u + (v / a) * (v / a))) / a;
     };
@@ -204,7 +306,7 @@ double Kernel::power_spectrum(double kx, double ky) const {
 }
 
 double Kernel::radial_power_spectrum(double k) const {
-    if (!has_carrier() && m_params.aspect == 1.0) return power_spectrum(k, 0.0);
+    if (!has_carrier() && m_params.aspect == 1.0 && !is_grid()) return power_spectrum(k, 0.0);
     // Angular average: the spectrum has period pi in angle (|H(k)| = |H(-k)| for real h).
     const int n = 180;
     double sum = 0.0;
@@ -232,13 +334,13 @@ double Kernel::autocorrelation(double tx, double ty) const {
         for (int i = 0; i < detail::kGlPoints; ++i) {
             const double r = r0 + 0.5 * hr * (1.0 + xs[i]);
             const double wr = 0.5 * hr * ws[i] * r;
-            const double e = envelope(r * r / (R * R));
+            const double e = is_grid() ? 1.0 : envelope(r * r / (R * R));
             if (e == 0.0) continue;
             double ring = 0.0;
             for (int j = 0; j < angles; ++j) {
                 const double ang = 2.0 * kPi * (j + 0.5) / angles;
                 const double u = r * std::cos(ang), v = r * std::sin(ang) / a;
-                double h = e;
+                double h = is_grid() ? grid_value(u, a * v) : e;
                 if (has_carrier()) h *= std::cos(2.0 * kPi * m_params.frequency * u + m_params.phase);
                 // back to texture coordinates
                 const double x = c * u - s * v, y = s * u + c * v;

@@ -9,6 +9,7 @@
 // band-pass; Lagae et al. 2009). `aspect` >= 1 squeezes the kernel across its orientation.
 
 #include <array>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -16,11 +17,22 @@
 
 namespace impulse::kernels {
 
-enum class KernelType { Cosine, Gaussian, Gabor };
+/// Analytic kernels, and `Sampled`: a kernel given by samples (from a spectrum, an
+/// autocorrelation, an exemplar image or a low-pass pyramid level).
+enum class KernelType { Cosine, Gaussian, Gabor, Sampled };
 
 /// Names accepted in scene files, in enum order.
 inline constexpr std::array<std::string_view, 3> kKernelTypeNames = {"cosine", "gaussian",
                                                                       "gabor"};
+/// Samples of a kernel. Radial: h(r) at r_i = i R / (n - 1), i = 0 .. n-1, interpolated with
+/// a cubic (Catmull–Rom) in r. Grid: h at x_i = -R + i 2R / (n - 1) (same in y), row-major
+/// values[j * n + i] = h(x_i, y_j), bilinear; both zero beyond the radius R.
+struct SampledKernel {
+    bool radial = true;
+    int n = 0;
+    std::vector<double> values;
+};
+
 /// Name of a kernel type ("cosine", ...).
 std::string_view to_string(KernelType type);
 /// Kernel type from its name; nullopt when unknown.
@@ -37,6 +49,8 @@ struct KernelParams {
     double phase = 0.0;        ///< gabor only: carrier phase, radians
     double orientation = 0.0;  ///< direction of the kernel's u axis, radians from +x (CCW)
     double aspect = 1.0;       ///< >= 1: ratio of the extent along u to the extent across it
+    /// sampled only: the samples (radius above gives R); shared, immutable
+    std::shared_ptr<const SampledKernel> sampled;
 };
 
 /// Throws impulse::ValueError naming the first invalid field ("radius = -1: must be > 0").
@@ -64,6 +78,8 @@ public:
     /// Gabor envelope parameter a actually used (derived when params.bandwidth == 0); 0 otherwise.
     double gabor_a() const { return m_gabor_a; }
     bool has_carrier() const { return m_params.type == KernelType::Gabor; }
+    /// True when the kernel is a 2-D grid of samples (not radially symmetric).
+    bool is_grid() const { return m_params.sampled && !m_params.sampled->radial; }
 
     /// Envelope e(q) at normalised squared radius q (exact, double); 0 for q >= 1.
     double envelope(double q) const;
@@ -90,9 +106,15 @@ public:
 
     /// Fast envelope for the renderer.
     const EnvelopePolynomial& polynomial() const { return m_poly; }
+    /// Envelope tabulated at q_i = i / (n - 1) (for envelopes the polynomial cannot fit to
+    /// 1e-6, e.g. sampled radial kernels); empty when the polynomial is used.
+    const std::vector<float>& envelope_table() const { return m_table; }
+    /// Grid samples as floats (grid kernels only), row-major n x n over [-R, R]^2.
+    const std::vector<float>& grid_values() const { return m_grid; }
 
 private:
     double envelope_transform(double k) const;  ///< isotropic envelope's Hankel transform E(k)
+    double grid_value(double u, double v) const;  ///< grid kernels: bilinear sample at (u, v)
 
     KernelParams m_params;
     double m_gabor_a = 0.0;
@@ -100,6 +122,8 @@ private:
     double m_integral_sq = 0.0;
     double m_integral_4 = 0.0;
     EnvelopePolynomial m_poly;
+    std::vector<float> m_table;
+    std::vector<float> m_grid;
 };
 
 }  // namespace impulse::kernels

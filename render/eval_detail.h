@@ -22,6 +22,14 @@ struct LoopKernel {
     /// product of per-column and per-row factors (separable), a few operations per pixel.
     bool separable = false;
     float gauss_g = 0;
+    /// Envelope table in q (q_i = i / (table_n - 1)), linear interpolation; used instead of the
+    /// polynomial when non-null.
+    const float* table = nullptr;
+    int table_n = 0;
+    /// 2-D grid kernel (samples over [-R, R]^2 in the kernel frame), bilinear; when non-null.
+    const float* grid = nullptr;
+    int grid_n = 0;
+    float aspect = 1;
     const float* coeffs = nullptr;  ///< Chebyshev coefficients of the envelope in q
     int ncoeffs = 0;                ///< odd, 5 .. 41
 };

@@ -39,7 +39,8 @@ LoopKernel loop_kernel(const kernels::Kernel& k, const View& view) {
     lk.phase_cycles = static_cast<float>(p.phase / (2.0 * std::numbers::pi));
     lk.general = lk.carrier || p.aspect != 1.0;
     // Isotropic Gaussian envelopes (gaussian; gabor with aspect 1) take the separable path.
-    if (p.aspect == 1.0 && p.type != kernels::KernelType::Cosine) {
+    if (p.aspect == 1.0 && (p.type == kernels::KernelType::Gaussian ||
+                            p.type == kernels::KernelType::Gabor)) {
         lk.separable = true;
         const double s = view.scale;  // texture units per pixel
         lk.gauss_g = static_cast<float>(
@@ -49,6 +50,15 @@ LoopKernel loop_kernel(const kernels::Kernel& k, const View& view) {
     }
     lk.coeffs = k.polynomial().coefficients.data();
     lk.ncoeffs = static_cast<int>(k.polynomial().coefficients.size());
+    lk.aspect = static_cast<float>(p.aspect);
+    if (!k.envelope_table().empty()) {
+        lk.table = k.envelope_table().data();
+        lk.table_n = static_cast<int>(k.envelope_table().size());
+    }
+    if (k.is_grid()) {
+        lk.grid = k.grid_values().data();
+        lk.grid_n = p.sampled->n;
+    }
     return lk;
 }
 
