@@ -81,15 +81,8 @@ void ensure_directory(const std::string& path) {
         throw IoError(path + ": output directory " + d + " is not writable");
 }
 
-/// Grey display values -> RGB triples for the video encoder.
-void to_rgb(const render::Frame& f, const render::ValueMapping& m, std::vector<float>& rgb) {
-    rgb.resize(f.data.size() * 3);
-    const double s = 1.0 / (m.hi - m.lo);
-    for (size_t i = 0; i < f.data.size(); ++i) {
-        const float v = static_cast<float>(std::clamp((f.data[i] - m.lo) * s, 0.0, 1.0));
-        rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = v;
-    }
-}
+/// True when the scene's shading gives colour (a ramp or relief), not plain grey.
+bool colour_shading(const render::Shading& s) { return !s.ramp.empty() || s.relief != 0.0; }
 
 }  // namespace
 
@@ -192,13 +185,20 @@ int run_render(const RenderOptions& opt) {
         renderer.render(f, frame, eo);
         const double t = (std::llround(out.start_s * out.fps) + f) / out.fps;
         if (video) {
-            to_rgb(frame, mapping, rgb);
+            render::shade(frame, mapping, sc.shading, rgb);
             writer.write_frame(rgb.data());
         } else {
             render::Metadata m = meta;
             m.emplace_back("frame", std::to_string(f));
             m.emplace_back("time", std::to_string(t));
-            render::write_image(target, frame, mapping, m, out.bits == 16);
+            // EXR keeps the raw field; display formats get the shading (grey by default).
+            const bool exr = fs::path(target).extension() == ".exr";
+            if (!exr && colour_shading(sc.shading)) {
+                render::shade(frame, mapping, sc.shading, rgb);
+                render::write_rgb_image(target, out.width, out.height, rgb, m, out.bits == 16);
+            } else {
+                render::write_image(target, frame, mapping, m, out.bits == 16);
+            }
         }
         ++written;
         progress.update(written + skipped);

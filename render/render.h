@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "kernels/kernels.h"
+#include "render/shading.h"
 #include "render/video.h"
 #include "sim/sim.h"
 
@@ -87,5 +88,17 @@ Frame read_image(const std::string& path);
 
 /// True for extensions OIIO writes here (.exr .png .tif .tiff .jpg .jpeg).
 bool is_image_path(const std::string& path);
+
+/// What an image file holds, read from its header only (no pixels).
+struct ImageInfo {
+    int width = 0, height = 0, channels = 0;
+    bool is_float = false;  ///< float or half samples: raw field values, not display values
+    int bits = 8;           ///< bits per sample (8, 16, 32 ...)
+};
+/// Header of an image in any format OIIO reads. Throws IoError with OIIO's message.
+ImageInfo probe_image(const std::string& path);
+/// True when the extension belongs to a format this OIIO build can read (case-insensitive;
+/// e.g. .exr .hdr .png .tif .jpg .bmp .tga .dpx).
+bool is_readable_image_path(const std::string& path);
 
 }  // namespace impulse::render

@@ -15,6 +15,7 @@
 #include <string_view>
 #include <vector>
 
+#include "render/shading.h"
 #include "sim/sim.h"
 
 namespace impulse::scenes::detail {
@@ -81,6 +82,9 @@ private:
     const toml::node* m_self;
     std::set<std::string, std::less<>> m_known;
 };
+
+/// The [shading] table (scenes/shading_config.cpp).
+render::Shading read_shading(std::optional<Reader> r);
 
 /// Text of a node's value as written (for messages).
 std::string value_text(const toml::node& n);

@@ -61,6 +61,7 @@ struct Scene {
     CameraConfig camera;
     Limits limits;
     std::vector<LayerConfig> layers;
+    render::Shading shading;  ///< [shading]: how the field becomes display colour
     std::string hash;  ///< FNV-1a of the scene text and overrides, hex
     std::vector<std::string> warnings;  ///< accepted but suspicious values, one line each
 };

@@ -1,0 +1,104 @@
+// SPDX-License-Identifier: Apache-2.0
+// The [shading] table: colour ramps (named or explicit), height-field relief, background.
+
+#include <cstdio>
+#include <map>
+
+#include "scenes/reader.h"
+#include "scenes/scenes.h"
+
+namespace impulse::scenes::detail {
+namespace {
+
+using Ramp = std::vector<render::ColorStop>;
+
+/// Built-in ramps: display value t -> colour and opacity.
+const std::map<std::string, Ramp>& named_ramps() {
+    static const std::map<std::string, Ramp> ramps = {
+        {"grey", {{0.0, 0, 0, 0, 1}, {1.0, 1, 1, 1, 1}}},
+        // Clouds over the sky gradient: transparent below the mean, white and opaque above.
+        {"clouds", {{0.0, 1, 1, 1, 0}, {0.45, 1, 1, 1, 0}, {0.62, 0.96f, 0.97f, 1, 0.85f}, {0.8, 1, 1, 1, 1}, {1.0, 1, 1, 1, 1}}},
+        {"fire", {{0.0, 0, 0, 0, 1}, {0.35, 0.5f, 0.02f, 0, 1}, {0.55, 0.95f, 0.3f, 0.02f, 1}, {0.75, 1, 0.75f, 0.15f, 1}, {1.0, 1, 1, 0.85f, 1}}},
+        {"ocean", {{0.0, 0.0f, 0.08f, 0.2f, 1}, {0.5, 0.05f, 0.3f, 0.5f, 1}, {0.85, 0.5f, 0.75f, 0.85f, 1}, {1.0, 0.95f, 0.98f, 1, 1}}},
+        {"terrain", {{0.0, 0.1f, 0.25f, 0.55f, 1}, {0.4, 0.25f, 0.5f, 0.2f, 1}, {0.65, 0.55f, 0.45f, 0.3f, 1}, {0.85, 0.6f, 0.6f, 0.6f, 1}, {1.0, 1, 1, 1, 1}}},
+        {"marble", {{0.0, 0.15f, 0.15f, 0.18f, 1}, {0.3, 0.85f, 0.84f, 0.8f, 1}, {1.0, 0.97f, 0.96f, 0.94f, 1}}},
+        {"wood", {{0.0, 0.35f, 0.18f, 0.07f, 1}, {0.5, 0.62f, 0.38f, 0.18f, 1}, {1.0, 0.8f, 0.58f, 0.33f, 1}}},
+        {"ink", {{0.0, 0.02f, 0.02f, 0.1f, 1}, {0.5, 0.2f, 0.25f, 0.6f, 1}, {1.0, 0.96f, 0.95f, 0.9f, 1}}},
+    };
+    return ramps;
+}
+
+/// A colour: [r, g, b] or [r, g, b, a] with components in [0, 1], or "#rrggbb".
+bool parse_color(const toml::node& n, float c[4]) {
+    c[3] = 1.0f;
+    if (auto s = n.value<std::string_view>()) {
+        unsigned r, g, b;
+        if (s->size() != 7 || std::sscanf(std::string(*s).c_str(), "#%02x%02x%02x", &r, &g, &b) != 3)
+            return false;
+        c[0] = r / 255.0f, c[1] = g / 255.0f, c[2] = b / 255.0f;
+        return true;
+    }
+    const toml::array* a = n.as_array();
+    if (!a || a->size() < 3 || a->size() > 4) return false;
+    for (size_t i = 0; i < a->size(); ++i) {
+        if (!(*a)[i].is_number()) return false;
+        const double v = (*a)[i].value<double>().value_or(-1);
+        if (!(v >= 0.0 && v <= 1.0)) return false;
+        c[i] = static_cast<float>(v);
+    }
+    return true;
+}
+
+}  // namespace
+
+render::Shading read_shading(std::optional<Reader> r) {
+    render::Shading s;
+    if (!r) return s;
+    if (const toml::node* n = r->node("ramp")) {
+        if (auto name = n->value<std::string_view>()) {
+            auto it = named_ramps().find(std::string(*name));
+            if (it == named_ramps().end()) {
+                std::string list;
+                for (const auto& [k, v] : named_ramps()) list += (list.empty() ? "" : ", ") + k;
+                r->fail(n, "ramp", "expected one of " + list + ", or a list of [t, colour] stops");
+            }
+            s.ramp = it->second;
+        } else if (const toml::array* a = n->as_array()) {
+            const char* what = "expected stops [t, \"#rrggbb\"] or [t, [r, g, b(, a)]] with t increasing in [0, 1]";
+            for (const auto& e : *a) {
+                const toml::array* stop = e.as_array();
+                if (!stop || stop->size() != 2 || !(*stop)[0].is_number()) r->fail(&e, "ramp", what);
+                render::ColorStop cs;
+                cs.t = (*stop)[0].value<double>().value_or(-1);
+                float c[4];
+                if (!(cs.t >= 0.0 && cs.t <= 1.0) || !parse_color((*stop)[1], c)) r->fail(&e, "ramp", what);
+                if (!s.ramp.empty() && !(cs.t > s.ramp.back().t)) r->fail(&e, "ramp", what);
+                cs.r = c[0], cs.g = c[1], cs.b = c[2], cs.a = c[3];
+                s.ramp.push_back(cs);
+            }
+            if (s.ramp.empty()) r->fail(n, "ramp", what);
+        } else {
+            r->fail(n, "ramp", "expected a ramp name or a list of stops, found " + type_name(*n));
+        }
+    }
+    s.relief = r->number("relief", 0.0, [](double v) { return v >= 0.0; }, "a relief >= 0 (0: flat)");
+    if (auto l = r->pair("light", "[azimuth, elevation] in degrees, elevation in (0, 90]")) {
+        if (!((*l)[1] > 0.0 && (*l)[1] <= 90.0))
+            r->fail(r->node("light"), "light", "expected [azimuth, elevation] in degrees, elevation in (0, 90]");
+        s.light_azimuth_deg = (*l)[0];
+        s.light_elevation_deg = (*l)[1];
+    }
+    s.ambient = r->number("ambient", s.ambient, [](double v) { return v >= 0.0 && v <= 1.0; }, "a fraction in [0, 1]");
+    for (const char* key : {"top", "bottom"}) {
+        if (const toml::node* n = r->node(key)) {
+            float c[4];
+            if (!parse_color(*n, c)) r->fail(n, key, "expected a colour \"#rrggbb\" or [r, g, b] in [0, 1]");
+            float* dst = std::string(key) == "top" ? s.top : s.bottom;
+            dst[0] = c[0], dst[1] = c[1], dst[2] = c[2];
+        }
+    }
+    r->finish();
+    return s;
+}
+
+}  // namespace impulse::scenes::detail
