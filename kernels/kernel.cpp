@@ -61,6 +61,11 @@ std::optional<KernelType> kernel_type_from_string(std::string_view name) {
 
 void validate(const KernelParams& p) {
     require_positive("radius", p.radius);
+    if (p.radius > 1e6) {
+        std::ostringstream s;
+        s << "radius = " << p.radius << ": must be at most 1e6 texture units";
+        throw ValueError(s.str());
+    }
     require_finite("orientation", p.orientation);
     require_finite("phase", p.phase);
     require_finite("aspect", p.aspect);
@@ -86,6 +91,12 @@ void validate(const KernelParams& p) {
         if (p.frequency < 0.0) {
             std::ostringstream s;
             s << "frequency = " << p.frequency << ": must be >= 0 (cycles per unit)";
+            throw ValueError(s.str());
+        }
+        if (p.frequency * p.radius > 1e4) {
+            std::ostringstream s;
+            s << "frequency = " << p.frequency << ": " << p.frequency * p.radius
+              << " cycles across the kernel radius; expected at most 10000";
             throw ValueError(s.str());
         }
         require_finite("bandwidth", p.bandwidth);

@@ -329,8 +329,13 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
         p.orientation = static_cast<sim::OrientationMode>(r.choice("orientation", sim::kOrientationModeNames, 0));
         p.max_travel = r.number("max_travel", 4096.0, kPositive, "a distance > 0 in texture units");
         p.cell_size = L.kernel.radius;
-        const kernels::Kernel k(L.kernel);
-        p.intensity = L.density / k.support_area();
+        double area = 0.0;
+        try {
+            area = kernels::Kernel(L.kernel).support_area();
+        } catch (const ValueError& e) {  // combinations the per-key checks cannot see
+            r.fail(r.node("kernel"), "kernel", e.what());
+        }
+        p.intensity = L.density / area;
         L.flow = read_flows(r, p, base);
         if (L.density < 1.0)
             r.warn("density", "below 1 impulse per kernel area the noise is lumpy, see Lewis 1989 §4.1");
