@@ -42,6 +42,13 @@ uint64_t mix_seed(uint64_t global, uint64_t layer) {
     return z ^ (z >> 31);
 }
 
+/// A number as a person writes it (30, 2.5), for messages.
+std::string num(double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+}
+
 bool whole_frames(double seconds, double fps) {
     const double f = seconds * fps;
     return std::abs(f - std::round(f)) < 1e-6;
@@ -234,10 +241,196 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
     return sum;
 }
 
-kernels::KernelParams read_kernel(std::optional<Reader> r) {
+/// Kernel types of scene files: the analytic ones (kernels::kKernelTypeNames, in enum order),
+/// then the designed ones (docs/scenes.md "Designed kernels").
+const std::array<std::string_view, 6> kSceneKernelTypes = {"cosine",   "gaussian",        "gabor",
+                                                           "spectrum", "autocorrelation", "exemplar"};
+
+/// A designed kernel: `spectrum`, `autocorrelation` or `exemplar` (kernels/spectral.h). Library
+/// errors (ValueError, IoError) are reported at the key whose value caused them.
+kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Reader& layer,
+                                           const fs::path& base) {
+    namespace K = kernels;
+    const std::string tname(type);
+    auto detail_of = [](const std::exception& e, const std::string& prefix) {
+        std::string m = e.what();  // drop a repeated 'expression "...": ' prefix
+        return m.rfind(prefix, 0) == 0 ? m.substr(prefix.size()) : m;
+    };
+    auto path_of = [&](const std::string& rel) {
+        return fs::path(rel).is_absolute() ? fs::path(rel) : base / rel;
+    };
+    const auto window = static_cast<K::DesignWindow>(r.choice("window", K::kDesignWindowNames, 1));
+    const toml::node* radius_node = r.node("radius");
+    const double radius = r.number("radius", 0.0, kPositive, "a radius > 0 (texture units)");
+    const double orientation = r.number("orientation", 0.0);
+    const double aspect = r.number("aspect", 1.0, [](double v) { return v >= 1.0; }, "a ratio >= 1");
+    for (const char* g : {"sigma", "frequency", "bandwidth", "phase"})
+        if (r.has(g)) r.warn(g, "ignored for kernel type " + tname);
+
+    K::KernelParams k;
+    if (type == "exemplar") {
+        const toml::node* pn = r.node("path");
+        const std::string rel = r.string("path", "");
+        if (rel.empty()) r.fail(pn, "path", "expected the path of an exemplar image (relative to the scene file)");
+        for (const char* g : {"energy", "nyquist", "rolloff", "max_radius", "model", "expression", "table"})
+            if (r.has(g)) r.warn(g, "ignored for kernel type exemplar");
+        K::ExemplarOptions o;
+        o.radius = radius;
+        o.window = window;
+        // Normalised at this layer's density and amplitude distribution (read here as well as
+        // in read_scene: same values, same messages).
+        o.density = layer.number("density", 16.0, kPositive, "a density > 0 (impulses per kernel area)");
+        o.amplitude_second_moment = sim::amplitude_second_moment(
+            static_cast<sim::Amplitude>(layer.choice("amplitude", sim::kAmplitudeNames, 0)));
+        render::Frame image;
+        try {
+            image = render::read_image(path_of(rel).string());
+        } catch (const Error& e) {
+            r.fail(pn, "path", e.what());
+        }
+        try {
+            k = K::kernel_from_exemplar(image.data.data(), image.width, image.height, o).params;
+        } catch (const ValueError& e) {
+            if (radius_node) r.fail(radius_node, "radius", e.what());
+            r.fail(pn, "path", e.what());
+        }
+    } else {
+        const bool acf = type == "autocorrelation";
+        K::DesignOptions o;
+        o.window = window;
+        o.radius = radius;
+        const toml::node* energy_node = r.node("energy");
+        o.energy = r.number("energy", o.energy, [](double v) { return v > 0 && v < 1; },
+                            "a fraction in (0, 1) of the kernel energy to keep, e.g. 0.99");
+        if (energy_node && radius_node)
+            r.fail(energy_node, "energy", "give energy or radius, not both (radius fixes the size)");
+        o.nyquist = r.number("nyquist", o.nyquist, kPositive,
+                             "a frequency > 0 (cycles per unit; 0.5 = pixel Nyquist at zoom 1)");
+        o.rolloff = r.number("rolloff", o.rolloff, [](double v) { return v >= 0 && v <= 0.9; },
+                             "a fraction in [0, 0.9] of nyquist");
+        o.max_radius = r.number("max_radius", o.max_radius, kPositive, "a radius > 0 (texture units)");
+        if (radius > o.max_radius)
+            r.fail(radius_node, "radius", "expected <= max_radius = " + std::to_string(o.max_radius));
+
+        // Exactly one source.
+        std::vector<std::string> given;
+        for (const char* g : {"model", "expression", "table"})
+            if (r.has(g)) given.push_back(g);
+        if (given.size() > 1)
+            r.fail(r.node(given[1]), given[1], "give one of model, expression" +
+                                                   std::string(acf ? "" : ", table") + ", not both " +
+                                                   given[0] + " and " + given[1]);
+        if (given.empty())
+            r.fail(nullptr, "model", acf ? "missing: a kernel of type autocorrelation needs model = "
+                                           "\"markov\" (or ...) or expression = \"...\" of r"
+                                         : "missing: a kernel of type spectrum needs model = \"markov\" "
+                                           "(or ...), expression = \"...\" of k and theta, or table = "
+                                           "\"path.csv\"");
+        const std::string source = given[0];
+        const toml::node* sn = r.node(source);
+
+        // Model parameters: read the ones the model uses, warn about the others.
+        const std::array<const char*, 10> model_keys = {"variance", "length", "exponent", "nu",    "k0",
+                                                        "f0",       "width",  "slope",    "k_low", "k_high"};
+        K::ModelParams mp;
+        std::vector<const char*> used;
+        if (source == "model") {
+            const std::string name = r.string("model", "");
+            const auto m = K::spectral_model_from_string(name);
+            if (!m) {
+                std::string list;
+                for (auto n : K::kSpectralModelNames) list += (list.empty() ? "" : ", ") + std::string(n);
+                r.fail(sn, "model", "expected one of " + list + " (exponential = markov)");
+            }
+            if (acf && !K::defined_by_autocorrelation(*m))
+                r.fail(sn, "model", "defined by its spectrum: expected one of markov, gaussian, markaussian, "
+                                    "matern for an autocorrelation kernel (or use type = \"spectrum\")");
+            mp.model = *m;
+            used.push_back("variance");
+            switch (mp.model) {
+                case K::SpectralModel::Markov:
+                case K::SpectralModel::Gaussian: used.push_back("length"); break;
+                case K::SpectralModel::Markaussian: used.insert(used.end(), {"length", "exponent"}); break;
+                case K::SpectralModel::Matern: used.insert(used.end(), {"length", "nu"}); break;
+                case K::SpectralModel::Lorentzian: used.push_back("k0"); break;
+                case K::SpectralModel::Bandpass: used.insert(used.end(), {"f0", "width"}); break;
+                case K::SpectralModel::Power: used.insert(used.end(), {"slope", "k_low", "k_high"}); break;
+            }
+            auto uses = [&](std::string_view key) {
+                return std::find(used.begin(), used.end(), key) != used.end();
+            };
+            if (uses("variance")) mp.variance = r.number("variance", mp.variance, kPositive, "a variance > 0 (R(0))");
+            if (uses("length")) mp.length = r.number("length", mp.length, kPositive, "a correlation length > 0 (texture units)");
+            if (uses("exponent"))
+                mp.exponent = r.number("exponent", mp.exponent, [](double v) { return v > 0 && v <= 2; },
+                                       "an exponent in (0, 2] (exp(-(r/l)^a) is an autocorrelation only there)");
+            if (uses("nu")) mp.nu = r.number("nu", mp.nu, [](double v) { return v > 0 && v <= 50; }, "a smoothness in (0, 50]");
+            if (uses("k0")) mp.k0 = r.number("k0", mp.k0, kPositive, "a corner frequency > 0 (cycles per unit)");
+            if (uses("f0")) mp.f0 = r.number("f0", mp.f0, kNonNegative, "a centre frequency >= 0 (cycles per unit)");
+            if (uses("width")) mp.width = r.number("width", mp.width, kPositive, "a ring width > 0 (cycles per unit)");
+            if (uses("slope")) mp.slope = r.number("slope", mp.slope, kPositive, "a slope > 0 (S ~ k^-slope)");
+            if (uses("k_low")) mp.k_low = r.number("k_low", mp.k_low, kPositive, "a low cut-off > 0 (cycles per unit)");
+            if (uses("k_high")) mp.k_high = r.number("k_high", mp.k_high, kNonNegative, "a high cut-off >= 0 (0: none)");
+            try {
+                K::validate(mp);
+            } catch (const ValueError& e) {  // a combination (power: slope <= 2 without k_high)
+                r.fail(r.node("slope"), "slope", e.what());
+            }
+        }
+        for (const char* g : model_keys)
+            if (std::find(used.begin(), used.end(), std::string_view(g)) == used.end() && r.has(g))
+                r.warn(g, source == "model" ? "ignored for model " + r.string("model", "")
+                                            : std::string("ignored without a model"));
+        if (acf && source == "table")
+            r.fail(sn, "table", "a table gives a spectrum: use type = \"spectrum\" (or an expression of r)");
+
+        K::DesignedKernel d;
+        try {
+            if (acf) {
+                const K::Autocorrelation a = source == "model"
+                                                 ? K::model_autocorrelation(mp)
+                                                 : K::expression_autocorrelation(r.string("expression", ""));
+                d = K::kernel_from_autocorrelation(a, o);
+            } else {
+                K::Spectrum sp;
+                if (source == "model") sp = K::model_spectrum(mp, o.nyquist);
+                else if (source == "expression") sp = K::expression_spectrum(r.string("expression", ""));
+                else sp = K::table_spectrum(path_of(r.string("table", "")).string());
+                d = K::kernel_from_spectrum(sp, o);
+            }
+        } catch (const Error& e) {
+            const std::string prefix =
+                source == "expression" ? "expression \"" + r.string("expression", "") + "\": " : "";
+            // Radius problems belong to the radius or energy key when one was given.
+            const std::string what = e.what();
+            if (what.find("radius") != std::string::npos && (radius_node || energy_node))
+                r.fail(radius_node ? radius_node : energy_node, radius_node ? "radius" : "energy",
+                       detail_of(e, prefix));
+            r.fail(sn, source, detail_of(e, prefix));
+        }
+        if (d.report.passband_error > 0.2) {
+            std::ostringstream s;
+            s << "the designed kernel (radius " << d.report.radius << ", " << 100 * d.report.energy_fraction
+              << " % of the energy) misses the target spectrum by up to "
+              << std::lround(100 * d.report.passband_error)
+              << " % in the pass band; a larger energy (e.g. 0.999) or radius costs no time per pixel";
+            r.warn(radius_node ? "radius" : "energy", s.str());
+        }
+        k = d.params;
+    }
+    k.orientation = orientation;
+    k.aspect = aspect;
+    r.finish();
+    return k;
+}
+
+kernels::KernelParams read_kernel(std::optional<Reader> r, Reader& layer, const fs::path& base) {
     kernels::KernelParams k;
     if (!r) return k;
-    k.type = static_cast<kernels::KernelType>(r->choice("type", kernels::kKernelTypeNames, 0));
+    const size_t type = r->choice("type", kSceneKernelTypes, 0);
+    if (type >= kernels::kKernelTypeNames.size())
+        return read_designed_kernel(*r, kSceneKernelTypes[type], layer, base);
+    k.type = static_cast<kernels::KernelType>(type);
     k.radius = r->number("radius", k.radius, kPositive, "a radius > 0 (texture units)");
     k.sigma = r->number("sigma", k.sigma, kPositive, "a standard deviation > 0");
     k.frequency = r->number("frequency", k.frequency, kNonNegative, "a frequency >= 0 (cycles per unit)");
@@ -273,7 +466,7 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
         s.output.fps = o->number("fps", 30.0, [](double v) { return v > 0 && v <= 1000; }, "frames per second in (0, 1000]");
         s.output.start_s = o->number("start", 0.0, kNonNegative, "a time >= 0 in seconds");
         if (!whole_frames(s.output.start_s, s.output.fps))
-            o->fail(o->node("start"), "start", "expected a whole number of frames at fps = " + std::to_string(s.output.fps));
+            o->fail(o->node("start"), "start", "expected a whole number of frames at fps = " + num(s.output.fps));
         const std::array<std::string_view, 5> codecs = {"auto", "h264", "prores", "ffv1", "vp9"};
         s.output.codec = std::string(codecs[o->choice("codec", codecs, 0)]);
         s.output.crf = static_cast<int>(o->integer("crf", 18, 0, 63));
@@ -300,7 +493,7 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
     for (size_t i = 0; i < layers.size(); ++i) {
         Reader& r = layers[i];
         LayerConfig L;
-        L.kernel = read_kernel(r.table("kernel"));
+        L.kernel = read_kernel(r.table("kernel"), r, base);
         if (!r.has("kernel")) r.node("kernel");
         sim::ProcessConfig& p = L.process;
         p.layer = static_cast<uint32_t>(i);
@@ -318,10 +511,10 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
                 r.fail(r.node("loop"), "loop", "a loop needs moving particles: set lifetime > 0");
             if (p.loop_s < p.lifetime_s)
                 r.fail(r.node("loop"), "loop",
-                       "a loop shorter than the lifetime (" + std::to_string(p.lifetime_s) +
+                       "a loop shorter than the lifetime (" + num(p.lifetime_s) +
                            " s) cannot repeat its births: expected loop >= lifetime");
             if (!whole_frames(p.loop_s, s.output.fps))
-                r.fail(r.node("loop"), "loop", "expected a whole number of frames at fps = " + std::to_string(s.output.fps));
+                r.fail(r.node("loop"), "loop", "expected a whole number of frames at fps = " + num(s.output.fps));
         }
         p.integrator = static_cast<sim::Integrator>(r.choice("integrator", sim::kIntegratorNames, 0));
         p.substeps = static_cast<int>(r.integer("substeps", 2, 1, 64));

@@ -2,6 +2,7 @@
 #include "scenes/reader.h"
 
 #include <algorithm>
+#include <cstdint>
 #include <cmath>
 #include <sstream>
 
@@ -32,11 +33,18 @@ std::optional<std::string> nearest(std::string_view word, const std::vector<std:
 }
 
 std::string value_text(const toml::node& n) {
+    // Compact, as a person would write it: 0.2 not 0.20000000000000001, [0, 64] not [ 0, 64 ].
     std::ostringstream s;
     if (auto v = n.as_string()) {
         s << '"' << v->get() << '"';
     } else if (auto f = n.as_floating_point()) {
         s << f->get();
+    } else if (auto a = n.as_array()) {
+        s << '[';
+        for (size_t i = 0; i < a->size(); ++i) s << (i ? ", " : "") << value_text((*a)[i]);
+        s << ']';
+    } else if (n.is_table()) {
+        s << "{...}";
     } else {
         n.visit([&](auto&& x) { s << x; });
     }
@@ -89,7 +97,9 @@ std::string Reader::location(const toml::node* n, std::string_view key) const {
 void Reader::fail(const toml::node* n, std::string_view key, const std::string& what) const {
     std::ostringstream s;
     s << location(n, key) << ": " << key_path(key);
-    if (n) s << " = " << value_text(*n);
+    // Tables and lists of tables are pointed at, not printed.
+    const bool composite = n && (n->is_table() || (n->is_array() && n->as_array()->is_array_of_tables()));
+    if (n && !composite) s << " = " << value_text(*n);
     s << ": " << what;
     throw SceneError(s.str());
 }
@@ -122,7 +132,9 @@ int64_t Reader::integer(std::string_view key, int64_t fallback, int64_t lo, int6
     if (!n->is_integer()) fail(n, key, "expected an integer, found " + type_name(*n));
     const int64_t v = n->value<int64_t>().value_or(0);
     if (v < lo || v > hi)
-        fail(n, key, "expected an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+        fail(n, key, hi == INT64_MAX ? "expected an integer >= " + std::to_string(lo)
+                                     : "expected an integer in [" + std::to_string(lo) + ", " +
+                                           std::to_string(hi) + "]");
     return v;
 }
 
