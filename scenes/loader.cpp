@@ -521,14 +521,11 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
         p.jacobian = r.boolean("jacobian", true);
         p.orientation = static_cast<sim::OrientationMode>(r.choice("orientation", sim::kOrientationModeNames, 0));
         p.max_travel = r.number("max_travel", 4096.0, kPositive, "a distance > 0 in texture units");
-        p.cell_size = L.kernel.radius;
-        double area = 0.0;
         try {
-            area = kernels::Kernel(L.kernel).support_area();
+            prepare_layer(L);
         } catch (const ValueError& e) {  // combinations the per-key checks cannot see
             r.fail(r.node("kernel"), "kernel", e.what());
         }
-        p.intensity = L.density / area;
         L.flow = read_flows(r, p, base);
         if (L.density < 1.0)
             r.warn("density", "below 1 impulse per kernel area the noise is lumpy, see Lewis 1989 §4.1");
@@ -540,6 +537,13 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
 }
 
 }  // namespace
+
+void prepare_layer(LayerConfig& layer) {
+    // Seeding cells as large as the kernel: a pixel's support meets at most 3 x 3 cells
+    // (Lewis 1989 §4.1), which the naive reference relies on.
+    layer.process.cell_size = layer.kernel.radius;
+    layer.process.intensity = layer.density / kernels::Kernel(layer.kernel).support_area();
+}
 
 Scene load_scene_string(std::string_view text, const std::string& name,
                         const std::vector<std::string>& overrides) {

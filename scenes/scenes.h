@@ -66,6 +66,11 @@ struct Scene {
     std::vector<std::string> warnings;  ///< accepted but suspicious values, one line each
 };
 
+/// Derive a layer's process.intensity (density / kernel area) and process.cell_size from its
+/// density and kernel. The loader does it; call it after building or changing a layer in code.
+/// Throws ValueError for an invalid kernel.
+void prepare_layer(LayerConfig& layer);
+
 /// Load a scene file, applying `--set key=value` overrides (dotted paths, array elements by
 /// index: "layer.0.kernel.radius=8"). Throws SceneError with "file:line:col: key = value:
 /// expected ..." on any problem, including unknown keys (with the nearest valid name).
