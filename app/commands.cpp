@@ -3,7 +3,7 @@
 
 #include "app/commands.h"
 
-#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -119,10 +119,6 @@ std::pair<long long, long long> parse_frame_range(const std::string& text, long 
 }
 
 int run_render(const RenderOptions& opt) {
-    std::unique_ptr<tbb::global_control> threads;
-    if (opt.threads > 0)
-        threads = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
-                                                        opt.threads);
     const std::string path = scenes::resolve_scene(opt.scene);
     auto overrides = overrides_for(opt.sets, opt.size, opt.seed);
     if (!opt.codec.empty()) overrides.push_back("output.codec=\"" + opt.codec + "\"");
@@ -152,7 +148,10 @@ int run_render(const RenderOptions& opt) {
     render::EvalOptions eo;
     eo.tile_size = opt.tile;
 
-    render::Metadata meta = {{"seed", std::to_string(sc.layers.front().process.seed)},
+    std::string layer_seeds;
+    for (const auto& l : sc.layers) layer_seeds += (layer_seeds.empty() ? "" : " ") + std::to_string(l.process.seed);
+    render::Metadata meta = {{"seed", std::to_string(sc.seed)},
+                             {"layer_seeds", layer_seeds},
                              {"scene", sc.path},
                              {"scene_hash", sc.hash},
                              {"fps", std::to_string(out.fps)},
@@ -175,6 +174,9 @@ int run_render(const RenderOptions& opt) {
     render::Frame frame;
     std::vector<float> rgb;
     long long written = 0, skipped = 0;
+    // --threads maps to a task arena: every parallel loop below runs inside it.
+    tbb::task_arena arena(opt.threads > 0 ? opt.threads : tbb::task_arena::automatic);
+    arena.execute([&] {
     for (long long f = first; f <= last; ++f) {
         if (g_interrupted) break;
         const std::string target = sequence ? expand_pattern(opt.output, f) : opt.output;
@@ -203,6 +205,7 @@ int run_render(const RenderOptions& opt) {
         ++written;
         progress.update(written + skipped);
     }
+    });
     progress.done();
     std::signal(SIGINT, previous);
     if (video) writer.close();  // on interruption too: what was encoded stays playable

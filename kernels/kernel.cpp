@@ -74,7 +74,15 @@ void validate(const KernelParams& p) {
         s << "aspect = " << p.aspect << ": must be >= 1 (extent along / across the orientation)";
         throw ValueError(s.str());
     }
-    if (p.type == KernelType::Gaussian) require_positive("sigma", p.sigma);
+    if (p.type == KernelType::Gaussian) {
+        require_positive("sigma", p.sigma);
+        if (p.radius / p.sigma > 1e3) {
+            std::ostringstream s;
+            s << "sigma = " << p.sigma << ": radius / sigma = " << p.radius / p.sigma
+              << ", expected at most 1000 (the kernel would be zero almost everywhere)";
+            throw ValueError(s.str());
+        }
+    }
     if (p.type == KernelType::Sampled) {
         if (!p.sampled || p.sampled->n < 4)
             throw ValueError("sampled kernel: expected at least 4 samples per axis");
@@ -136,31 +144,26 @@ Kernel::Kernel(const KernelParams& params) : m_params(params) {
     // cos^4 = 3/8 + 1/2 cos 2x + 1/8 cos 4x); each cosine term is the envelope power's
     // transform at the harmonic (the integral of e(x) cos(2 pi k u + c) is cos(c) E(k)).
     if (is_grid()) {
-        // Exact integrals of the bilinear interpolant: tensor products of the 1-D rules
-        // int lerp = (a + b)/2 and int lerp^2 = (a^2 + ab + b^2)/3 per cell; h^4 by the
-        // trapezoid rule on the samples (an approximation, O(spacing^2)).
+        // Integrals of the bilinear interpolant masked to the disk (what the renderer
+        // evaluates): each cell sub-sampled 8 x 8 at midpoints, error O(spacing^2 / 64 h'').
         const SampledKernel& sk = *params.sampled;
         const int n = sk.n;
         const double d = 2.0 * R / (n - 1);
-        auto val = [&](int i, int j) { return sk.values[size_t(j) * n + i]; };
+        constexpr int kSub = 8;
         double i1 = 0, i2 = 0, i4 = 0;
         for (int j = 0; j + 1 < n; ++j)
-            for (int i = 0; i + 1 < n; ++i) {
-                const double c[2][2] = {{val(i, j), val(i + 1, j)}, {val(i, j + 1), val(i + 1, j + 1)}};
-                const double M[2][2] = {{1.0 / 3, 1.0 / 6}, {1.0 / 6, 1.0 / 3}};
-                double sq = 0;
-                for (int a = 0; a < 2; ++a)
-                    for (int b = 0; b < 2; ++b)
-                        for (int e = 0; e < 2; ++e)
-                            for (int f = 0; f < 2; ++f) sq += M[a][e] * M[b][f] * c[a][b] * c[e][f];
-                i1 += 0.25 * (c[0][0] + c[0][1] + c[1][0] + c[1][1]);
-                i2 += sq;
-                i4 += 0.25 * (std::pow(c[0][0], 4) + std::pow(c[0][1], 4) + std::pow(c[1][0], 4) +
-                              std::pow(c[1][1], 4));
-            }
-        m_integral = inv_aspect * i1 * d * d;
-        m_integral_sq = inv_aspect * i2 * d * d;
-        m_integral_4 = inv_aspect * i4 * d * d;
+            for (int i = 0; i + 1 < n; ++i)
+                for (int b = 0; b < kSub; ++b)
+                    for (int a = 0; a < kSub; ++a) {
+                        const double u = -R + (i + (a + 0.5) / kSub) * d;
+                        const double v = -R + (j + (b + 0.5) / kSub) * d;
+                        const double h = grid_value(u, v);
+                        i1 += h, i2 += h * h, i4 += h * h * h * h;
+                    }
+        const double cell = d * d / (kSub * kSub);
+        m_integral = inv_aspect * i1 * cell;
+        m_integral_sq = inv_aspect * i2 * cell;
+        m_integral_4 = inv_aspect * i4 * cell;
         m_grid.assign(sk.values.begin(), sk.values.end());
         return;
     }
@@ -203,12 +206,22 @@ Kernel::Kernel(const KernelParams& params) : m_params(params) {
         if (err < 1e-6 * std::abs(e0) || degree >= 40) break;
     }
     if (!(m_poly.max_error < 1e-6 * std::abs(e0))) {
-        // The polynomial cannot follow this envelope (e.g. an oscillating sampled profile):
-        // tabulate it in q for linear interpolation instead (4097 entries: error
-        // ~ e''(q) / 8 / 4096^2 relative).
-        m_table.resize(4097);
-        for (size_t i = 0; i < m_table.size(); ++i)
-            m_table[i] = static_cast<float>(envelope(std::min(i / 4096.0, 1.0 - 1e-12)));
+        // The polynomial cannot follow this envelope (e.g. an oscillating sampled profile or
+        // a Gaussian many sigmas wide): tabulate it in q for linear interpolation, doubling the
+        // table until the error at the midpoints (where linear interpolation is worst,
+        // ~ e''/8 spacing^2) is below the polynomial's promise, up to 2^20 intervals.
+        for (size_t intervals = 4096;; intervals *= 2) {
+            m_table.resize(intervals + 1);
+            for (size_t i = 0; i <= intervals; ++i)
+                m_table[i] = static_cast<float>(envelope(std::min(double(i) / intervals, 1.0 - 1e-12)));
+            double err = 0.0;
+            for (size_t i = 0; i < intervals; ++i) {
+                const double q = (i + 0.5) / intervals;
+                err = std::max(err, std::abs(0.5 * (double(m_table[i]) + m_table[i + 1]) - envelope(q)));
+            }
+            m_table_error = err;
+            if (err < 1e-6 * std::abs(e0) || intervals >= (size_t(1) << 20)) break;
+        }
     }
 }
 
@@ -219,7 +232,10 @@ double Kernel::envelope(double q) const {
         case KernelType::Cosine:
             return 0.5 + 0.5 * std::cos(kPi * std::sqrt(q));  // Lewis 1989 §4.1
         case KernelType::Gaussian:
-            return std::exp(-q * R * R / (2.0 * m_params.sigma * m_params.sigma));
+        {
+            const double rs = R / m_params.sigma;  // the ratio, so tiny sigmas cannot underflow
+            return std::exp(-0.5 * q * rs * rs);
+        }
         case KernelType::Gabor:
             return std::exp(-kPi * m_gabor_a * m_gabor_a * R * R * q);  // Lagae 2009 eq. 1
         case KernelType::Sampled: {
@@ -248,6 +264,7 @@ double Kernel::grid_value(double u, double v) const {
     const double R = m_params.radius;
     const double gx = (u + R) / (2.0 * R) * (sk.n - 1), gy = (v + R) / (2.0 * R) * (sk.n - 1);
     if (!(gx >= 0.0) || !(gy >= 0.0) || gx > sk.n - 1 || gy > sk.n - 1) return 0.0;
+    if (u * u + v * v >= R * R) return 0.0;  // the support is the disk, as in the renderer
     const int i = std::min(static_cast<int>(gx), sk.n - 2), j = std::min(static_cast<int>(gy), sk.n - 2);
     const double a = gx - i, b = gy - j;
     const double* r0 = sk.values.data() + size_t(j) * sk.n;
