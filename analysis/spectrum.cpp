@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <cmath>
 #include <mutex>
+
+#include "util/fftw_lock.h"
 #include <numbers>
 #include <string>
 #include <vector>
@@ -19,11 +21,8 @@ namespace impulse::analysis {
 namespace {
 
 // FFTW's planner (plan creation and destruction) is not thread-safe; fftw_execute is. Every
-// planner call in this file goes through this lock.
-std::mutex& planner_mutex() {
-    static std::mutex m;
-    return m;
-}
+// planner call goes through the process-wide lock shared with kernels/ (util/fftw_lock.h).
+std::mutex& planner_mutex() { return fftw_planner_mutex(); }
 
 // A real-to-complex 2-D transform of a height x width array and its inverse, with buffers from
 // fftw_alloc_* so the SIMD alignment (and hence the plan FFTW_ESTIMATE picks and its rounding)

@@ -16,6 +16,7 @@
 #include <regex>
 #include <sstream>
 
+#include "app/analyze.h"
 #include "app/commands.h"
 #include "util/errors.h"
 
@@ -55,6 +56,20 @@ int main(int argc, char** argv) {
     info->add_option("--set", io.sets, "Override a scene key");
     info->add_option("--size", io.size, "Override output.size as WxH");
 
+    impulse::app::AnalyzeOptions ao;
+    CLI::App* analyze = app.add_subcommand(
+        "analyze", "Measure an image, sequence or video; with --scene, compare with its theory");
+    analyze->add_option("input", ao.input,
+                        "One image, a sequence pattern (frame_####.exr, frame_%04d.png) or a video")
+        ->required();
+    analyze->add_option("--scene", ao.scene, "Scene file or built-in name to compare with");
+    analyze->add_option("--set", ao.sets, "Override a scene key (with --scene)");
+    analyze->add_flag("--json", ao.json, "Print one JSON object instead of text");
+    analyze->add_option("--report", ao.report, "Write a self-contained HTML report (plots as SVG)");
+    analyze->add_option("--frames", ao.frames, "Inclusive 0-based frame range A-B, or one frame A");
+    analyze->add_option("--max-frames", ao.max_frames, "Analyse at most N frames")
+        ->check(CLI::PositiveNumber);
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -64,6 +79,7 @@ int main(int argc, char** argv) {
         if (*render) return impulse::app::run_render(ro);
         if (*scenes) return impulse::app::run_scenes();
         if (*info) return impulse::app::run_info(io);
+        if (*analyze) return impulse::app::run_analyze(ao);
     } catch (const impulse::Error& e) {
         std::cerr << "error: " << e.what() << "\n";
         return 1;

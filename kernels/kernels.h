@@ -26,7 +26,10 @@ inline constexpr std::array<std::string_view, 3> kKernelTypeNames = {"cosine", "
                                                                       "gabor"};
 /// Samples of a kernel. Radial: h(r) at r_i = i R / (n - 1), i = 0 .. n-1, interpolated with
 /// a cubic (Catmull–Rom) in r. Grid: h at x_i = -R + i 2R / (n - 1) (same in y), row-major
-/// values[j * n + i] = h(x_i, y_j), bilinear; both zero beyond the radius R.
+/// values[j * n + i] = h(x_i, y_j), bilinear; both zero beyond the radius R (a grid is cut to
+/// the disk: window it to zero there, or the cut is a jump). The grid's power spectrum is that
+/// of the bilinear interpolant of the samples (the disk cut is neglected: exact for a grid
+/// windowed to zero at R).
 struct SampledKernel {
     bool radial = true;
     int n = 0;
@@ -123,7 +126,15 @@ private:
     double m_integral_4 = 0.0;
     EnvelopePolynomial m_poly;
     std::vector<float> m_table;
+    double m_table_error = 0.0;
     std::vector<float> m_grid;
 };
 
 }  // namespace impulse::kernels
+
+// Kernels designed from a spectrum, an autocorrelation or an exemplar image.
+#include "kernels/spectral.h"
+
+#include "kernels/shaping.h"  // distribution shaping (Lewis 1986 §4) and ITAM
+
+#include "kernels/pyramid.h"  // band-limited kernel pyramid (Lewis 1986 §3.1)

@@ -126,4 +126,43 @@ Frame read_image(const std::string& path) {
     return f;
 }
 
+ImageInfo probe_image(const std::string& path) {
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) throw IoError(path + ": cannot read: " + OIIO::geterror());
+    const OIIO::ImageSpec& spec = in->spec();
+    ImageInfo info;
+    info.width = spec.width;
+    info.height = spec.height;
+    info.channels = spec.nchannels;
+    info.is_float = spec.format.is_floating_point();
+    info.bits = spec.get_int_attribute("oiio:BitsPerSample", static_cast<int>(spec.format.size()) * 8);
+    in->close();
+    return info;
+}
+
+bool is_readable_image_path(const std::string& path) {
+    std::string e = lower_extension(path);
+    if (e.size() < 2) return false;
+    e = e.substr(1);
+    // "format:ext,ext;format:ext..." as OIIO reports it for the plugins it was built with.
+    const std::string list = OIIO::get_string_attribute("extension_list");
+    size_t pos = 0;
+    while (pos < list.size()) {
+        size_t end = list.find(';', pos);
+        if (end == std::string::npos) end = list.size();
+        const std::string entry = list.substr(pos, end - pos);
+        const size_t colon = entry.find(':');
+        std::string exts = colon == std::string::npos ? entry : entry.substr(colon + 1);
+        size_t p = 0;
+        while (p <= exts.size()) {
+            size_t comma = exts.find(',', p);
+            if (comma == std::string::npos) comma = exts.size();
+            if (exts.compare(p, comma - p, e) == 0 && comma - p == e.size()) return true;
+            p = comma + 1;
+        }
+        pos = end + 1;
+    }
+    return false;
+}
+
 }  // namespace impulse::render

@@ -102,3 +102,5 @@ ImageInfo probe_image(const std::string& path);
 bool is_readable_image_path(const std::string& path);
 
 }  // namespace impulse::render
+
+#include "render/perspective.h"  // cameras with anti-aliasing (kernel pyramid)

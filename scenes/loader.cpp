@@ -9,9 +9,12 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <numbers>
 #include <sstream>
 
+#include "scenes/camera_detail.h"
+#include "scenes/marginal.h"
 #include "scenes/reader.h"
 #include "scenes/scenes.h"
 #include "util/errors.h"
@@ -104,9 +107,15 @@ void apply_override(toml::table& root, const std::string& text, Source& src) {
     toml::table doc;
     try {
         doc = toml::parse("v = " + value);
-    } catch (const toml::parse_error&) {
+    } catch (const toml::parse_error& e) {
+        // A bare word is a string (--set layer.0.kernel.type=gabor); something that starts
+        // like a number or a TOML value but does not parse is an error, not a string.
+        const char c = value.empty() ? ' ' : value[0];
+        if (std::isdigit(static_cast<unsigned char>(c)) || c == '-' || c == '+' || c == '.' ||
+            c == '[' || c == '{' || c == '"' || c == '\'')
+            throw SceneError("--set " + text + ": cannot parse the value: " + std::string(e.description()));
         doc = toml::table{};
-        doc.insert("v", value);  // a bare word is a string: --set layer.0.kernel.type=gabor
+        doc.insert("v", value);
     }
     t->insert_or_assign(last, *doc.get("v"));
     src.overrides[shown] = text;
@@ -129,9 +138,7 @@ CameraConfig read_camera(std::optional<Reader> r, int width, int height) {
     if (r->has("center_x")) c.center_x = r->keyframed("center_x", width / 2.0);
     if (r->has("center_y")) c.center_y = r->keyframed("center_y", height / 2.0);
     c.zoom = r->keyframed("zoom", 1.0, kPositive, "a number > 0 (pixels per texture unit)");
-    r->string("type", "orthographic");
-    if (r->string("type", "orthographic") != "orthographic")
-        r->fail(r->node("type"), "type", "expected one of orthographic");
+    detail::read_camera_view(*r, c, width, height);  // type, perspective, anti-aliasing
     r->finish();
     return c;
 }
@@ -243,8 +250,8 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
 
 /// Kernel types of scene files: the analytic ones (kernels::kKernelTypeNames, in enum order),
 /// then the designed ones (docs/scenes.md "Designed kernels").
-const std::array<std::string_view, 6> kSceneKernelTypes = {"cosine",   "gaussian",        "gabor",
-                                                           "spectrum", "autocorrelation", "exemplar"};
+const std::array<std::string_view, 6> kSceneKernelTypes = {
+    "cosine", "gaussian", "gabor", "spectrum", "autocorrelation", "exemplar"};
 
 /// A designed kernel: `spectrum`, `autocorrelation` or `exemplar` (kernels/spectral.h). Library
 /// errors (ValueError, IoError) are reported at the key whose value caused them.
@@ -252,9 +259,16 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
                                            const fs::path& base) {
     namespace K = kernels;
     const std::string tname(type);
-    auto detail_of = [](const std::exception& e, const std::string& prefix) {
-        std::string m = e.what();  // drop a repeated 'expression "...": ' prefix
-        return m.rfind(prefix, 0) == 0 ? m.substr(prefix.size()) : m;
+    auto detail_of = [](const std::exception& e, const std::string& quoted) {
+        // Drop a repeated 'expression "...": ' or 'expression "..." ' (the key shows the value).
+        const std::string m = e.what();
+        if (quoted.empty() || m.rfind(quoted, 0) != 0) return m;
+        size_t i = quoted.size();
+        if (m.compare(i, 2, ": ") == 0)
+            i += 2;
+        else if (m.compare(i, 1, " ") == 0)
+            i += 1;
+        return m.substr(i);
     };
     auto path_of = [&](const std::string& rel) {
         return fs::path(rel).is_absolute() ? fs::path(rel) : base / rel;
@@ -263,7 +277,8 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
     const toml::node* radius_node = r.node("radius");
     const double radius = r.number("radius", 0.0, kPositive, "a radius > 0 (texture units)");
     const double orientation = r.number("orientation", 0.0);
-    const double aspect = r.number("aspect", 1.0, [](double v) { return v >= 1.0; }, "a ratio >= 1");
+    const double aspect = r.number(
+        "aspect", 1.0, [](double v) { return v >= 1.0; }, "a ratio >= 1");
     for (const char* g : {"sigma", "frequency", "bandwidth", "phase"})
         if (r.has(g)) r.warn(g, "ignored for kernel type " + tname);
 
@@ -271,15 +286,19 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
     if (type == "exemplar") {
         const toml::node* pn = r.node("path");
         const std::string rel = r.string("path", "");
-        if (rel.empty()) r.fail(pn, "path", "expected the path of an exemplar image (relative to the scene file)");
-        for (const char* g : {"energy", "nyquist", "rolloff", "max_radius", "model", "expression", "table"})
+        if (rel.empty())
+            r.fail(pn, "path",
+                   "expected the path of an exemplar image (relative to the scene file)");
+        for (const char* g :
+             {"energy", "nyquist", "rolloff", "max_radius", "model", "expression", "table"})
             if (r.has(g)) r.warn(g, "ignored for kernel type exemplar");
         K::ExemplarOptions o;
         o.radius = radius;
         o.window = window;
         // Normalised at this layer's density and amplitude distribution (read here as well as
         // in read_scene: same values, same messages).
-        o.density = layer.number("density", 16.0, kPositive, "a density > 0 (impulses per kernel area)");
+        o.density =
+            layer.number("density", 16.0, kPositive, "a density > 0 (impulses per kernel area)");
         o.amplitude_second_moment = sim::amplitude_second_moment(
             static_cast<sim::Amplitude>(layer.choice("amplitude", sim::kAmplitudeNames, 0)));
         render::Frame image;
@@ -300,38 +319,45 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
         o.window = window;
         o.radius = radius;
         const toml::node* energy_node = r.node("energy");
-        o.energy = r.number("energy", o.energy, [](double v) { return v > 0 && v < 1; },
-                            "a fraction in (0, 1) of the kernel energy to keep, e.g. 0.99");
+        o.energy = r.number(
+            "energy", o.energy, [](double v) { return v > 0 && v < 1; },
+            "a fraction in (0, 1) of the kernel energy to keep, e.g. 0.99");
         if (energy_node && radius_node)
-            r.fail(energy_node, "energy", "give energy or radius, not both (radius fixes the size)");
+            r.fail(energy_node, "energy",
+                   "give energy or radius, not both (radius fixes the size)");
         o.nyquist = r.number("nyquist", o.nyquist, kPositive,
                              "a frequency > 0 (cycles per unit; 0.5 = pixel Nyquist at zoom 1)");
-        o.rolloff = r.number("rolloff", o.rolloff, [](double v) { return v >= 0 && v <= 0.9; },
-                             "a fraction in [0, 0.9] of nyquist");
-        o.max_radius = r.number("max_radius", o.max_radius, kPositive, "a radius > 0 (texture units)");
+        o.rolloff = r.number(
+            "rolloff", o.rolloff, [](double v) { return v >= 0 && v <= 0.9; },
+            "a fraction in [0, 0.9] of nyquist");
+        o.max_radius =
+            r.number("max_radius", o.max_radius, kPositive, "a radius > 0 (texture units)");
         if (radius > o.max_radius)
-            r.fail(radius_node, "radius", "expected <= max_radius = " + std::to_string(o.max_radius));
+            r.fail(radius_node, "radius",
+                   "expected <= max_radius = " + std::to_string(o.max_radius));
 
         // Exactly one source.
         std::vector<std::string> given;
         for (const char* g : {"model", "expression", "table"})
             if (r.has(g)) given.push_back(g);
         if (given.size() > 1)
-            r.fail(r.node(given[1]), given[1], "give one of model, expression" +
-                                                   std::string(acf ? "" : ", table") + ", not both " +
-                                                   given[0] + " and " + given[1]);
+            r.fail(r.node(given[1]), given[1],
+                   "give one of model, expression" + std::string(acf ? "" : ", table") +
+                       ", not both " + given[0] + " and " + given[1]);
         if (given.empty())
-            r.fail(nullptr, "model", acf ? "missing: a kernel of type autocorrelation needs model = "
-                                           "\"markov\" (or ...) or expression = \"...\" of r"
-                                         : "missing: a kernel of type spectrum needs model = \"markov\" "
-                                           "(or ...), expression = \"...\" of k and theta, or table = "
-                                           "\"path.csv\"");
+            r.fail(nullptr, "model",
+                   acf ? "missing: a kernel of type autocorrelation needs model = "
+                         "\"markov\" (or ...) or expression = \"...\" of r"
+                       : "missing: a kernel of type spectrum needs model = \"markov\" "
+                         "(or ...), expression = \"...\" of k and theta, or table = "
+                         "\"path.csv\"");
         const std::string source = given[0];
         const toml::node* sn = r.node(source);
 
         // Model parameters: read the ones the model uses, warn about the others.
-        const std::array<const char*, 10> model_keys = {"variance", "length", "exponent", "nu",    "k0",
-                                                        "f0",       "width",  "slope",    "k_low", "k_high"};
+        const std::array<const char*, 10> model_keys = {"variance", "length", "exponent", "nu",
+                                                        "k0",       "f0",     "width",    "slope",
+                                                        "k_low",    "k_high"};
         K::ModelParams mp;
         std::vector<const char*> used;
         if (source == "model") {
@@ -339,38 +365,70 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
             const auto m = K::spectral_model_from_string(name);
             if (!m) {
                 std::string list;
-                for (auto n : K::kSpectralModelNames) list += (list.empty() ? "" : ", ") + std::string(n);
+                for (auto n : K::kSpectralModelNames)
+                    list += (list.empty() ? "" : ", ") + std::string(n);
                 r.fail(sn, "model", "expected one of " + list + " (exponential = markov)");
             }
             if (acf && !K::defined_by_autocorrelation(*m))
-                r.fail(sn, "model", "defined by its spectrum: expected one of markov, gaussian, markaussian, "
-                                    "matern for an autocorrelation kernel (or use type = \"spectrum\")");
+                r.fail(sn, "model",
+                       "defined by its spectrum: expected one of markov, gaussian, markaussian, "
+                       "matern for an autocorrelation kernel (or use type = \"spectrum\")");
             mp.model = *m;
             used.push_back("variance");
             switch (mp.model) {
                 case K::SpectralModel::Markov:
-                case K::SpectralModel::Gaussian: used.push_back("length"); break;
-                case K::SpectralModel::Markaussian: used.insert(used.end(), {"length", "exponent"}); break;
-                case K::SpectralModel::Matern: used.insert(used.end(), {"length", "nu"}); break;
-                case K::SpectralModel::Lorentzian: used.push_back("k0"); break;
-                case K::SpectralModel::Bandpass: used.insert(used.end(), {"f0", "width"}); break;
-                case K::SpectralModel::Power: used.insert(used.end(), {"slope", "k_low", "k_high"}); break;
+                case K::SpectralModel::Gaussian:
+                    used.push_back("length");
+                    break;
+                case K::SpectralModel::Markaussian:
+                    used.insert(used.end(), {"length", "exponent"});
+                    break;
+                case K::SpectralModel::Matern:
+                    used.insert(used.end(), {"length", "nu"});
+                    break;
+                case K::SpectralModel::Lorentzian:
+                    used.push_back("k0");
+                    break;
+                case K::SpectralModel::Bandpass:
+                    used.insert(used.end(), {"f0", "width"});
+                    break;
+                case K::SpectralModel::Power:
+                    used.insert(used.end(), {"slope", "k_low", "k_high"});
+                    break;
             }
             auto uses = [&](std::string_view key) {
                 return std::find(used.begin(), used.end(), key) != used.end();
             };
-            if (uses("variance")) mp.variance = r.number("variance", mp.variance, kPositive, "a variance > 0 (R(0))");
-            if (uses("length")) mp.length = r.number("length", mp.length, kPositive, "a correlation length > 0 (texture units)");
+            if (uses("variance"))
+                mp.variance = r.number("variance", mp.variance, kPositive, "a variance > 0 (R(0))");
+            if (uses("length"))
+                mp.length = r.number("length", mp.length, kPositive,
+                                     "a correlation length > 0 (texture units)");
             if (uses("exponent"))
-                mp.exponent = r.number("exponent", mp.exponent, [](double v) { return v > 0 && v <= 2; },
-                                       "an exponent in (0, 2] (exp(-(r/l)^a) is an autocorrelation only there)");
-            if (uses("nu")) mp.nu = r.number("nu", mp.nu, [](double v) { return v > 0 && v <= 50; }, "a smoothness in (0, 50]");
-            if (uses("k0")) mp.k0 = r.number("k0", mp.k0, kPositive, "a corner frequency > 0 (cycles per unit)");
-            if (uses("f0")) mp.f0 = r.number("f0", mp.f0, kNonNegative, "a centre frequency >= 0 (cycles per unit)");
-            if (uses("width")) mp.width = r.number("width", mp.width, kPositive, "a ring width > 0 (cycles per unit)");
-            if (uses("slope")) mp.slope = r.number("slope", mp.slope, kPositive, "a slope > 0 (S ~ k^-slope)");
-            if (uses("k_low")) mp.k_low = r.number("k_low", mp.k_low, kPositive, "a low cut-off > 0 (cycles per unit)");
-            if (uses("k_high")) mp.k_high = r.number("k_high", mp.k_high, kNonNegative, "a high cut-off >= 0 (0: none)");
+                mp.exponent = r.number(
+                    "exponent", mp.exponent, [](double v) { return v > 0 && v <= 2; },
+                    "an exponent in (0, 2] (exp(-(r/l)^a) is an autocorrelation only there)");
+            if (uses("nu"))
+                mp.nu = r.number(
+                    "nu", mp.nu, [](double v) { return v > 0 && v <= 50; },
+                    "a smoothness in (0, 50]");
+            if (uses("k0"))
+                mp.k0 =
+                    r.number("k0", mp.k0, kPositive, "a corner frequency > 0 (cycles per unit)");
+            if (uses("f0"))
+                mp.f0 = r.number("f0", mp.f0, kNonNegative,
+                                 "a centre frequency >= 0 (cycles per unit)");
+            if (uses("width"))
+                mp.width =
+                    r.number("width", mp.width, kPositive, "a ring width > 0 (cycles per unit)");
+            if (uses("slope"))
+                mp.slope = r.number("slope", mp.slope, kPositive, "a slope > 0 (S ~ k^-slope)");
+            if (uses("k_low"))
+                mp.k_low =
+                    r.number("k_low", mp.k_low, kPositive, "a low cut-off > 0 (cycles per unit)");
+            if (uses("k_high"))
+                mp.k_high =
+                    r.number("k_high", mp.k_high, kNonNegative, "a high cut-off >= 0 (0: none)");
             try {
                 K::validate(mp);
             } catch (const ValueError& e) {  // a combination (power: slope <= 2 without k_high)
@@ -382,25 +440,29 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
                 r.warn(g, source == "model" ? "ignored for model " + r.string("model", "")
                                             : std::string("ignored without a model"));
         if (acf && source == "table")
-            r.fail(sn, "table", "a table gives a spectrum: use type = \"spectrum\" (or an expression of r)");
+            r.fail(sn, "table",
+                   "a table gives a spectrum: use type = \"spectrum\" (or an expression of r)");
 
         K::DesignedKernel d;
         try {
             if (acf) {
-                const K::Autocorrelation a = source == "model"
-                                                 ? K::model_autocorrelation(mp)
-                                                 : K::expression_autocorrelation(r.string("expression", ""));
+                const K::Autocorrelation a =
+                    source == "model" ? K::model_autocorrelation(mp)
+                                      : K::expression_autocorrelation(r.string("expression", ""));
                 d = K::kernel_from_autocorrelation(a, o);
             } else {
                 K::Spectrum sp;
-                if (source == "model") sp = K::model_spectrum(mp, o.nyquist);
-                else if (source == "expression") sp = K::expression_spectrum(r.string("expression", ""));
-                else sp = K::table_spectrum(path_of(r.string("table", "")).string());
+                if (source == "model")
+                    sp = K::model_spectrum(mp, o.nyquist);
+                else if (source == "expression")
+                    sp = K::expression_spectrum(r.string("expression", ""));
+                else
+                    sp = K::table_spectrum(path_of(r.string("table", "")).string());
                 d = K::kernel_from_spectrum(sp, o);
             }
         } catch (const Error& e) {
             const std::string prefix =
-                source == "expression" ? "expression \"" + r.string("expression", "") + "\": " : "";
+                source == "expression" ? "expression \"" + r.string("expression", "") + "\"" : "";
             // Radius problems belong to the radius or energy key when one was given.
             const std::string what = e.what();
             if (what.find("radius") != std::string::npos && (radius_node || energy_node))
@@ -408,12 +470,41 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
                        detail_of(e, prefix));
             r.fail(sn, source, detail_of(e, prefix));
         }
+        // Scale so the layer's spectrum is S itself: lambda E[a^2] |H|^2 = S with this layer's
+        // lambda = density / (pi R^2) (the aspect squeeze changes lambda and int h^2 by inverse
+        // factors, so the variance stays int S d^2k = R(0)).
+        const double density =
+            layer.number("density", 16.0, kPositive, "a density > 0 (impulses per kernel area)");
+        const auto amp =
+            static_cast<sim::Amplitude>(layer.choice("amplitude", sim::kAmplitudeNames, 0));
+        const double ea2 = sim::amplitude_second_moment(amp),
+                     ea4 = sim::amplitude_fourth_moment(amp);
+        const double lambda = density / (std::numbers::pi * d.params.radius * d.params.radius);
+        {
+            auto scaled = std::make_shared<K::SampledKernel>(*d.params.sampled);
+            for (double& v : scaled->values) v /= std::sqrt(lambda * ea2);
+            d.params.sampled = scaled;
+        }
+        // A peaked kernel needs more impulses to look Gaussian (Campbell: the fourth cumulant).
+        const double kurtosis = ea4 / (ea2 * ea2) / (lambda * d.report.effective_area);
+        if (kurtosis > 1.0) {
+            std::ostringstream s;
+            s << std::setprecision(3) << "the designed kernel is peaked (its energy spreads over "
+              << std::lround(d.report.effective_area) << " units^2 of its "
+              << std::lround(std::numbers::pi * d.params.radius * d.params.radius)
+              << "): at density " << density << " the field's excess kurtosis is " << kurtosis
+              << " and it looks speckled; density >= " << std::ceil(density * kurtosis / 0.3)
+              << " brings it to 0.3";
+            layer.warn("density", s.str());
+        }
         if (d.report.passband_error > 0.2) {
             std::ostringstream s;
-            s << "the designed kernel (radius " << d.report.radius << ", " << 100 * d.report.energy_fraction
+            s << std::setprecision(3) << "the designed kernel (radius " << d.report.radius << ", "
+              << 100 * d.report.energy_fraction
               << " % of the energy) misses the target spectrum by up to "
               << std::lround(100 * d.report.passband_error)
-              << " % in the pass band; a larger energy (e.g. 0.999) or radius costs no time per pixel";
+              << " % in the pass band; a larger energy (e.g. 0.999) or radius costs no time per "
+                 "pixel";
             r.warn(radius_node ? "radius" : "energy", s.str());
         }
         k = d.params;
@@ -451,6 +542,7 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
     Scene s;
     Reader top(root, "", src);
     const uint64_t global_seed = static_cast<uint64_t>(top.integer("seed", 0, 0, INT64_MAX));
+    s.seed = global_seed;
 
     if (auto o = top.table("output")) {
         if (const toml::node* n = o->node("size")) {
@@ -519,7 +611,7 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
         p.integrator = static_cast<sim::Integrator>(r.choice("integrator", sim::kIntegratorNames, 0));
         p.substeps = static_cast<int>(r.integer("substeps", 2, 1, 64));
         p.jacobian = r.boolean("jacobian", true);
-        p.orientation = static_cast<sim::OrientationMode>(r.choice("orientation", sim::kOrientationModeNames, 0));
+        detail::read_orientation(r, p, base);  // a mode name or a field table
         p.max_travel = r.number("max_travel", 4096.0, kPositive, "a distance > 0 in texture units");
         try {
             prepare_layer(L);
@@ -527,6 +619,7 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
             r.fail(r.node("kernel"), "kernel", e.what());
         }
         L.flow = read_flows(r, p, base);
+        detail::read_marginal(r, L, base);
         if (L.density < 1.0)
             r.warn("density", "below 1 impulse per kernel area the noise is lumpy, see Lewis 1989 §4.1");
         r.finish();

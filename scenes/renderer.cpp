@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <sstream>
 
+#include "scenes/camera_detail.h"
+#include "scenes/marginal.h"
 #include "scenes/scenes.h"
 #include "util/errors.h"
 
@@ -25,6 +27,8 @@ render::View CameraConfig::view(int width, int height, double t) const {
 }
 
 Theory layer_theory(const LayerConfig& layer) {
+    // A shaped layer has the target marginal's moments (Lewis 1986 §4).
+    if (layer.marginal) return {layer.marginal->target().mean(), layer.marginal->target().variance()};
     // Campbell's theorem: Var = lambda E[a^2] int h^2, times (1/T) int w^2 dt for a process
     // with births at beta = lambda / T and a temporal envelope w (design.md §1).
     const kernels::Kernel k(layer.kernel);
@@ -49,6 +53,10 @@ struct Renderer::State {
     std::vector<kernels::Kernel> kernels;
     std::vector<sim::LayerSimulator> sims;
     std::vector<sim::Impulses> impulses;
+    std::vector<std::shared_ptr<const kernels::MarginalTransform>> marginals;  ///< per layer
+    render::Frame scratch;  ///< a shaped layer's own field
+    /// Camera-dependent evaluation: pyramids, perspective (scenes/camera_render.cpp).
+    std::unique_ptr<detail::CameraPipeline> camera;
 };
 
 Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
@@ -61,6 +69,7 @@ Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
         S.sims.emplace_back(l.process, l.flow, timing, l.kernel.radius);
     }
     S.impulses.resize(S.scene.layers.size());
+    S.camera = std::make_unique<detail::CameraPipeline>(S.scene, S.kernels);
     // Refuse what would exhaust memory or time, with the estimate (design.md §4).
     const double n = estimated_impulses();
     if (n > S.scene.limits.max_impulses) {
@@ -78,6 +87,11 @@ Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
           << " MiB (limits.max_memory_mib)";
         throw BudgetError(s.str());
     }
+    // An empirical F_x is measured once, on a calibration render at frame 0 (frame independent).
+    for (const auto& l : S.scene.layers)
+        S.marginals.push_back(l.marginal && l.marginal_cdf == kernels::SourceCdf::Empirical
+                                  ? detail::calibrate_marginal(l, timing)
+                                  : l.marginal);
 }
 
 Renderer::~Renderer() = default;
@@ -94,7 +108,8 @@ double Renderer::estimated_impulses() const {
         for (const auto& k : S.scene.camera.zoom.keys) min_zoom = std::min(min_zoom, k.second);
         render::View v = S.scene.camera.view(S.scene.output.width, S.scene.output.height, 0.0);
         v.scale = 1.0 / min_zoom;
-        n += sim::expected_impulses(S.sims[i].config(), S.sims[i].birth_region(v.box()));
+        n += sim::expected_impulses(S.sims[i].config(),
+                                    S.sims[i].birth_region(S.camera->estimate_box(i, v)));
     }
     return n;
 }
@@ -124,11 +139,18 @@ void Renderer::render(int64_t frame, render::Frame& out, const render::EvalOptio
     double mean = 0.0;
     for (size_t i = 0; i < S.sims.size(); ++i) {
         sim::Impulses& imp = S.impulses[i];
-        S.sims[i].impulses_at(frame, view.box(), imp);
+        S.sims[i].impulses_at(frame, S.camera->box(i, view, t), imp);
         const auto& layer = S.scene.layers[i];
         if (layer.gain != 1.0)
             for (auto& w : imp.weight) w = static_cast<float>(w * layer.gain);
-        render::accumulate(S.kernels[i], imp, view, out, options);
+        if (S.marginals[i]) {  // shaped (Lewis 1986 §4): its own field, through g, then added
+            S.scratch.resize(o.width, o.height);
+            S.camera->accumulate(i, imp, view, t, S.scratch, options);
+            S.marginals[i]->apply(S.scratch.data, layer.mean);
+            for (size_t p = 0; p < out.data.size(); ++p) out.data[p] += S.scratch.data[p];
+            continue;
+        }
+        S.camera->accumulate(i, imp, view, t, out, options);
         mean += layer.mean;
     }
     if (mean != 0.0)

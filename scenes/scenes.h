@@ -31,12 +31,37 @@ struct OutputConfig {
     int bits = 8;                    ///< 8 or 16 bits per channel for PNG/TIFF
 };
 
-/// [camera]: orthographic view of the texture plane.
+/// [camera]: an orthographic (default) or perspective view of the texture plane, and the
+/// anti-aliasing by band-limited kernels (docs/scenes.md "[camera]").
 struct CameraConfig {
+    enum class Type { Orthographic, Perspective };
+    Type type = Type::Orthographic;
+    // orthographic
     sim::Keyframed center_x, center_y;  ///< texture point at the frame centre (default: size/2)
     sim::Keyframed zoom = 1.0;          ///< pixels per texture unit, > 0
+    // perspective (scenes/camera_config.cpp)
+    sim::Keyframed position_x, position_y;  ///< the camera's foot on the plane (default: size/2)
+    sim::Keyframed altitude = 100.0;    ///< key `height`: distance from the plane, texture units, > 0
+    sim::Keyframed pitch = 20.0;        ///< degrees below (ground) / above (sky) the horizon, [-90, 90]
+    sim::Keyframed heading = 0.0;       ///< degrees on the plane: 0 looks towards -y, 90 towards +x
+    sim::Keyframed fov = 60.0;          ///< vertical field of view, degrees, in (0, 180)
+    render::Plane plane = render::Plane::Ground;
+    // anti-aliasing
+    enum class AntiAliasMode { Auto, Blend, Nearest, Off };
+    /// auto: on for perspective cameras, and for orthographic ones that zoom below 1 at some key.
+    AntiAliasMode antialias = AntiAliasMode::Auto;
+    double filter = 0.5;       ///< pixel filter standard deviation in pixels, > 0
+    double cutoff = 0.01;      ///< fade to the mean below this fraction of the sd, in (0, 0.5]
+    bool anisotropic = true;   ///< false: isotropic levels from the footprint's major axis
+
     /// The view at time t for a frame of the given size.
     render::View view(int width, int height, double t_s) const;
+    /// The perspective camera at time t (type Perspective).
+    render::PerspectiveCamera perspective(int width, int height, double t_s) const;
+    /// Whether frames go through the kernel pyramid.
+    bool antialiased() const;
+    /// The anti-aliasing options for the renderer.
+    render::AntiAlias antialias_options() const;
 };
 
 /// [limits]: refuse requests that would exhaust memory or time.
@@ -53,10 +78,21 @@ struct LayerConfig {
     double mean = 0.0;           ///< constant added to the layer
     double gain = 1.0;           ///< amplitude scale
     std::shared_ptr<sim::Flow> flow;  ///< null: no motion
+    /// Distribution shaping g = F_y^-1(F_x(.)) of the layer's values (Lewis 1986 §4); null:
+    /// none. Built with the Gaussian F_x of the unshaped layer's closed-form mean and variance.
+    std::shared_ptr<const kernels::MarginalTransform> marginal;
+    /// F_x of the marginal: Gaussian, or empirical (the Renderer measures it on a calibration
+    /// render of the layer at frame 0).
+    kernels::SourceCdf marginal_cdf = kernels::SourceCdf::Gaussian;
+    /// Set when `precorrect = true` replaced `kernel` by the ITAM-corrected kernel (so the shaped
+    /// layer has the original kernel's spectrum): what it achieved. process.intensity and
+    /// cell_size still refer to the original kernel.
+    std::shared_ptr<const kernels::PrecorrectionReport> precorrection;
 };
 
 struct Scene {
     std::string path;  ///< file it came from ("" for a string)
+    uint64_t seed = 0; ///< the scene-wide seed (top-level `seed`, `--seed`)
     OutputConfig output;
     CameraConfig camera;
     Limits limits;

@@ -37,17 +37,19 @@ struct Particles {
     std::vector<double> birth_frac;
     std::vector<uint8_t> stepped;
     std::vector<float> amp;
+    std::vector<float> th0;  // random angle drawn at birth, in [0, 2 pi) (orientation jitter)
 
     size_t size() const { return x.size(); }
     void clear() {
         x.clear(), y.clear(), lnj.clear(), th.clear(), step.clear(), birth_step.clear();
-        birth_frac.clear(), stepped.clear(), amp.clear();
+        birth_frac.clear(), stepped.clear(), amp.clear(), th0.clear();
     }
     void copy_from(const Particles& o, size_t i) {
         x.push_back(o.x[i]), y.push_back(o.y[i]), lnj.push_back(o.lnj[i]), th.push_back(o.th[i]);
         step.push_back(o.step[i]), birth_step.push_back(o.birth_step[i]);
         birth_frac.push_back(o.birth_frac[i]), stepped.push_back(o.stepped[i]);
         amp.push_back(o.amp[i]);
+        th0.push_back(o.th0[i]);
     }
 };
 
@@ -271,6 +273,7 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
                         P.step.push_back(bs);
                         P.stepped.push_back(0);
                         P.amp.push_back(S.cell.amplitude[k]);
+                        P.th0.push_back(S.cell.theta0[k]);
                     }
                 }
                 S.next_blocks.push_back({key, start, P.size() - start});
@@ -323,6 +326,18 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
                     dv.data(), cu.data());
         for (size_t j = 0; j < n; ++j)
             out.theta[j] = static_cast<float>(std::atan2(vy[j], vx[j]));
+    }
+    if (c.orientation == OrientationMode::Field && c.orientation_field) {
+        // theta(x, t) at the particle's current position at the frame time (loop-wrapped like
+        // the flow, so a looped layer repeats), plus the per-particle jitter drawn at birth.
+        c.orientation_field->angles(S.time_of_step(target), out.size(), out.x.data(),
+                                    out.y.data(), out.theta.data());
+        if (c.orientation_jitter != 0.0) {
+            constexpr double kInvPi = 1.0 / 3.14159265358979323846;
+            for (size_t j = 0; j < out.size(); ++j)
+                out.theta[j] = static_cast<float>(
+                    out.theta[j] + c.orientation_jitter * (P.th0[emitted[j]] * kInvPi - 1.0));
+        }
     }
 
     std::swap(S.live, S.next);

@@ -1,0 +1,989 @@
+// SPDX-License-Identifier: Apache-2.0
+// `impulse analyze` output: the text report, JSON, and a self-contained HTML page whose plots
+// are SVG drawn here (no scripts, no network), written atomically.
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <numbers>
+#include <sstream>
+
+#include "app/analyze.h"
+#include "util/errors.h"
+
+namespace impulse::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string fmt(double v, int digits = 6) {
+    if (std::isnan(v)) return "n/a";
+    if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.*g", digits, v);
+    return buf;
+}
+
+std::string fixed(double v, int decimals) {
+    if (!std::isfinite(v)) return fmt(v);
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%.*f", decimals, v);
+    return buf;
+}
+
+std::string yes_no(bool b) { return b ? "yes" : "no"; }
+
+std::string source_text(const AnalysisResult& r) {
+    std::string s = r.kind == "image" ? "one image" : r.kind == "sequence" ? "image sequence" : "video";
+    s += r.raw ? ", float (raw field values)"
+               : ", " + std::to_string(r.bits) + "-bit (display values)";
+    return s;
+}
+
+std::string frames_text(const AnalysisResult& r) {
+    std::string s = std::to_string(r.frames) + (r.frames == 1 ? " frame" : " frames");
+    if (r.frames > 1 || r.first_frame != 0)
+        s += " (" + std::to_string(r.first_frame) + "-" +
+             std::to_string(r.first_frame + r.frames - 1) + ")";
+    return s;
+}
+
+std::string correlation_text(const AnalysisResult& r) {
+    return "(mean " + fmt(r.tau_mean, 3) + ", variance " + fmt(r.tau_variance, 3) + ", spectrum " +
+           fmt(r.tau_spectrum, 3) + "; " +
+           (r.tau_source == "scene"    ? "from the scene's temporal envelopes)"
+            : r.tau_source == "frames" ? "estimated from the frames)"
+                                       : "all frames counted as one)");
+}
+
+/// "name = value < limit" or ">= limit": a verdict's number against its threshold.
+std::string against(const std::string& name, double value, double limit, int decimals) {
+    return name + " = " + fixed(value, 2) + (value < limit ? " < " : " >= ") + fixed(limit, decimals);
+}
+
+std::string z_text(double z, double limit) { return against("|z|", std::abs(z), limit, 0); }
+
+std::string spectrum_threshold_text(const SpectrumTheory& s) {
+    return against("max|z|", s.max_abs_z, s.threshold, 2) + ", Bonferroni limit for " +
+           std::to_string(s.compared) + " annuli at family alpha 0.01";
+}
+
+std::string stationarity_verdict(const Stationarity& st) {
+    return "trend " + against("|t|", std::abs(st.trend.t), st.t_limit, 0) + "; drift " +
+           against("max|z|", st.max_abs_z_corrected, st.z_threshold, 2) +
+           ", Bonferroni limit for " + std::to_string(st.drift.z.size()) +
+           " annuli at family alpha 0.01; both must hold";
+}
+
+// ---------------------------------------------------------------------------------------------
+// JSON
+
+class Json {
+public:
+    Json& key(const std::string& k) {
+        comma();
+        m_s << quote(k) << ':';
+        m_fresh = true;
+        return *this;
+    }
+    Json& open(char c) {
+        comma();
+        m_s << c;
+        m_fresh = true;
+        return *this;
+    }
+    Json& close(char c) {
+        m_s << c;
+        m_fresh = false;
+        return *this;
+    }
+    Json& num(double v) {
+        comma();
+        if (std::isfinite(v)) {
+            char buf[64];
+            std::snprintf(buf, sizeof buf, "%.17g", v);
+            m_s << buf;
+        } else {
+            m_s << "null";
+        }
+        return *this;
+    }
+    Json& integer(long long v) {
+        comma();
+        m_s << v;
+        return *this;
+    }
+    Json& boolean(bool b) {
+        comma();
+        m_s << (b ? "true" : "false");
+        return *this;
+    }
+    Json& null() {
+        comma();
+        m_s << "null";
+        return *this;
+    }
+    Json& str(const std::string& v) {
+        comma();
+        m_s << quote(v);
+        return *this;
+    }
+    template <class V>
+    Json& nums(const V& values) {
+        open('[');
+        for (const auto& v : values) num(static_cast<double>(v));
+        return close(']');
+    }
+    std::string text() const { return m_s.str(); }
+
+private:
+    void comma() {
+        if (!m_fresh) m_s << ',';
+        m_fresh = false;
+    }
+    static std::string quote(const std::string& s) {
+        std::string o = "\"";
+        for (unsigned char c : s) {
+            if (c == '"' || c == '\\') {
+                o += '\\';
+                o += static_cast<char>(c);
+            } else if (c < 0x20) {
+                char buf[8];
+                std::snprintf(buf, sizeof buf, "\\u%04x", c);
+                o += buf;
+            } else {
+                o += static_cast<char>(c);
+            }
+        }
+        return o + "\"";
+    }
+    std::ostringstream m_s;
+    bool m_fresh = true;
+};
+
+// ---------------------------------------------------------------------------------------------
+// SVG plots
+
+std::string esc(const std::string& s) {
+    std::string o;
+    for (char c : s) {
+        if (c == '&') o += "&amp;";
+        else if (c == '<') o += "&lt;";
+        else if (c == '>') o += "&gt;";
+        else if (c == '"') o += "&quot;";
+        else o += c;
+    }
+    return o;
+}
+
+struct Series {
+    std::string label;
+    std::vector<double> x, y;
+    std::string color = "#1f77b4";
+    enum Kind { Line, Points, Bars } kind = Line;
+    bool dashed = false;
+};
+struct Band {
+    std::string label;
+    std::vector<double> x, lo, hi;
+    std::string color = "#d62728";
+};
+struct HLine {
+    double y = 0;
+    std::string label;
+    std::string color = "#777";
+};
+struct Plot {
+    std::string title, xlabel, ylabel;
+    bool logx = false, logy = false;
+    std::vector<Series> series;
+    std::vector<Band> bands;
+    std::vector<HLine> hlines;
+};
+
+constexpr double kW = 680, kH = 320, kL = 78, kR = 20, kT = 34, kB = 48;
+
+std::vector<double> linear_ticks(double lo, double hi) {
+    const double span = hi - lo;
+    const double raw = span / 6.0;
+    const double mag = std::pow(10.0, std::floor(std::log10(raw)));
+    double step = mag;
+    for (double m : {1.0, 2.0, 5.0, 10.0})
+        if (m * mag >= raw) {
+            step = m * mag;
+            break;
+        }
+    std::vector<double> t;
+    for (double v = std::ceil(lo / step) * step; v <= hi + 1e-9 * span; v += step)
+        t.push_back(std::abs(v) < 1e-12 * span ? 0.0 : v);
+    return t;
+}
+
+std::string svg_plot(const Plot& p) {
+    // Data range (non-positive values are left out on log axes).
+    double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+    const auto take = [&](double x, double y) {
+        if (!std::isfinite(x) || !std::isfinite(y)) return;
+        if (p.logx && x <= 0) return;
+        if (p.logy && y <= 0) return;
+        x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
+    };
+    for (const auto& s : p.series)
+        for (size_t i = 0; i < s.x.size(); ++i) take(s.x[i], s.y[i]);
+    for (const auto& b : p.bands)
+        for (size_t i = 0; i < b.x.size(); ++i) take(b.x[i], b.lo[i]), take(b.x[i], b.hi[i]);
+    for (const auto& h : p.hlines)
+        if (std::isfinite(x0)) take(x0, h.y);
+    if (!std::isfinite(x0)) x0 = 0, x1 = 1, y0 = 0, y1 = 1;
+    if (p.logx) x0 = std::log10(x0), x1 = std::log10(x1);
+    if (p.logy) {
+        y0 = std::log10(y0), y1 = std::log10(y1);
+        y0 = std::max(y0, y1 - 12.0);  // at most 12 decades
+    }
+    if (x1 <= x0) x0 -= 0.5, x1 += 0.5;
+    if (y1 <= y0) y0 -= 0.5 * std::max(1.0, std::abs(y0)), y1 += 0.5 * std::max(1.0, std::abs(y1));
+    const double pad = 0.04 * (y1 - y0);
+    y0 -= pad, y1 += pad;
+
+    const double pw = kW - kL - kR, ph = kH - kT - kB;
+    const auto X = [&](double x) { return kL + ((p.logx ? std::log10(x) : x) - x0) / (x1 - x0) * pw; };
+    const auto Y = [&](double y) {
+        double v = p.logy ? std::log10(y) : y;
+        v = std::clamp(v, y0, y1);
+        return kT + (y1 - v) / (y1 - y0) * ph;
+    };
+    const auto ok = [&](double x, double y) {
+        return std::isfinite(x) && std::isfinite(y) && !(p.logx && x <= 0) && !(p.logy && y <= 0);
+    };
+
+    std::ostringstream o;
+    o << "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " << kW << ' ' << kH
+      << "\" width=\"" << kW << "\" height=\"" << kH << "\" role=\"img\">\n";
+    o << "<title>" << esc(p.title) << "</title>\n";
+    o << "<rect x=\"0\" y=\"0\" width=\"" << kW << "\" height=\"" << kH << "\" fill=\"#fff\"/>\n";
+    o << "<text x=\"" << kW / 2 << "\" y=\"20\" text-anchor=\"middle\" class=\"pt\">" << esc(p.title)
+      << "</text>\n";
+    // Ticks and grid.
+    o << "<g class=\"ax\">\n";
+    const auto xticks = [&]() {
+        std::vector<std::pair<double, std::string>> t;
+        if (p.logx) {
+            const int step = std::max(1, int(std::ceil((x1 - x0) / 8)));
+            for (int d = int(std::ceil(x0)); d <= int(std::floor(x1)); d += step)
+                t.push_back({std::pow(10.0, d), "1e" + std::to_string(d)});
+            if (t.size() < 2)
+                for (double v : linear_ticks(std::pow(10.0, x0), std::pow(10.0, x1)))
+                    if (v > 0) t.push_back({v, fmt(v, 3)});
+        } else {
+            for (double v : linear_ticks(x0, x1)) t.push_back({v, fmt(v, 4)});
+        }
+        return t;
+    }();
+    const auto yticks = [&]() {
+        std::vector<std::pair<double, std::string>> t;
+        if (p.logy) {
+            const int step = std::max(1, int(std::ceil((y1 - y0) / 7)));
+            for (int d = int(std::ceil(y0)); d <= int(std::floor(y1)); d += step)
+                t.push_back({std::pow(10.0, d), "1e" + std::to_string(d)});
+            if (t.size() < 2)
+                for (double v : linear_ticks(std::pow(10.0, y0), std::pow(10.0, y1)))
+                    if (v > 0) t.push_back({v, fmt(v, 3)});
+        } else {
+            for (double v : linear_ticks(y0, y1)) t.push_back({v, fmt(v, 4)});
+        }
+        return t;
+    }();
+    for (const auto& [v, label] : xticks) {
+        const double x = X(v);
+        if (x < kL - 0.5 || x > kW - kR + 0.5) continue;
+        o << "<line x1=\"" << x << "\" y1=\"" << kT << "\" x2=\"" << x << "\" y2=\"" << kT + ph
+          << "\" class=\"grid\"/><text x=\"" << x << "\" y=\"" << kT + ph + 16
+          << "\" text-anchor=\"middle\">" << esc(label) << "</text>\n";
+    }
+    for (const auto& [v, label] : yticks) {
+        const double y = Y(v);
+        if ((p.logy ? std::log10(v) : v) < y0 || (p.logy ? std::log10(v) : v) > y1) continue;
+        o << "<line x1=\"" << kL << "\" y1=\"" << y << "\" x2=\"" << kL + pw << "\" y2=\"" << y
+          << "\" class=\"grid\"/><text x=\"" << kL - 6 << "\" y=\"" << y + 4
+          << "\" text-anchor=\"end\">" << esc(label) << "</text>\n";
+    }
+    o << "<rect x=\"" << kL << "\" y=\"" << kT << "\" width=\"" << pw << "\" height=\"" << ph
+      << "\" fill=\"none\" stroke=\"#333\"/>\n";
+    o << "<text x=\"" << kL + pw / 2 << "\" y=\"" << kH - 8 << "\" text-anchor=\"middle\">"
+      << esc(p.xlabel) << "</text>\n";
+    o << "<text transform=\"translate(16," << kT + ph / 2 << ") rotate(-90)\" text-anchor=\"middle\">"
+      << esc(p.ylabel) << "</text>\n</g>\n";
+
+    // Bands, reference lines, series.
+    for (const auto& b : p.bands) {
+        std::ostringstream pts;
+        size_t used = 0;
+        for (size_t i = 0; i < b.x.size(); ++i)
+            if (ok(b.x[i], b.hi[i])) pts << X(b.x[i]) << ',' << Y(b.hi[i]) << ' ', ++used;
+        for (size_t i = b.x.size(); i-- > 0;)
+            if (ok(b.x[i], b.lo[i])) pts << X(b.x[i]) << ',' << Y(b.lo[i]) << ' ', ++used;
+        if (used >= 3)
+            o << "<polygon points=\"" << pts.str() << "\" fill=\"" << b.color
+              << "\" fill-opacity=\"0.15\" stroke=\"none\"/>\n";
+    }
+    for (const auto& h : p.hlines) {
+        if (p.logy && h.y <= 0) continue;
+        const double y = Y(h.y);
+        o << "<line x1=\"" << kL << "\" y1=\"" << y << "\" x2=\"" << kL + pw << "\" y2=\"" << y
+          << "\" stroke=\"" << h.color << "\" stroke-dasharray=\"5,4\"/>\n";
+    }
+    for (const auto& s : p.series) {
+        if (s.kind == Series::Bars) {
+            for (size_t i = 0; i + 1 < s.x.size(); ++i) {
+                if (!ok(s.x[i], s.y[i])) continue;
+                const double xa = X(s.x[i]), xb = X(s.x[i + 1]);
+                const double yt = Y(s.y[i]), yb = Y(p.logy ? std::pow(10.0, y0) : std::max(y0, 0.0));
+                o << "<rect x=\"" << xa << "\" y=\"" << std::min(yt, yb) << "\" width=\""
+                  << std::max(0.0, xb - xa - 0.5) << "\" height=\"" << std::abs(yb - yt)
+                  << "\" fill=\"" << s.color << "\" fill-opacity=\"0.75\"/>\n";
+            }
+        } else if (s.kind == Series::Points) {
+            o << "<g fill=\"" << s.color << "\">";
+            for (size_t i = 0; i < s.x.size(); ++i)
+                if (ok(s.x[i], s.y[i]))
+                    o << "<circle cx=\"" << X(s.x[i]) << "\" cy=\"" << Y(s.y[i]) << "\" r=\"1.8\"/>";
+            o << "</g>\n";
+        } else {
+            // A polyline, broken where a value cannot be drawn.
+            std::ostringstream pts;
+            size_t count = 0;
+            const auto flush = [&]() {
+                if (count >= 2)
+                    o << "<polyline points=\"" << pts.str() << "\" fill=\"none\" stroke=\"" << s.color
+                      << "\" stroke-width=\"1.6\"" << (s.dashed ? " stroke-dasharray=\"6,4\"" : "")
+                      << "/>\n";
+                pts.str("");
+                count = 0;
+            };
+            for (size_t i = 0; i < s.x.size(); ++i) {
+                if (!ok(s.x[i], s.y[i])) {
+                    flush();
+                    continue;
+                }
+                pts << X(s.x[i]) << ',' << Y(s.y[i]) << ' ';
+                ++count;
+            }
+            flush();
+        }
+    }
+    // Legend, top right on a translucent panel sized to its longest label (~6.2 px a character).
+    size_t longest = 0, entries = 0;
+    const auto measure = [&](const std::string& label) {
+        if (!label.empty()) longest = std::max(longest, label.size()), ++entries;
+    };
+    for (const auto& s : p.series) measure(s.label);
+    for (const auto& b : p.bands) measure(b.label);
+    for (const auto& h : p.hlines) measure(h.label);
+    const double lw = 34 + 6.2 * double(longest);
+    const double lx = kL + pw - lw;
+    if (entries)
+        o << "<rect x=\"" << lx - 4 << "\" y=\"" << kT + 3 << "\" width=\"" << lw << "\" height=\""
+          << 15 * entries + 6 << "\" fill=\"#fff\" fill-opacity=\"0.85\"/>\n";
+    double ly = kT + 14;
+    const auto legend = [&](const std::string& label, const std::string& color, bool box) {
+        if (label.empty()) return;
+        if (box)
+            o << "<rect x=\"" << lx << "\" y=\"" << ly - 8 << "\" width=\"18\" height=\"9\" fill=\""
+              << color << "\" fill-opacity=\"0.3\"/>";
+        else
+            o << "<line x1=\"" << lx << "\" y1=\"" << ly - 4 << "\" x2=\"" << lx + 18 << "\" y2=\""
+              << ly - 4 << "\" stroke=\"" << color << "\" stroke-width=\"2.5\"/>";
+        o << "<text x=\"" << lx + 24 << "\" y=\"" << ly << "\" class=\"lg\">" << esc(label)
+          << "</text>\n";
+        ly += 15;
+    };
+    for (const auto& s : p.series) legend(s.label, s.color, s.kind == Series::Bars);
+    for (const auto& b : p.bands) legend(b.label, b.color, true);
+    for (const auto& h : p.hlines) legend(h.label, h.color, false);
+    o << "</svg>\n";
+    return o.str();
+}
+
+/// Viridis-like colour ramp on [0, 1] (five anchors of matplotlib's viridis, linear between).
+std::string ramp(double t) {
+    static const double a[5][3] = {{68, 1, 84}, {59, 82, 139}, {33, 145, 140}, {94, 201, 98}, {253, 231, 37}};
+    t = std::clamp(t, 0.0, 1.0) * 4.0;
+    const int i = std::min(3, int(t));
+    const double f = t - i;
+    char buf[16];
+    std::snprintf(buf, sizeof buf, "#%02x%02x%02x", int(a[i][0] + f * (a[i + 1][0] - a[i][0])),
+                  int(a[i][1] + f * (a[i + 1][1] - a[i][1])), int(a[i][2] + f * (a[i + 1][2] - a[i][2])));
+    return buf;
+}
+
+std::string svg_heatmap(const PeriodogramSummary& s, int w, int h) {
+    const std::string title = "2-D periodogram, log10 power (centred; window: " + s.window + ")";
+    double hi = -INFINITY;
+    for (double v : s.heat)
+        if (std::isfinite(v)) hi = std::max(hi, v);
+    const double lo = std::isfinite(hi) ? hi - 8.0 : 0.0;
+    const double side = 300, x0 = 150, y0 = 34;
+    const double cw = side / s.heat_width, ch = side / s.heat_height;
+    std::ostringstream o;
+    o << "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " << kW << " 380\" width=\"" << kW
+      << "\" height=\"380\" role=\"img\">\n<title>" << esc(title) << "</title>\n";
+    o << "<rect x=\"0\" y=\"0\" width=\"" << kW << "\" height=\"380\" fill=\"#fff\"/>\n";
+    o << "<text x=\"" << kW / 2 << "\" y=\"20\" text-anchor=\"middle\" class=\"pt\">" << esc(title)
+      << "</text>\n<g shape-rendering=\"crispEdges\">";
+    for (int r = 0; r < s.heat_height; ++r)
+        for (int c = 0; c < s.heat_width; ++c) {
+            const double v = s.heat[size_t(r) * s.heat_width + c];
+            o << "<rect x=\"" << x0 + c * cw << "\" y=\"" << y0 + r * ch << "\" width=\"" << cw + 0.05
+              << "\" height=\"" << ch + 0.05 << "\" fill=\""
+              << (std::isfinite(v) ? ramp((v - lo) / (hi - lo)) : std::string("#000")) << "\"/>";
+        }
+    o << "</g>\n<g class=\"ax\">";
+    o << "<rect x=\"" << x0 << "\" y=\"" << y0 << "\" width=\"" << side << "\" height=\"" << side
+      << "\" fill=\"none\" stroke=\"#333\"/>";
+    // kx from -0.5 (left) to 0.5, ky from -0.5 (top) to 0.5: display row r holds ky index r - h/2.
+    for (double f : {-0.5, -0.25, 0.0, 0.25, 0.5}) {
+        const double x = x0 + (f + 0.5) * side, y = y0 + (f + 0.5) * side;
+        o << "<text x=\"" << x << "\" y=\"" << y0 + side + 16 << "\" text-anchor=\"middle\">" << f
+          << "</text><text x=\"" << x0 - 6 << "\" y=\"" << y + 4 << "\" text-anchor=\"end\">" << f
+          << "</text>";
+    }
+    o << "<text x=\"" << x0 + side / 2 << "\" y=\"" << y0 + side + 34
+      << "\" text-anchor=\"middle\">kx (cycles/pixel)</text>";
+    o << "<text transform=\"translate(" << x0 - 48 << "," << y0 + side / 2
+      << ") rotate(-90)\" text-anchor=\"middle\">ky (cycles/pixel)</text>";
+    // Colour bar.
+    const double bx = x0 + side + 40;
+    for (int i = 0; i < 50; ++i)
+        o << "<rect x=\"" << bx << "\" y=\"" << y0 + side - (i + 1) * side / 50 << "\" width=\"16\" height=\""
+          << side / 50 + 0.2 << "\" fill=\"" << ramp((i + 0.5) / 50) << "\"/>";
+    for (int d = 0; d <= 8; d += 2)
+        o << "<text x=\"" << bx + 22 << "\" y=\"" << y0 + side - d / 8.0 * side + 4 << "\">"
+          << fmt(lo + d, 3) << "</text>";
+    o << "<text x=\"" << bx + 70 << "\" y=\"" << y0 + 12 << "\">" << w << "x" << h
+      << " bins</text></g>\n</svg>\n";
+    return o.str();
+}
+
+std::vector<double> iota_from(size_t n, double first) {
+    std::vector<double> v(n);
+    for (size_t i = 0; i < n; ++i) v[i] = first + double(i);
+    return v;
+}
+
+/// The report's plots, in order.
+std::vector<std::string> plots(const AnalysisResult& r) {
+    std::vector<std::string> out;
+    const auto& T = r.theory;
+    const std::string measured = "measured";
+    const std::string red = "#d62728";
+
+    {  // histogram
+        Plot p;
+        p.title = "Histogram of values (64 bins over mean +- 4 sd)";
+        p.xlabel = "value";
+        p.ylabel = "pixels per bin";
+        Series s;
+        s.label = measured;
+        s.kind = Series::Bars;
+        const auto& hg = r.histogram;
+        const double bw = (hg.hi - hg.lo) / double(hg.counts.size());
+        for (size_t i = 0; i <= hg.counts.size(); ++i) {
+            s.x.push_back(hg.lo + bw * double(i));
+            s.y.push_back(i < hg.counts.size() ? double(hg.counts[i]) : 0.0);
+        }
+        p.series.push_back(s);
+        if (T && T->variance > 0) {
+            Series g;
+            g.label = "Gaussian, theory mean and variance";
+            g.color = red;
+            const double total = double(r.frames) * r.width * r.height;
+            const double sd = std::sqrt(T->variance);
+            for (int i = 0; i <= 256; ++i) {
+                const double x = hg.lo + (hg.hi - hg.lo) * i / 256.0;
+                const double z = (x - T->mean) / sd;
+                g.x.push_back(x);
+                g.y.push_back(total * bw * std::exp(-0.5 * z * z) / (sd * std::sqrt(2 * std::numbers::pi)));
+            }
+            p.series.push_back(g);
+        }
+        out.push_back(svg_plot(p));
+    }
+    out.push_back(svg_heatmap(r.periodogram, r.width, r.height));
+    {  // radial spectrum
+        Plot p;
+        p.title = "Radially averaged power spectrum";
+        p.xlabel = "frequency |k| (cycles/pixel)";
+        p.ylabel = "power (value^2 pixel^2)";
+        p.logx = p.logy = true;
+        Series s;
+        s.label = measured + " (" + std::to_string(r.frames) + (r.frames == 1 ? " frame)" : " frames)");
+        s.kind = Series::Points;
+        for (size_t b = 0; b < r.spectrum.power.size(); ++b)
+            if (r.spectrum.count[b] > 0) s.x.push_back(r.spectrum.frequency[b]), s.y.push_back(r.spectrum.power[b]);
+        p.series.push_back(s);
+        if (T && T->spectrum) {
+            Series t;
+            t.label = "theory";
+            t.color = red;
+            for (size_t b = 0; b < r.spectrum.power.size(); ++b)
+                if (r.spectrum.count[b] > 0) t.x.push_back(r.spectrum.frequency[b]), t.y.push_back(T->spectrum->power[b]);
+            p.series.push_back(t);
+        }
+        out.push_back(svg_plot(p));
+    }
+    if (T && T->spectrum) {  // spectrum z
+        Plot p;
+        p.title = "Spectrum against theory: z per annulus";
+        p.xlabel = "frequency |k| (cycles/pixel)";
+        p.ylabel = "z (Wilson-Hilferty)";
+        Series s;
+        s.label = "z";
+        s.kind = Series::Points;
+        for (size_t b = 0; b < T->spectrum->z.size(); ++b)
+            if (std::isfinite(T->spectrum->z[b])) s.x.push_back(r.spectrum.frequency[b]), s.y.push_back(T->spectrum->z[b]);
+        p.series.push_back(s);
+        p.hlines.push_back({T->spectrum->threshold, "Bonferroni limit +-" + fixed(T->spectrum->threshold, 2), "#777"});
+        p.hlines.push_back({-T->spectrum->threshold, "", "#777"});
+        out.push_back(svg_plot(p));
+    }
+    {  // autocovariance
+        Plot p;
+        p.title = "Radial autocovariance";
+        p.xlabel = "lag (pixels)";
+        p.ylabel = "covariance (value^2)";
+        Series s;
+        s.label = measured;
+        s.kind = Series::Points;
+        s.x = iota_from(r.autocovariance.size(), 0);
+        s.y = r.autocovariance;
+        p.series.push_back(s);
+        if (T && !T->autocovariance.empty()) {
+            Series t;
+            t.label = "theory";
+            t.color = red;
+            t.x = iota_from(T->autocovariance.size(), 0);
+            t.y = T->autocovariance;
+            p.series.push_back(t);
+        }
+        p.hlines.push_back({0.0, "", "#aaa"});
+        out.push_back(svg_plot(p));
+    }
+    if (r.frames > 1) {
+        const auto x = iota_from(size_t(r.frames), double(r.first_frame));
+        const auto per_frame = [&](const std::string& title, const std::string& ylabel,
+                                   auto get, double theory, double sd, size_t from) {
+            Plot p;
+            p.title = title;
+            p.xlabel = "frame";
+            p.ylabel = ylabel;
+            Series s;
+            s.label = measured;
+            for (size_t j = from; j < r.frame_stats.size(); ++j) s.x.push_back(x[j]), s.y.push_back(get(r.frame_stats[j]));
+            p.series.push_back(s);
+            if (std::isfinite(theory)) {
+                if (sd > 0) {
+                    Band b;
+                    b.label = "theory +- 2 sd (one frame)";
+                    b.x = {x[from], x.back()};
+                    b.lo = {theory - 2 * sd, theory - 2 * sd};
+                    b.hi = {theory + 2 * sd, theory + 2 * sd};
+                    p.bands.push_back(b);
+                }
+                p.hlines.push_back({theory, "theory", red});
+            }
+            out.push_back(svg_plot(p));
+        };
+        per_frame("Per-frame mean", "mean", [](const analysis::FrameStats& f) { return f.mean; },
+                  T ? T->mean : NAN, T ? T->sd_frame_mean : 0.0, 0);
+        per_frame("Per-frame variance", "variance", [](const analysis::FrameStats& f) { return f.variance; },
+                  T ? T->variance + T->sd_mean * T->sd_mean - T->sd_frame_mean * T->sd_frame_mean : NAN,
+                  T ? T->sd_frame_variance : 0.0, 0);
+        per_frame("Per-frame difference variance (frame - previous)", "variance of the difference",
+                  [](const analysis::FrameStats& f) { return f.diff_variance; },
+                  T && T->diff_variance ? *T->diff_variance : NAN, 0.0, 1);
+    }
+    if (r.stationarity.available) {
+        const auto& st = r.stationarity;
+        Plot p;
+        p.title = "Spectral drift, first quarter against last: z per annulus";
+        p.xlabel = "frequency |k| (cycles/pixel)";
+        p.ylabel = "z (correlation-corrected)";
+        Series s;
+        s.label = "z, corrected";
+        s.kind = Series::Points;
+        s.x = st.drift.frequency;
+        s.y = st.z_corrected;
+        p.series.push_back(s);
+        p.hlines.push_back({st.z_threshold, "Bonferroni limit +-" + fixed(st.z_threshold, 2), "#777"});
+        p.hlines.push_back({-st.z_threshold, "", "#777"});
+        out.push_back(svg_plot(p));
+    }
+    return out;
+}
+
+void write_atomically(const std::string& path, const std::string& text) {
+    const fs::path p(path);
+    const fs::path dir = p.parent_path();
+    std::error_code ec;
+    if (!dir.empty() && !fs::is_directory(dir, ec))
+        throw IoError(path + ": cannot write: directory " + dir.string() + " does not exist");
+    const fs::path tmp = dir / ("." + p.filename().string() + ".partial-" + std::to_string(::getpid()));
+    {
+        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+        if (!out) throw IoError(path + ": cannot write " + tmp.string());
+        out << text;
+        out.flush();
+        if (!out) {
+            out.close();
+            fs::remove(tmp, ec);
+            throw IoError(path + ": write failed");
+        }
+    }
+    fs::rename(tmp, p, ec);
+    if (ec) {
+        std::error_code ec2;
+        fs::remove(tmp, ec2);
+        throw IoError(path + ": cannot rename temporary file into place: " + ec.message());
+    }
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+std::string to_text(const AnalysisResult& r) {
+    std::ostringstream o;
+    const auto line = [&](const std::string& k, const std::string& v) {
+        o << k << std::string(k.size() < 13 ? 13 - k.size() : 1, ' ') << v << "\n";
+    };
+    const auto& m = r.moments;
+    line("input", r.input + ": " + source_text(r));
+    line("size", std::to_string(r.width) + "x" + std::to_string(r.height) + ", " + frames_text(r));
+    line("mean", fmt(m.mean));
+    line("variance", fmt(m.variance) + " (sd " + fmt(std::sqrt(m.variance)) + ")");
+    line("skewness", fmt(m.skewness, 4));
+    line("kurtosis", fmt(m.excess_kurtosis, 4) + " (excess)");
+    line("min / max", fmt(m.min) + " / " + fmt(m.max));
+    line("histogram", "64 bins over [" + fmt(r.histogram.lo, 4) + ", " + fmt(r.histogram.hi, 4) +
+                          "), " + std::to_string(r.histogram.below) + " below, " +
+                          std::to_string(r.histogram.above) + " above");
+    const auto& p = r.periodogram;
+    line("periodogram", "window " + p.window + " (" + (p.periodic ? "periodic" : "not periodic") +
+                            ": wrap/interior step ratio x " + fmt(p.wrap_ratio_x, 3) + ", y " +
+                            fmt(p.wrap_ratio_y, 3) + "), averaged over " + std::to_string(r.frames) +
+                            (r.frames == 1 ? " frame" : " frames"));
+    line("", "total power " + fmt(p.total_power) + ", centroid |k| " + fmt(p.centroid, 4) +
+                 " cycles/px, peak " + fmt(p.peak_power, 4) + " at (" + fmt(p.peak_fx, 4) + ", " +
+                 fmt(p.peak_fy, 4) + ")");
+    line("", "anisotropy " + fmt(p.anisotropy, 3) + " (0 = isotropic), axis " +
+                 fixed(p.orientation_deg, 1) + " deg from +x towards +y (image rows down)");
+    if (r.frames > 1)
+        line("correlation", "frames per independent frame " + correlation_text(r));
+
+    const auto& st = r.stationarity;
+    if (st.available) {
+        line("trend", "per-frame variance slope " + fmt(st.trend.slope, 4) + " per frame, stderr " +
+                          fmt(st.trend.stderr_slope, 4) + ", t " + fixed(st.trend.t, 2) + " (" +
+                          std::to_string(st.trend_blocks) + " blocks)");
+        line("drift", "first vs last " + std::to_string(st.quarter) + " frames: max|z| " +
+                          fixed(st.drift.max_abs_z, 2) + " as if independent, " +
+                          fixed(st.max_abs_z_corrected, 2) + " for " + fmt(st.q_eff, 3) +
+                          " independent frames per quarter and a common level varying by " +
+                          fmt(100 * std::sqrt(st.common_variance), 2) + " %");
+    }
+
+    if (r.theory) {
+        const auto& T = *r.theory;
+        o << "\ntheory       " << T.scene << " (hash " << T.hash << "), zoom " << fmt(T.zoom)
+          << " px/unit\n";
+        line("field", "mean " + fmt(T.field_mean) + ", variance " + fmt(T.field_variance) +
+                          " (Campbell's theorem)");
+        if (T.mapped)
+            line("mapping", "display values v -> " + fmt(T.map_lo) + " + v * (" + fmt(T.map_hi) +
+                                " - " + fmt(T.map_lo) + "); " + fixed(100 * T.clipped_fraction, 3) +
+                                " % clipped");
+        line("mean", "measured " + fmt(m.mean) + ", theory " + fmt(T.mean) + " +- " +
+                         fmt(T.sd_mean, 3) + ", z " + fixed(T.z_mean, 2));
+        line("variance", "measured " + fmt(m.variance) + ", theory " + fmt(T.variance) + " +- " +
+                             fmt(T.sd_variance, 3) + ", z " + fixed(T.z_variance, 2));
+        if (T.diff_variance && r.frames > 1) {
+            double dv = 0;
+            for (size_t j = 1; j < r.frame_stats.size(); ++j) dv += r.frame_stats[j].diff_variance;
+            dv /= double(r.frame_stats.size() - 1);
+            line("diff var", "measured " + fmt(dv) + " (mean over frames), theory " + fmt(*T.diff_variance));
+        }
+        if (T.spectrum)
+            line("spectrum", "max|z| " + fixed(T.spectrum->max_abs_z, 2) + " over " +
+                                 std::to_string(T.spectrum->compared) + " annuli");
+    }
+
+    o << "\n";
+    if (r.theory) {
+        const auto& T = *r.theory;
+        o << "mean agrees with theory: " << yes_no(T.mean_agrees) << " ("
+          << z_text(T.z_mean, T.z_limit) << ")\n";
+        o << "variance agrees with theory: " << yes_no(T.variance_agrees) << " ("
+          << z_text(T.z_variance, T.z_limit) << ")\n";
+        if (T.spectrum && T.spectrum->not_judged.empty())
+            o << "spectrum agrees with theory: " << yes_no(T.spectrum->agrees) << " ("
+              << spectrum_threshold_text(*T.spectrum) << ")\n";
+        else
+            o << "spectrum agrees with theory: n/a ("
+              << (T.spectrum ? T.spectrum->not_judged : T.no_spectrum) << ")\n";
+    }
+    if (st.available)
+        o << "stationary: " << yes_no(st.stationary) << " (" << stationarity_verdict(st) << ")\n";
+    else
+        o << "stationary: n/a (" << st.reason << ")\n";
+    for (const auto& n : r.notes) o << "note: " << n << "\n";
+
+    // Tables.
+    o << "\nhistogram (bin start, count)\n";
+    const double bw = (r.histogram.hi - r.histogram.lo) / double(r.histogram.counts.size());
+    uint64_t most = 1;
+    for (auto c : r.histogram.counts) most = std::max(most, c);
+    for (size_t i = 0; i < r.histogram.counts.size(); ++i) {
+        char buf[64];
+        std::snprintf(buf, sizeof buf, "  %12.5g %10llu ", r.histogram.lo + bw * double(i),
+                      static_cast<unsigned long long>(r.histogram.counts[i]));
+        o << buf << std::string(size_t(40.0 * double(r.histogram.counts[i]) / double(most) + 0.5), '#')
+          << "\n";
+    }
+    const bool spec_theory = r.theory && r.theory->spectrum;
+    o << "\nradial spectrum (annulus, frequency cycles/px, power, bins"
+      << (spec_theory ? ", theory, ratio, z" : "") << ")\n";
+    for (size_t b = 0; b < r.spectrum.power.size(); ++b) {
+        if (r.spectrum.count[b] == 0) continue;
+        char buf[160];
+        std::snprintf(buf, sizeof buf, "  %4zu %9.6f %13.6g %7llu", b, r.spectrum.frequency[b],
+                      r.spectrum.power[b], static_cast<unsigned long long>(r.spectrum.count[b]));
+        o << buf;
+        if (spec_theory) {
+            const auto& S = *r.theory->spectrum;
+            std::snprintf(buf, sizeof buf, " %13.6g %8s %7s", S.power[b], fmt(S.ratio[b], 4).c_str(),
+                          std::isfinite(S.z[b]) ? fixed(S.z[b], 2).c_str() : "-");
+            o << buf;
+        }
+        o << "\n";
+    }
+    const bool acov_theory = r.theory && !r.theory->autocovariance.empty();
+    o << "\nradial autocovariance (lag px, value" << (acov_theory ? ", theory" : "") << ")\n";
+    for (size_t l = 0; l < r.autocovariance.size(); ++l) {
+        char buf[96];
+        std::snprintf(buf, sizeof buf, "  %4zu %13.6g", l, r.autocovariance[l]);
+        o << buf;
+        if (acov_theory) {
+            std::snprintf(buf, sizeof buf, " %13.6g", r.theory->autocovariance[l]);
+            o << buf;
+        }
+        o << "\n";
+    }
+    if (r.frames > 1) {
+        o << "\nper frame (frame, mean, variance, diff variance)\n";
+        for (size_t j = 0; j < r.frame_stats.size(); ++j) {
+            char buf[128];
+            std::snprintf(buf, sizeof buf, "  %6lld %13.6g %13.6g %13.6g\n",
+                          r.first_frame + static_cast<long long>(j), r.frame_stats[j].mean,
+                          r.frame_stats[j].variance, r.frame_stats[j].diff_variance);
+            o << buf;
+        }
+    }
+    return o.str();
+}
+
+std::string to_json(const AnalysisResult& r) {
+    Json j;
+    j.open('{');
+    j.key("input").str(r.input).key("kind").str(r.kind).key("values").str(r.raw ? "raw" : "display");
+    j.key("bits").integer(r.bits).key("width").integer(r.width).key("height").integer(r.height);
+    j.key("frames").integer(r.frames).key("first_frame").integer(r.first_frame);
+    const auto& m = r.moments;
+    j.key("moments").open('{').key("mean").num(m.mean).key("variance").num(m.variance);
+    j.key("skewness").num(m.skewness).key("excess_kurtosis").num(m.excess_kurtosis);
+    j.key("min").num(m.min).key("max").num(m.max).close('}');
+    j.key("histogram").open('{').key("lo").num(r.histogram.lo).key("hi").num(r.histogram.hi);
+    j.key("bins").integer(static_cast<long long>(r.histogram.counts.size()));
+    j.key("counts").nums(r.histogram.counts);
+    j.key("below").integer(static_cast<long long>(r.histogram.below));
+    j.key("above").integer(static_cast<long long>(r.histogram.above)).close('}');
+    const auto& p = r.periodogram;
+    j.key("periodogram").open('{').key("window").str(p.window).key("periodic").boolean(p.periodic);
+    j.key("wrap_step_ratio").open('[').num(p.wrap_ratio_x).num(p.wrap_ratio_y).close(']');
+    j.key("total_power").num(p.total_power);
+    j.key("peak").open('{').key("fx").num(p.peak_fx).key("fy").num(p.peak_fy).key("power").num(p.peak_power).close('}');
+    j.key("centroid_cpp").num(p.centroid).key("anisotropy").num(p.anisotropy);
+    j.key("orientation_deg").num(p.orientation_deg).close('}');
+    j.key("radial_spectrum").open('{');
+    j.key("frequency").nums(r.spectrum.frequency).key("power").nums(r.spectrum.power);
+    j.key("count").nums(r.spectrum.count);
+    if (r.theory && r.theory->spectrum) {
+        const auto& S = *r.theory->spectrum;
+        j.key("theory").nums(S.power).key("ratio").nums(S.ratio).key("z").nums(S.z);
+    }
+    j.close('}');
+    j.key("autocovariance").open('{').key("max_lag").integer(r.max_lag);
+    j.key("value").nums(r.autocovariance);
+    if (r.theory && !r.theory->autocovariance.empty()) j.key("theory").nums(r.theory->autocovariance);
+    j.close('}');
+    j.key("per_frame").open('{');
+    std::vector<double> a, b, c;
+    for (const auto& f : r.frame_stats) a.push_back(f.mean), b.push_back(f.variance), c.push_back(f.diff_variance);
+    j.key("mean").nums(a).key("variance").nums(b).key("diff_variance").nums(c).close('}');
+    j.key("frame_correlation").open('{').key("source").str(r.tau_source).key("mean").num(r.tau_mean);
+    j.key("variance").num(r.tau_variance).key("spectrum").num(r.tau_spectrum).close('}');
+    const auto& st = r.stationarity;
+    j.key("stationarity").open('{').key("available").boolean(st.available);
+    if (st.available) {
+        j.key("trend").open('{').key("slope").num(st.trend.slope).key("stderr").num(st.trend.stderr_slope);
+        j.key("t").num(st.trend.t).key("blocks").integer(st.trend_blocks).key("limit").num(st.t_limit).close('}');
+        j.key("spectral_drift").open('{').key("quarter_frames").integer(st.quarter);
+        j.key("max_abs_z").num(st.drift.max_abs_z).key("q_eff").num(st.q_eff);
+        j.key("common_level_relative_variance").num(st.common_variance);
+        j.key("max_abs_z_corrected").num(st.max_abs_z_corrected).key("threshold").num(st.z_threshold);
+        j.key("z_corrected").nums(st.z_corrected);
+        j.key("frequency").nums(st.drift.frequency).key("z").nums(st.drift.z).close('}');
+        j.key("stationary").boolean(st.stationary);
+    } else {
+        j.key("reason").str(st.reason).key("stationary").null();
+    }
+    j.close('}');
+    j.key("theory");
+    if (r.theory) {
+        const auto& T = *r.theory;
+        j.open('{').key("scene").str(T.scene).key("hash").str(T.hash).key("zoom").num(T.zoom);
+        j.key("mapped").boolean(T.mapped);
+        if (T.mapped) j.key("range").open('[').num(T.map_lo).num(T.map_hi).close(']').key("clipped_fraction").num(T.clipped_fraction);
+        j.key("field_mean").num(T.field_mean).key("field_variance").num(T.field_variance);
+        j.key("mean").open('{').key("measured").num(m.mean).key("expected").num(T.mean);
+        j.key("sd").num(T.sd_mean).key("sd_frame").num(T.sd_frame_mean).key("z").num(T.z_mean);
+        j.key("limit").num(T.z_limit).key("agrees").boolean(T.mean_agrees).close('}');
+        j.key("variance").open('{').key("measured").num(m.variance).key("expected").num(T.variance);
+        j.key("sd").num(T.sd_variance).key("sd_frame").num(T.sd_frame_variance).key("z").num(T.z_variance);
+        j.key("limit").num(T.z_limit).key("agrees").boolean(T.variance_agrees).close('}');
+        j.key("spectrum");
+        if (T.spectrum) {
+            j.open('{').key("compared").integer(T.spectrum->compared).key("max_abs_z").num(T.spectrum->max_abs_z);
+            j.key("threshold").num(T.spectrum->threshold).key("agrees");
+            if (T.spectrum->not_judged.empty()) j.boolean(T.spectrum->agrees);
+            else j.null().key("not_judged").str(T.spectrum->not_judged);
+            j.close('}');
+        } else {
+            j.null().key("no_spectrum").str(T.no_spectrum);
+        }
+        j.key("diff_variance");
+        if (T.diff_variance) j.num(*T.diff_variance);
+        else j.null();
+        j.close('}');
+    } else {
+        j.null();
+    }
+    j.key("notes").open('[');
+    for (const auto& n : r.notes) j.str(n);
+    j.close(']');
+    j.close('}');
+    return j.text() + "\n";
+}
+
+int html_plot_count(const AnalysisResult& r) {
+    int n = 4;  // histogram, 2-D periodogram, radial spectrum, autocovariance
+    if (r.theory && r.theory->spectrum) ++n;
+    if (r.frames > 1) n += 3;
+    if (r.stationarity.available) ++n;
+    return n;
+}
+
+std::string to_html(const AnalysisResult& r) {
+    const std::vector<std::string> svgs = plots(r);
+    std::ostringstream o;
+    o << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
+      << "<meta name=\"impulse-plots\" content=\"" << svgs.size() << "\">\n"
+      << "<title>impulse analyze: " << esc(r.input) << "</title>\n<style>\n"
+      << "body{font-family:system-ui,-apple-system,'DejaVu Sans',sans-serif;margin:24px auto;"
+         "max-width:1400px;color:#222;background:#fafafa}\n"
+      << "h1{font-size:20px} h2{font-size:16px;margin-top:28px}\n"
+      << "table{border-collapse:collapse;font-size:13px;background:#fff}\n"
+      << "td,th{border:1px solid #ddd;padding:3px 8px;text-align:left;vertical-align:top}\n"
+      << "th{background:#f0f0f0}\n.yes{color:#1a7f37;font-weight:600}.no{color:#c62828;font-weight:600}"
+         ".na{color:#777}\n"
+      << ".plots{display:flex;flex-wrap:wrap;gap:12px}\n"
+      << "figure{margin:0;border:1px solid #ddd;background:#fff}\n"
+      << "svg text{font-size:11px;fill:#333} svg text.pt{font-size:13px;font-weight:600}"
+         " svg text.lg{font-size:11px} svg .grid{stroke:#eee}\n"
+      << "</style>\n</head>\n<body>\n";
+    o << "<h1>impulse analyze: " << esc(r.input) << "</h1>\n";
+
+    const auto row = [&](const std::string& k, const std::string& v) {
+        o << "<tr><th>" << esc(k) << "</th><td>" << v << "</td></tr>\n";
+    };
+    const auto verdict = [](bool b) {
+        return std::string("<span class=\"") + (b ? "yes\">yes" : "no\">no") + "</span>";
+    };
+    o << "<h2>Summary</h2>\n<table>\n";
+    const auto& m = r.moments;
+    row("input", esc(r.input + ": " + source_text(r)));
+    row("size", std::to_string(r.width) + "x" + std::to_string(r.height) + ", " + esc(frames_text(r)));
+    row("mean", fmt(m.mean));
+    row("variance", fmt(m.variance) + " (sd " + fmt(std::sqrt(m.variance)) + ")");
+    row("skewness / excess kurtosis", fmt(m.skewness, 4) + " / " + fmt(m.excess_kurtosis, 4));
+    row("min / max", fmt(m.min) + " / " + fmt(m.max));
+    const auto& p = r.periodogram;
+    row("periodogram", "window " + p.window + " (" + (p.periodic ? "periodic" : "not periodic") +
+                           ", wrap/interior step ratio " + fmt(p.wrap_ratio_x, 3) + ", " +
+                           fmt(p.wrap_ratio_y, 3) + "); total power " + fmt(p.total_power) +
+                           "; centroid |k| " + fmt(p.centroid, 4) + " cycles/px; anisotropy " +
+                           fmt(p.anisotropy, 3) + " (axis " + fixed(p.orientation_deg, 1) + "&deg;)");
+    if (r.frames > 1) row("frame correlation", esc(correlation_text(r)));
+    const auto& st = r.stationarity;
+    if (st.available) {
+        row("trend of frame variance", "slope " + fmt(st.trend.slope, 4) + " per frame, stderr " +
+                                           fmt(st.trend.stderr_slope, 4) + ", t " + fixed(st.trend.t, 2));
+        row("spectral drift", "max|z| " + fixed(st.drift.max_abs_z, 2) + " (independent frames), " +
+                                  fixed(st.max_abs_z_corrected, 2) + " for " + fmt(st.q_eff, 3) +
+                                  " independent frames per quarter");
+        row("stationary", verdict(st.stationary) + " &mdash; " + esc(stationarity_verdict(st)));
+    } else {
+        row("stationary", "<span class=\"na\">n/a</span> (" + esc(st.reason) + ")");
+    }
+    if (r.theory) {
+        const auto& T = *r.theory;
+        row("scene", esc(T.scene) + " (hash " + esc(T.hash) + "), zoom " + fmt(T.zoom));
+        if (T.mapped)
+            row("display mapping", "v &rarr; " + fmt(T.map_lo) + " + v (" + fmt(T.map_hi) + " &minus; " +
+                                       fmt(T.map_lo) + "), " + fixed(100 * T.clipped_fraction, 3) +
+                                       " % clipped");
+        row("mean vs theory", fmt(m.mean) + " vs " + fmt(T.mean) + " &plusmn; " + fmt(T.sd_mean, 3) +
+                                  ", z " + fixed(T.z_mean, 2) + ": agrees " + verdict(T.mean_agrees) +
+                                  " (" + esc(z_text(T.z_mean, T.z_limit)) + ")");
+        row("variance vs theory", fmt(m.variance) + " vs " + fmt(T.variance) + " &plusmn; " +
+                                      fmt(T.sd_variance, 3) + ", z " + fixed(T.z_variance, 2) +
+                                      ": agrees " + verdict(T.variance_agrees) + " (" +
+                                      esc(z_text(T.z_variance, T.z_limit)) + ")");
+        if (T.spectrum && T.spectrum->not_judged.empty())
+            row("spectrum vs theory", "agrees " + verdict(T.spectrum->agrees) + " (" +
+                                          esc(spectrum_threshold_text(*T.spectrum)) + ")");
+        else
+            row("spectrum vs theory",
+                "agrees <span class=\"na\">n/a</span> (" +
+                    esc(T.spectrum ? T.spectrum->not_judged : T.no_spectrum) + ")");
+    }
+    for (const auto& n : r.notes) row("note", esc(n));
+    o << "</table>\n<h2>Plots</h2>\n<div class=\"plots\">\n";
+    for (const auto& s : svgs) o << "<figure>\n" << s << "</figure>\n";
+    o << "</div>\n</body>\n</html>\n";
+    return o.str();
+}
+
+int run_analyze(const AnalyzeOptions& options) {
+    const AnalysisResult r = analyze_input(options);
+    if (!options.report.empty()) write_atomically(options.report, to_html(r));
+    std::cout << (options.json ? to_json(r) : to_text(r));
+    if (!options.report.empty() && !options.json) std::cout << "wrote " << options.report << "\n";
+    return 0;
+}
+
+}  // namespace impulse::app

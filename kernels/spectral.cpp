@@ -1,0 +1,857 @@
+// SPDX-License-Identifier: Apache-2.0
+// Kernels from a spectrum or an autocorrelation (Lewis 1986 §3: the field's spectrum is the
+// kernel's |H|^2, so h = F^-1[sqrt(S)]; Lewis 1986 §2 and 1987: an autocorrelation must be
+// non-negative definite, i.e. its spectrum S = F[R] >= 0).
+//
+// 2-D transforms of isotropic functions are Hankel transforms, G(k) = 2 pi int g(r) J0(2 pi k r)
+// r dr (the same formula in both directions with the convention H(k) = int h e^{-2 pi i k.x}).
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iomanip>
+#include <numbers>
+#include <sstream>
+
+#include "kernels/fft.h"
+#include "kernels/kernels.h"
+#include "kernels/quadrature.h"
+#include "util/errors.h"
+
+namespace impulse::kernels {
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+/// S below -kNegativeThreshold * max S is a real negative lobe, not quadrature noise.
+constexpr double kNegativeThreshold = 1e-6;
+/// R is integrated out to where |R| < kAcfTail R(0).
+constexpr double kAcfTail = 1e-9;
+constexpr double kAcfMaxRadius = 4096.0;
+/// The taper of DesignWindow::Hann/Gaussian covers the outer (1 - kTaperStart) of the radius.
+constexpr double kTaperStart = 0.8;
+
+std::string num(double v) {
+    std::ostringstream s;
+    s << std::setprecision(4) << v;
+    return s.str();
+}
+
+void require(bool ok, const std::string& key, double value, const char* expected) {
+    if (!ok || !std::isfinite(value))
+        throw ValueError(key + " = " + num(value) + ": expected " + expected);
+}
+
+/// Gauss–Legendre nodes and weights.
+struct Nodes {
+    std::vector<double> x, w;
+    void add(double a, double b, int panels) {
+        const double* gx = detail::gl_nodes();
+        const double* gw = detail::gl_weights();
+        const double h = (b - a) / panels;
+        for (int p = 0; p < panels; ++p) {
+            const double mid = a + (p + 0.5) * h;
+            for (int i = 0; i < detail::kGlPoints; ++i) {
+                x.push_back(mid + 0.5 * h * gx[i]);
+                w.push_back(0.5 * h * gw[i]);
+            }
+        }
+    }
+};
+
+/// Raised-cosine roll-off of sqrt(S): 1 up to the pass band kp, 0 from K on.
+double rolloff(double k, double K, double kp) {
+    if (k <= kp) return 1.0;
+    if (k >= K) return 0.0;
+    return 0.5 + 0.5 * std::cos(kPi * (k - kp) / (K - kp));
+}
+
+/// Radial window of a designed kernel of radius R whose taper starts at a.
+double window_weight(DesignWindow w, double r, double R, double a) {
+    if (r > R) return 0.0;
+    if (w == DesignWindow::None || r <= a) return 1.0;
+    if (w == DesignWindow::Hann) return 0.5 + 0.5 * std::cos(kPi * (r - a) / (R - a));
+    const double s = (R - a) / 3.0;  // Gaussian: 3 sigma over the taper (1.1 % at R)
+    return std::exp(-0.5 * (r - a) * (r - a) / (s * s));
+}
+
+double sinc(double x) { return x == 0.0 ? 1.0 : std::sin(kPi * x) / (kPi * x); }
+
+/// A sample of a spectrum, for the negativity report.
+struct SpectrumSample {
+    double k, theta, s;
+};
+
+/// Throws when samples fall below -kNegativeThreshold * smax, listing the most negative values
+/// (at most three, one per negative lobe). `ordered`: samples are consecutive along k, and a lobe
+/// is a run of consecutive negative samples; otherwise lobes are told apart by a distance of at
+/// least `separation` in the frequency plane (a sample and its mirror -k count as one).
+void refuse_negative(const std::vector<SpectrumSample>& samples, double smax, bool ordered,
+                     double separation, const std::string& what, bool show_theta) {
+    const double limit = -kNegativeThreshold * smax;
+    std::vector<SpectrumSample> lobes;
+    if (ordered) {
+        for (size_t i = 0; i < samples.size(); ++i) {
+            if (!(samples[i].s < limit)) continue;
+            SpectrumSample low = samples[i];
+            for (; i < samples.size() && samples[i].s < limit; ++i)
+                if (samples[i].s < low.s) low = samples[i];
+            lobes.push_back(low);
+        }
+    } else {
+        for (const auto& s : samples)
+            if (s.s < limit) lobes.push_back(s);
+    }
+    if (lobes.empty()) return;
+    std::stable_sort(lobes.begin(), lobes.end(),
+                     [](const auto& a, const auto& b) { return a.s < b.s; });
+    std::vector<SpectrumSample> shown;
+    for (const auto& b : lobes) {
+        bool near = false;
+        for (const auto& s : shown) {
+            const double bx = b.k * std::cos(b.theta), by = b.k * std::sin(b.theta);
+            const double sx = s.k * std::cos(s.theta), sy = s.k * std::sin(s.theta);
+            near |= !ordered && (std::hypot(bx - sx, by - sy) < separation ||
+                                 std::hypot(bx + sx, by + sy) < separation);
+        }
+        if (!near) shown.push_back(b);
+        if (shown.size() == 3) break;
+    }
+    std::ostringstream m;
+    m << what << ": ";
+    for (size_t i = 0; i < shown.size(); ++i) {
+        m << (i ? ", " : "") << "S(" << num(shown[i].k);
+        if (show_theta) m << ", theta = " << num(shown[i].theta);
+        m << ") = " << num(shown[i].s);
+    }
+    m << " (a power spectrum must be >= 0; values below -" << kNegativeThreshold
+      << " max S = " << num(limit) << " are not numerical noise)";
+    throw ValueError(m.str());
+}
+
+void require_finite_sample(const std::string& name, double k, double s) {
+    if (!std::isfinite(s))
+        throw ValueError(name + ": S(" + num(k) + ") = " + num(s) +
+                         ": expected a finite number (a spectrum must be finite; add a low-"
+                         "frequency cut-off such as (k^2 + 0.01^2)^(-d/2))");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Models
+
+double markov_s(double k, double l) {
+    return 2 * kPi * l * l * std::pow(1 + std::pow(2 * kPi * l * k, 2), -1.5);
+}
+
+/// int_0^inf |k| g(k - f0) dk + int_0^inf k g(k + f0) dk for g(x) = exp(-x^2 / (2 w^2)): the
+/// ring's radial moment (E|X| sqrt(2 pi) w for X ~ N(f0, w^2)).
+double bandpass_moment(double f0, double w) {
+    const double e_abs = w * std::sqrt(2.0 / kPi) * std::exp(-f0 * f0 / (2 * w * w)) +
+                         f0 * std::erf(f0 / (w * std::sqrt(2.0)));
+    return e_abs * std::sqrt(2 * kPi) * w;
+}
+
+double power_shape(const ModelParams& p, double k) {
+    double s = std::pow(1.0 + (k / p.k_low) * (k / p.k_low), -0.5 * p.slope);
+    if (p.k_high > 0) s *= std::exp(-(k / p.k_high) * (k / p.k_high));
+    return s;
+}
+
+/// int power_shape d^2k.
+double power_norm(const ModelParams& p) {
+    if (p.k_high == 0.0) return 2 * kPi * p.k_low * p.k_low / (p.slope - 2.0);
+    // k = k_low e^u, d^2k = 2 pi k^2 du, from 1e-6 k_low (the rest is < 1e-12 k_low^2) to
+    // 8 k_high (exp(-64) beyond).
+    const double u0 = std::log(1e-6), u1 = std::log(8.0 * p.k_high / p.k_low);
+    if (u1 <= u0) return 0.0;
+    return 2 * kPi *
+           detail::integrate(
+               [&](double u) {
+                   const double k = p.k_low * std::exp(u);
+                   return power_shape(p, k) * k * k;
+               },
+               u0, u1, 400);
+}
+
+// ---------------------------------------------------------------------------------------------
+// CSV tables
+
+struct Table {
+    std::vector<double> k, s;
+    double operator()(double q) const {
+        if (q <= k.front()) return s.front();
+        if (q > k.back()) return 0.0;
+        const size_t i = std::upper_bound(k.begin(), k.end(), q) - k.begin() - 1;
+        const double t = (q - k[i]) / (k[i + 1] - k[i]);
+        return s[i] + t * (s[i + 1] - s[i]);
+    }
+};
+
+bool parse_number(std::string_view field, double& out) {
+    size_t a = 0, b = field.size();
+    while (a < b && std::isspace(static_cast<unsigned char>(field[a]))) ++a;
+    while (b > a && std::isspace(static_cast<unsigned char>(field[b - 1]))) --b;
+    if (a == b) return false;
+    const std::string s(field.substr(a, b - a));
+    char* end = nullptr;
+    out = std::strtod(s.c_str(), &end);
+    return end == s.c_str() + s.size();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Radial (isotropic) design
+
+DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
+    const double K = o.nyquist, kp = (1.0 - o.rolloff) * K;
+    auto S = [&](double k) { return sp.density(k, 0.0); };
+
+    // Check S on a fine grid: finite, not negative beyond noise, not all zero.
+    const int nc = 4096;
+    std::vector<SpectrumSample> check(nc + 1);
+    double smax = 0.0;
+    for (int i = 0; i <= nc; ++i) {
+        const double k = K * i / nc;
+        const double s = S(k);
+        require_finite_sample(sp.name, k, s);
+        check[i] = {k, 0.0, s};
+        smax = std::max(smax, s);
+    }
+    if (!(smax > 0.0))
+        throw ValueError(sp.name + ": S(k) <= 0 everywhere on [0, " + num(K) +
+                         "]: nothing to design");
+    refuse_negative(check, smax, true, 0.0, sp.name + " is negative", false);
+
+    // sqrt(S) T at Gauss–Legendre nodes on [0, kp] and [kp, K] (T has a kink at kp). The panel
+    // count resolves J0(2 pi k r) up to r_hi (2 panels = 32 nodes per period 1/r_hi) and
+    // features of S down to K/256.
+    struct Amplitude {
+        Nodes n;
+        std::vector<double> wa;  // 2 pi w_j k_j sqrt(S_j) T_j
+        double energy = 0.0;     // 2 pi sum w_j k_j S_j T_j^2 = int A^2 d^2k
+    };
+    auto amplitude = [&](double r_hi) {
+        Amplitude a;
+        const int panels = std::max(256, 32 + static_cast<int>(std::ceil(2.0 * K * r_hi)));
+        const int pass = std::max(1, static_cast<int>(std::lround(panels * kp / K)));
+        if (kp > 0) a.n.add(0.0, kp, pass);
+        if (K > kp) a.n.add(kp, K, std::max(16, panels - pass));
+        for (size_t j = 0; j < a.n.x.size(); ++j) {
+            const double k = a.n.x[j];
+            const double amp = std::sqrt(std::max(S(k), 0.0)) * rolloff(k, K, kp);
+            a.wa.push_back(2 * kPi * a.n.w[j] * k * amp);
+            a.energy += 2 * kPi * a.n.w[j] * k * amp * amp;
+        }
+        return a;
+    };
+    auto h_at = [](const Amplitude& a, double r) {
+        double s = 0.0;
+        for (size_t j = 0; j < a.wa.size(); ++j)
+            s += a.wa[j] * detail::bessel_j0(2 * kPi * a.n.x[j] * r);
+        return s;
+    };
+    const double total = amplitude(0.0).energy;
+
+    // Radius: the energy radius R_f where 2 pi int_0^R_f h^2 r dr reaches `energy` of the total
+    // (Parseval: int h^2 = int A^2 d^2k). 16-point Gauss–Legendre panels of width 1/K (two
+    // periods of h^2, whose band reaches 2K); not the trapezoid rule, whose Euler–Maclaurin
+    // end correction dr^2/12 * 2 pi h(0)^2 at r = 0 is ~1 % for peaked kernels (markov).
+    // Within the panel that crosses the target, R_f is interpolated linearly.
+    const bool tapered = o.window != DesignWindow::None;
+    double R = o.radius;
+    if (R == 0.0) {
+        const double limit = tapered ? kTaperStart * o.max_radius : o.max_radius;
+        const double pw = 1.0 / K, target = o.energy * total;
+        double cum = 0.0, r = 0.0, rf = -1.0;
+        while (rf < 0.0) {
+            const double chunk_end = r + 64.0 * pw;
+            const Amplitude a = amplitude(chunk_end);
+            for (; r < chunk_end - 0.5 * pw; r += pw) {
+                Nodes pn;
+                pn.add(r, r + pw, 1);
+                double add = 0.0;
+                for (size_t j = 0; j < pn.x.size(); ++j) {
+                    const double h = h_at(a, pn.x[j]);
+                    add += pn.w[j] * 2 * kPi * pn.x[j] * h * h;
+                }
+                if (cum + add >= target) {
+                    rf = r + pw * (target - cum) / add;
+                    break;
+                }
+                cum += add;
+                if (r + pw > limit) {
+                    throw ValueError(sp.name + ": keeping " + num(100 * o.energy) +
+                                     " % of the kernel energy needs a radius beyond " +
+                                     num(tapered ? limit / kTaperStart : limit) +
+                                     " units (max_radius = " + num(o.max_radius) + "; " +
+                                     num(100 * cum / total) +
+                                     " % kept there): lower energy, give a radius, or raise "
+                                     "max_radius");
+                }
+            }
+        }
+        R = std::max(tapered ? rf / kTaperStart : rf, 1.0 / K);
+    }
+
+    // Samples for the Catmull–Rom profile: 16 per shortest period 1/K (interpolation error
+    // < 0.1 % at K), at most 4097.
+    const int n = std::clamp(static_cast<int>(std::ceil(16.0 * K * R)) + 1, 64, 4097);
+    const Amplitude a = amplitude(R);
+    auto sk = std::make_shared<SampledKernel>();
+    sk->radial = true;
+    sk->n = n;
+    sk->values.resize(n);
+    const double taper_start = tapered ? kTaperStart * R : R;
+    for (int i = 0; i < n; ++i) {
+        const double r = R * i / (n - 1);
+        sk->values[i] = h_at(a, r) * window_weight(o.window, r, R, taper_start);
+    }
+    sk->values[n - 1] = 0.0;  // the profile is zero from R on
+    DesignedKernel out;
+    out.params.type = KernelType::Sampled;
+    out.params.radius = R;
+    out.params.sampled = sk;
+    const Kernel kern(out.params);
+
+    // Report: |H|^2 of the final profile (as Kernel evaluates it) against S.
+    DesignReport& rep = out.report;
+    rep.radius = R;
+    rep.samples = n;
+    rep.passband = kp;
+    rep.energy_fraction = kern.integral_sq() / a.energy;
+    rep.effective_area = kern.integral_sq() * kern.integral_sq() / kern.integral_4();
+    Nodes rn;
+    rn.add(0.0, R, std::max({64, (n - 1) / 2, 32 + static_cast<int>(std::ceil(2.0 * K * R))}));
+    std::vector<double> hr(rn.x.size());
+    for (size_t j = 0; j < rn.x.size(); ++j)
+        hr[j] = 2 * kPi * rn.w[j] * rn.x[j] * kern.envelope(rn.x[j] * rn.x[j] / (R * R));
+    const int M = 256;
+    double num2 = 0.0, den2 = 0.0, pmax = 0.0;
+    std::vector<double> hk2(M + 1), sm(M + 1);
+    for (int m = 0; m <= M; ++m) {
+        const double k = K * m / M;
+        double H = 0.0;
+        for (size_t j = 0; j < rn.x.size(); ++j)
+            H += hr[j] * detail::bessel_j0(2 * kPi * k * rn.x[j]);
+        hk2[m] = H * H;
+        sm[m] = std::max(S(k), 0.0);
+        pmax = std::max(pmax, sm[m]);
+        const double wt = (m == 0 || m == M ? 0.5 : 1.0) * k;
+        num2 += wt * (hk2[m] - sm[m]) * (hk2[m] - sm[m]);
+        den2 += wt * sm[m] * sm[m];
+    }
+    rep.spectrum_error = den2 > 0 ? std::sqrt(num2 / den2) : 0.0;
+    rep.achieved = hk2;
+    for (int m = 0; m <= M; ++m)
+        if (K * m / M <= kp && sm[m] >= 0.01 * pmax)
+            rep.passband_error = std::max(rep.passband_error, std::abs(hk2[m] / sm[m] - 1.0));
+
+    // What the renderer evaluates: the Chebyshev polynomial, or the q-table (linear in q, so
+    // coarse in r near the centre: the first entry spans r < R / 64).
+    double hmax = 0.0, err = 0.0;
+    for (double v : sk->values) hmax = std::max(hmax, std::abs(v));
+    const auto& table = kern.envelope_table();
+    for (int i = 0; i < 20000; ++i) {
+        const double r = R * i / 20000.0, q = (r / R) * (r / R);
+        double fast;
+        if (!table.empty()) {
+            const double x = q * (table.size() - 1);
+            const size_t t = std::min(static_cast<size_t>(x), table.size() - 2);
+            fast = table[t] + (x - t) * (table[t + 1] - table[t]);
+        } else {
+            fast = kern.polynomial().evaluate(static_cast<float>(q));
+        }
+        err = std::max(err, std::abs(fast - kern.envelope(q)));
+    }
+    rep.render_error = hmax > 0 ? err / hmax : 0.0;
+    return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Grid (angle-dependent) design
+
+DesignedKernel design_grid(const Spectrum& sp, const DesignOptions& o) {
+    const double K = o.nyquist, kp = (1.0 - o.rolloff) * K;
+    // Grid spacing 1/(4K): the samples carry frequencies up to 2K, twice the designed band, so
+    // the bilinear interpolant's images (at multiples of 4K) sit far from the band.
+    const double d = 0.25 / K;
+    const bool tapered = o.window != DesignWindow::None;
+    auto fft_size = [](int n) {  // smallest 2^a 3^b 5^c >= n, even
+        for (int m = std::max(n, 16);; ++m) {
+            if (m % 2) continue;
+            int x = m;
+            for (int f : {2, 3, 5})
+                while (x % f == 0) x /= f;
+            if (x == 1) return m;
+        }
+    };
+    // The FFT domain must hold the kernel plus its tail: side >= 4 R (the periodic copies of
+    // the tail stay beyond 2 R). Start at 256 samples (or from the given radius), double as
+    // needed, at most 2048.
+    const int kMaxN = 2048;
+    int N = std::max(
+        256, o.radius > 0 ? fft_size(static_cast<int>(std::ceil(4.0 * o.radius / d))) : 256);
+    if (N > kMaxN)
+        throw ValueError(sp.name + ": radius = " + num(o.radius) + " needs a " + std::to_string(N) +
+                         "^2 FFT for an angle-dependent spectrum (at most " +
+                         std::to_string(kMaxN) + "^2 at nyquist = " + num(K) + ")");
+    bool checked = false;
+    for (;;) {
+        const double dk = 1.0 / (N * d);
+        const int hw = N / 2 + 1;
+        detail::RealFft2d inv(N, N, false);
+        std::vector<double> target(size_t(N) * hw, 0.0);  // symmetrised S on the half grid
+        std::vector<SpectrumSample> samples;
+        double smax = 0.0;
+        for (int j = 0; j < N; ++j) {
+            const int sj = j < N / 2 ? j : j - N;
+            for (int i = 0; i < hw; ++i) {
+                const int si = i == N / 2 ? -i : i;  // the Nyquist column is its own mirror
+                const double kx = si * dk, ky = sj * dk, k = std::hypot(kx, ky);
+                if (k >= K) continue;
+                const double th = std::atan2(ky, kx);
+                const double s1 = sp.density(k, th), s2 = sp.density(k, th + (th > 0 ? -kPi : kPi));
+                require_finite_sample(sp.name, k, s1);
+                require_finite_sample(sp.name, k, s2);
+                if (!checked) samples.push_back({k, th, std::min(s1, s2)});
+                // A real field has S(k) = S(-k): use the symmetric part (Lewis 1987: the
+                // spectrum of a real noise is symmetric).
+                const double s = 0.5 * (s1 + s2);
+                smax = std::max(smax, std::max(s1, s2));
+                target[size_t(j) * hw + i] = std::max(s, 0.0);
+                const double comp = std::pow(sinc(kx * d) * sinc(ky * d), 2);
+                inv.spectrum()[size_t(j) * hw + i] =
+                    std::sqrt(std::max(s, 0.0)) * rolloff(k, K, kp) / comp;
+            }
+        }
+        if (!checked) {
+            if (!(smax > 0.0))
+                throw ValueError(sp.name + ": S <= 0 everywhere on |k| < " + num(K) +
+                                 ": nothing to design");
+            refuse_negative(samples, smax, false, 0.125 * K, sp.name + " is negative", true);
+            checked = true;
+        }
+        inv.execute();
+        // h(x) = sum_k A(k) e^{2 pi i k.x} dk^2; index (i, j) <-> x = (si d, sj d).
+        const double* raw = inv.real();
+        std::vector<double> h(size_t(N) * N);
+        for (size_t t = 0; t < h.size(); ++t) h[t] = raw[t] * dk * dk;
+        auto at = [&](int x, int y) {  // signed sample indices
+            return h[size_t((y + N) % N) * N + size_t((x + N) % N)];
+        };
+        // Energy in rings of width d/2 for the energy radius.
+        const int rings = N;  // radius up to N d / sqrt(2) < N * d/2 * 2
+        std::vector<double> ring(rings + 1, 0.0);
+        double total = 0.0;
+        for (int y = -N / 2; y < N / 2; ++y)
+            for (int x = -N / 2; x < N / 2; ++x) {
+                const double v = at(x, y);
+                const int b = std::min(rings, static_cast<int>(2.0 * std::hypot(x, y)));
+                ring[b] += v * v;
+                total += v * v;
+            }
+        double R = o.radius;
+        if (R == 0.0) {
+            double cum = 0.0, rf = 0.0;
+            for (int b = 0; b <= rings; ++b) {
+                if (cum + ring[b] >= o.energy * total) {
+                    rf = 0.5 * d * (b + (o.energy * total - cum) / ring[b]);
+                    break;
+                }
+                cum += ring[b];
+            }
+            R = std::max(tapered ? rf / kTaperStart : rf, 2.0 * d);
+            if (R > o.max_radius)
+                throw ValueError(sp.name + ": keeping " + num(100 * o.energy) +
+                                 " % of the kernel energy needs a radius of " + num(R) +
+                                 " units (max_radius = " + num(o.max_radius) +
+                                 "): lower energy, give a radius, or raise max_radius");
+            if (4.0 * R > N * d) {
+                if (2 * N > kMaxN)
+                    throw ValueError(sp.name + ": the kernel needs a radius of " + num(R) +
+                                     " units, beyond the largest FFT for an angle-dependent "
+                                     "spectrum (" +
+                                     num(kMaxN * d / 4) + " units at nyquist = " + num(K) +
+                                     "): lower energy or give a radius");
+                N = fft_size(2 * N);
+                continue;
+            }
+        }
+        // Crop to R (rounded up to whole samples), windowed.
+        const int m = static_cast<int>(std::ceil(R / d - 1e-9));
+        R = m * d;
+        const int n = 2 * m + 1;
+        const double taper_start = tapered ? kTaperStart * R : R;
+        auto sk = std::make_shared<SampledKernel>();
+        sk->radial = false;
+        sk->n = n;
+        sk->values.assign(size_t(n) * n, 0.0);
+        double kept = 0.0;
+        detail::RealFft2d fwd(N, N, true);  // the final kernel's transform, for the report
+        for (int y = -m; y <= m; ++y)
+            for (int x = -m; x <= m; ++x) {
+                const double v =
+                    at(x, y) * window_weight(o.window, std::hypot(x, y) * d, R, taper_start);
+                sk->values[size_t(y + m) * n + size_t(x + m)] = v;
+                fwd.real()[size_t((y + N) % N) * N + size_t((x + N) % N)] = v;
+                kept += v * v;
+            }
+        DesignedKernel out;
+        out.params.type = KernelType::Sampled;
+        out.params.radius = R;
+        out.params.sampled = sk;
+        DesignReport& rep = out.report;
+        rep.radius = R;
+        rep.samples = n;
+        rep.grid = true;
+        rep.passband = kp;
+        rep.energy_fraction = kept / total;
+        {
+            const Kernel kern(out.params);
+            rep.effective_area = kern.integral_sq() * kern.integral_sq() / kern.integral_4();
+        }
+        // |H(k)|^2 of the bilinear interpolant: (d^2 sinc^2(kx d) sinc^2(ky d) |DFT|)^2, exact at
+        // the grid frequencies. Both halves of the plane count (weights 2 except columns 0, N/2).
+        fwd.execute();
+        double num2 = 0.0, den2 = 0.0, pmax = 0.0;
+        for (double t : target) pmax = std::max(pmax, t);
+        for (int j = 0; j < N; ++j) {
+            const int sj = j < N / 2 ? j : j - N;
+            for (int i = 0; i < hw; ++i) {
+                const double kx = i * dk, ky = sj * dk, k = std::hypot(kx, ky);
+                if (k >= K) continue;
+                const double f = d * d * std::pow(sinc(kx * d) * sinc(ky * d), 2);
+                const double H2 = f * f * std::norm(fwd.spectrum()[size_t(j) * hw + i]);
+                const double s = target[size_t(j) * hw + i];
+                const double wt = (i == 0 || i == N / 2) ? 1.0 : 2.0;
+                num2 += wt * (H2 - s) * (H2 - s);
+                den2 += wt * s * s;
+                if (k <= kp && s >= 0.01 * pmax)
+                    rep.passband_error = std::max(rep.passband_error, std::abs(H2 / s - 1.0));
+            }
+        }
+        rep.spectrum_error = den2 > 0 ? std::sqrt(num2 / den2) : 0.0;
+        return out;
+    }
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Models
+
+std::optional<SpectralModel> spectral_model_from_string(std::string_view name) {
+    if (name == "exponential") return SpectralModel::Markov;
+    for (size_t i = 0; i < kSpectralModelNames.size(); ++i)
+        if (kSpectralModelNames[i] == name) return static_cast<SpectralModel>(i);
+    return std::nullopt;
+}
+
+bool defined_by_autocorrelation(SpectralModel m) {
+    return m == SpectralModel::Markov || m == SpectralModel::Gaussian ||
+           m == SpectralModel::Markaussian || m == SpectralModel::Matern;
+}
+
+void validate(const ModelParams& p) {
+    require(p.variance > 0, "variance", p.variance, "a variance > 0");
+    switch (p.model) {
+        case SpectralModel::Markov:
+        case SpectralModel::Gaussian:
+            require(p.length > 0, "length", p.length, "a length > 0");
+            break;
+        case SpectralModel::Markaussian:
+            require(p.length > 0, "length", p.length, "a length > 0");
+            require(p.exponent > 0 && p.exponent <= 2, "exponent", p.exponent,
+                    "an exponent in (0, 2] (exp(-r^a) is a valid 2-D autocorrelation only there)");
+            break;
+        case SpectralModel::Matern:
+            require(p.length > 0, "length", p.length, "a length > 0");
+            require(p.nu > 0 && p.nu <= 50, "nu", p.nu, "a smoothness nu in (0, 50]");
+            break;
+        case SpectralModel::Lorentzian:
+            require(p.k0 > 0, "k0", p.k0, "a corner frequency > 0 (cycles per unit)");
+            break;
+        case SpectralModel::Bandpass:
+            require(p.f0 >= 0, "f0", p.f0, "a centre frequency >= 0 (cycles per unit)");
+            require(p.width > 0, "width", p.width, "a ring width > 0 (cycles per unit)");
+            break;
+        case SpectralModel::Power:
+            require(p.slope > 0, "slope", p.slope, "a slope > 0 (S ~ k^-slope)");
+            require(p.k_low > 0, "k_low", p.k_low, "a low cut-off > 0 (cycles per unit)");
+            require(p.k_high >= 0, "k_high", p.k_high, "a high cut-off >= 0 (0: none)");
+            if (p.k_high == 0 && p.slope <= 2)
+                throw ValueError(
+                    "slope = " + num(p.slope) +
+                    ": expected > 2 without k_high (the variance int S d^2k diverges); "
+                    "or set k_high > 0");
+            break;
+    }
+}
+
+Spectrum model_spectrum(const ModelParams& params, double k_max) {
+    validate(params);
+    const ModelParams p = params;
+    const double v = p.variance;
+    Spectrum s;
+    s.name = std::string(kSpectralModelNames[static_cast<int>(p.model)]);
+    switch (p.model) {
+        case SpectralModel::Markov:
+            s.density = [p, v](double k, double) { return v * markov_s(k, p.length); };
+            break;
+        case SpectralModel::Gaussian:
+            s.density = [p, v](double k, double) {
+                return v * kPi * p.length * p.length * std::exp(-std::pow(kPi * p.length * k, 2));
+            };
+            break;
+        case SpectralModel::Markaussian: {
+            Spectrum t = spectrum_of_autocorrelation(model_autocorrelation(p), k_max);
+            s.density = t.density;
+            break;
+        }
+        case SpectralModel::Matern: {
+            // Rasmussen & Williams 2006 eq. 4.15 in 2-D: S = (4 pi nu / a) (1 + 4 pi^2 k^2 /
+            // a)^-(nu+1), a = 2 nu / l^2 (nu = 1/2 is markov).
+            const double a = 2 * p.nu / (p.length * p.length);
+            s.density = [p, v, a](double k, double) {
+                return v * 4 * kPi * p.nu / a *
+                       std::pow(1 + 4 * kPi * kPi * k * k / a, -(p.nu + 1));
+            };
+            break;
+        }
+        case SpectralModel::Lorentzian:
+            // The 2-D transform pair of markov: k0 = 1 / (2 pi l).
+            s.density = [p, v](double k, double) {
+                return v / (2 * kPi * p.k0 * p.k0) * std::pow(1 + (k / p.k0) * (k / p.k0), -1.5);
+            };
+            break;
+        case SpectralModel::Bandpass: {
+            const double c = v / (2 * kPi * bandpass_moment(p.f0, p.width));
+            s.density = [p, c](double k, double) {
+                const double w2 = 2 * p.width * p.width;
+                return c * (std::exp(-(k - p.f0) * (k - p.f0) / w2) +
+                            std::exp(-(k + p.f0) * (k + p.f0) / w2));
+            };
+            break;
+        }
+        case SpectralModel::Power: {
+            const double c = v / power_norm(p);
+            s.density = [p, c](double k, double) { return c * power_shape(p, k); };
+            break;
+        }
+    }
+    return s;
+}
+
+Autocorrelation model_autocorrelation(const ModelParams& params) {
+    validate(params);
+    const ModelParams p = params;
+    const double v = p.variance;
+    Autocorrelation a;
+    a.name = std::string(kSpectralModelNames[static_cast<int>(p.model)]);
+    switch (p.model) {
+        case SpectralModel::Markov:
+            a.function = [p, v](double r) { return v * std::exp(-r / p.length); };
+            break;
+        case SpectralModel::Gaussian:
+            a.function = [p, v](double r) {
+                return v * std::exp(-(r / p.length) * (r / p.length));
+            };
+            break;
+        case SpectralModel::Markaussian:
+            a.function = [p, v](double r) {
+                return v * std::exp(-std::pow(r / p.length, p.exponent));
+            };
+            break;
+        case SpectralModel::Matern: {
+            const double c = std::pow(2.0, 1.0 - p.nu) / std::tgamma(p.nu);
+            a.function = [p, v, c](double r) {
+                const double x = std::sqrt(2 * p.nu) * r / p.length;
+                if (x < 1e-10) return v;
+                if (x > 700) return 0.0;
+                return v * c * std::pow(x, p.nu) * std::cyl_bessel_k(p.nu, x);
+            };
+            break;
+        }
+        default:
+            throw ValueError("model = \"" + a.name +
+                             "\": defined by its spectrum, not an autocorrelation: expected one of "
+                             "markov, gaussian, markaussian, matern (or use a spectrum kernel)");
+    }
+    return a;
+}
+
+Spectrum expression_spectrum(std::string_view text) {
+    auto e = std::make_shared<const Expression>(text, std::vector<std::string>{"k", "theta"});
+    Spectrum s;
+    s.isotropic = !e->uses("theta");
+    s.name = "expression \"" + std::string(text) + "\"";
+    s.density = [e](double k, double theta) {
+        const double v[2] = {k, theta};
+        return e->evaluate(v);
+    };
+    return s;
+}
+
+Autocorrelation expression_autocorrelation(std::string_view text) {
+    auto e = std::make_shared<const Expression>(text, std::vector<std::string>{"r"});
+    Autocorrelation a;
+    a.name = "expression \"" + std::string(text) + "\"";
+    a.function = [e](double r) {
+        const double v[1] = {r};
+        return e->evaluate(v);
+    };
+    return a;
+}
+
+Spectrum table_spectrum_text(std::string_view text, const std::string& name) {
+    Table t;
+    std::istringstream in{std::string(text)};
+    std::string line;
+    int line_no = 0;
+    bool first = true;
+    while (std::getline(in, line)) {
+        ++line_no;
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        const size_t b = line.find_first_not_of(" \t");
+        if (b == std::string::npos || line[b] == '#') continue;
+        auto fail = [&](const std::string& what) {
+            throw ValueError(name + ":" + std::to_string(line_no) + ": " + what);
+        };
+        std::vector<std::string> fields;
+        std::stringstream ls(line);
+        for (std::string f; std::getline(ls, f, ',');) fields.push_back(f);
+        if (!line.empty() && line.back() == ',') fields.push_back("");
+        double k = 0, s = 0;
+        const bool ok_k = fields.size() >= 1 && parse_number(fields[0], k);
+        const bool ok_s = fields.size() >= 2 && parse_number(fields[1], s);
+        if (first && !ok_k) {  // a header line
+            first = false;
+            continue;
+        }
+        first = false;
+        if (fields.size() > 2)
+            fail("expected two columns k,S, found " + std::to_string(fields.size()));
+        if (!ok_k) fail("k: expected a number, found \"" + fields[0] + "\"");
+        if (fields.size() < 2 || fields[1].find_first_not_of(" \t") == std::string::npos)
+            fail("missing value: expected k,S");
+        if (!ok_s) fail("S: expected a number, found \"" + fields[1] + "\"");
+        if (!std::isfinite(k) || k < 0)
+            fail("k = " + num(k) + ": expected a finite frequency >= 0");
+        if (!std::isfinite(s)) fail("S = " + num(s) + ": expected a finite number");
+        if (!t.k.empty() && !(k > t.k.back()))
+            fail("k = " + num(k) + " after " + num(t.k.back()) + ": k must be strictly increasing");
+        t.k.push_back(k);
+        t.s.push_back(s);
+    }
+    if (t.k.size() < 2)
+        throw ValueError(name + ": expected at least two rows k,S, found " +
+                         std::to_string(t.k.size()));
+    Spectrum sp;
+    sp.name = name;
+    sp.density = [t = std::move(t)](double k, double) { return t(k); };
+    return sp;
+}
+
+Spectrum table_spectrum(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError(path + ": cannot open spectrum table: " + std::strerror(errno));
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return table_spectrum_text(ss.str(), path);
+}
+
+Spectrum spectrum_of_autocorrelation(const Autocorrelation& acf, double k_max) {
+    require(k_max > 0, "nyquist", k_max, "a frequency > 0 (cycles per unit)");
+    const double r0 = acf.function(0.0);
+    if (!(r0 > 0) || !std::isfinite(r0))
+        throw ValueError(acf.name + ": R(0) = " + num(r0) + ": expected a finite variance > 0");
+    // Support: scan at 1/(16 k_max) for the last r with |R| >= kAcfTail R(0).
+    const double dr = 1.0 / (16.0 * k_max);
+    double last = 0.0;
+    for (double r = dr; r <= kAcfMaxRadius; r += dr) {
+        const double v = acf.function(r);
+        if (!std::isfinite(v))
+            throw ValueError(acf.name + ": R(" + num(r) + ") = " + num(v) +
+                             ": expected a finite number");
+        if (std::abs(v) > r0 * (1 + 1e-9))
+            throw ValueError("autocorrelation " + acf.name + " is not non-negative definite: |R(" +
+                             num(r) + ")| = " + num(std::abs(v)) + " > R(0) = " + num(r0));
+        if (std::abs(v) >= kAcfTail * r0) last = r;
+    }
+    if (last > kAcfMaxRadius - 1.0)
+        throw ValueError(acf.name + ": R(" + num(kAcfMaxRadius) +
+                         ") = " + num(acf.function(kAcfMaxRadius)) +
+                         ": expected it to decay below " + num(kAcfTail) + " R(0) within " +
+                         num(kAcfMaxRadius) + " units (a shorter correlation length)");
+    const double rs = last + dr;
+    // Hankel transform by Gauss–Legendre in r: 2 panels per period 1/k_max of J0 at the top
+    // frequency; S tabulated at dk <= 1/(8 rs) (S is the transform of a function supported on
+    // [0, rs], so it varies on scales ~1/rs) and at least 4096 intervals.
+    Nodes rn;
+    rn.add(0.0, rs, std::max(64, 32 + static_cast<int>(std::ceil(2.0 * k_max * rs))));
+    std::vector<double> wr(rn.x.size());
+    for (size_t j = 0; j < rn.x.size(); ++j)
+        wr[j] = 2 * kPi * rn.w[j] * rn.x[j] * acf.function(rn.x[j]);
+    const int nk = std::max(4096, static_cast<int>(std::ceil(8.0 * rs * k_max)));
+    auto table = std::make_shared<std::vector<double>>(nk + 1);
+    std::vector<SpectrumSample> samples(nk + 1);
+    double smax = 0.0;
+    for (int i = 0; i <= nk; ++i) {
+        const double k = k_max * i / nk;
+        double s = 0.0;
+        for (size_t j = 0; j < wr.size(); ++j)
+            s += wr[j] * detail::bessel_j0(2 * kPi * k * rn.x[j]);
+        (*table)[i] = s;
+        samples[i] = {k, 0.0, s};
+        smax = std::max(smax, s);
+    }
+    refuse_negative(samples, smax, true, 0.0,
+                    "autocorrelation " + acf.name + " is not non-negative definite", false);
+    for (double& s : *table) s = std::max(s, 0.0);
+    Spectrum out;
+    out.name = "spectrum of autocorrelation " + acf.name;
+    out.density = [table, k_max, nk](double k, double) {
+        if (k < 0 || k > k_max) return 0.0;
+        // Catmull–Rom on the table, clamped at 0 (a cubic can undershoot near zeros of S).
+        const double x = k / k_max * nk;
+        const int i = std::min(static_cast<int>(x), nk - 1);
+        const double t = x - i;
+        auto v = [&](int j) { return (*table)[std::clamp(j, 0, nk)]; };
+        const double p0 = i == 0 ? v(1) : v(i - 1), p1 = v(i), p2 = v(i + 1), p3 = v(i + 2);
+        const double s =
+            p1 +
+            0.5 * t *
+                (p2 - p0 + t * (2 * p0 - 5 * p1 + 4 * p2 - p3 + t * (3 * (p1 - p2) + p3 - p0)));
+        return std::max(s, 0.0);
+    };
+    return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Design
+
+void validate(const DesignOptions& o) {
+    require(o.nyquist > 0, "nyquist", o.nyquist,
+            "a frequency > 0 (cycles per unit; 0.5 = pixel Nyquist at zoom 1)");
+    require(o.rolloff >= 0 && o.rolloff <= 0.9, "rolloff", o.rolloff, "a fraction in [0, 0.9]");
+    require(o.energy > 0 && o.energy < 1, "energy", o.energy, "a fraction in (0, 1), e.g. 0.99");
+    require(o.radius >= 0, "radius", o.radius, "a radius > 0 (texture units)");
+    require(o.max_radius > 0, "max_radius", o.max_radius, "a radius > 0");
+    if (o.radius > o.max_radius)
+        throw ValueError("radius = " + num(o.radius) +
+                         ": expected <= max_radius = " + num(o.max_radius));
+}
+
+DesignedKernel kernel_from_spectrum(const Spectrum& spectrum, const DesignOptions& options) {
+    validate(options);
+    if (!spectrum.density) throw ValueError("spectrum " + spectrum.name + ": no density function");
+    return spectrum.isotropic ? design_radial(spectrum, options) : design_grid(spectrum, options);
+}
+
+DesignedKernel kernel_from_autocorrelation(const Autocorrelation& acf,
+                                           const DesignOptions& options) {
+    validate(options);
+    return kernel_from_spectrum(spectrum_of_autocorrelation(acf, options.nyquist), options);
+}
+
+}  // namespace impulse::kernels

@@ -1,0 +1,69 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// The inner loops of the perspective evaluator (internal to impulse::render). Like
+// eval_detail.h: one source (persp_loops.inc) compiled for baseline x86-64 and for AVX2 with FMA
+// contraction off, so both round identically. Everything here is in texture units relative to
+// the frame origin, except image positions (continuous pixels, pixel i spans [i, i + 1)).
+
+#include <cstddef>
+#include <cstdint>
+
+namespace impulse::render::detail {
+
+/// One pyramid level as the loops see it.
+struct PerspLevel {
+    float radius = 1, inv_r2 = 1;          ///< support R_l and 1 / R_l^2
+    const float* table = nullptr;          ///< radial: h_l at q = r^2 / R_l^2, linear
+    int table_n = 0;
+    const float* line_p = nullptr;         ///< radial: line mass P and chord variance q at
+    const float* line_q = nullptr;         ///< t = v^2 / R_l^2, linear; and the chord's
+    const float* line_k4 = nullptr;        ///< fourth cumulant (Edgeworth correction)
+    int line_n = 0;
+    const float* grid = nullptr;           ///< grid levels: n x n over [-R_l, R_l]^2, bilinear
+    int grid_n = 0;
+};
+
+struct PerspKernel {
+    bool radial = true;
+    const PerspLevel* levels = nullptr;
+};
+
+enum PerspMode : uint8_t { kPerspSingle = 0, kPerspProbes = 1, kPerspLine = 2 };
+
+/// One probe of an impulse: its offset from the impulse, weight and clipped image box.
+struct PerspProbe {
+    float dx = 0, dy = 0;   ///< offset along the major axis, texture units
+    float w = 0;            ///< impulse weight * fade * Gaussian probe weight
+    int x0 = 0, y0 = 0, x1 = -1, y1 = -1;  ///< pixels touched (inclusive), clipped to the image
+};
+
+/// An impulse prepared for the loops.
+struct PerspItem {
+    float px = 0, py = 0;   ///< texture position relative to the origin
+    float sx = 0, sy = 0;   ///< image position
+    float w = 0;            ///< weight * fade (single, line)
+    float cs = 1, sn = 0;   ///< cos, sin of the total orientation (grid kernels)
+    float a = 0;            ///< weight of level hi in the blend
+    int16_t lo = 0, hi = 0; ///< levels
+    uint8_t mode = kPerspSingle;
+    float ix = 0, iy = 1;   ///< line: image direction of the footprint's major axis
+    float inv_smaj = 1;     ///< line: 1 / s_major (pixels per texture unit along the major axis)
+    float smin = 1;         ///< line: s_minor (texture units per pixel across)
+    /// line: half the second derivative of the image position along the axis per texture unit
+    /// moved along it (pixels / unit^2): the chord's image centroid sits at curv * q(v).
+    float curv = 0;
+    float var_lo = 0, var_hi = 0;  ///< line: extra blur along the major axis, pixels^2, per level
+    uint32_t probe0 = 0, nprobe = 0;  ///< probes: range in the probe array
+    int x0 = 0, y0 = 0, x1 = -1, y1 = -1;  ///< pixels touched (inclusive), clipped to the image
+};
+
+/// Adds items idx[0..n) to the tile covering pixels [tx0, tx0+tw) x [ty0, ty0+th); `acc` is
+/// tw*th floats. X, Y: texture coordinates of all pixel centres (row stride `stride`).
+void persp_tile_base(const PerspKernel& k, const PerspItem* items, const PerspProbe* probes,
+                     const uint32_t* idx, size_t n, const float* X, const float* Y, int stride,
+                     int tx0, int ty0, int tw, int th, float* acc);
+void persp_tile_avx2(const PerspKernel& k, const PerspItem* items, const PerspProbe* probes,
+                     const uint32_t* idx, size_t n, const float* X, const float* Y, int stride,
+                     int tx0, int ty0, int tw, int th, float* acc);
+
+}  // namespace impulse::render::detail

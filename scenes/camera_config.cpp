@@ -1,0 +1,273 @@
+// SPDX-License-Identifier: Apache-2.0
+// [camera] beyond the orthographic center/zoom (type, perspective placement, anti-aliasing) and
+// layer.orientation fields (docs/scenes.md).
+
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <set>
+#include <sstream>
+
+#include "scenes/camera_detail.h"
+#include "util/errors.h"
+
+namespace impulse::scenes {
+
+render::PerspectiveCamera CameraConfig::perspective(int width, int height, double t) const {
+    render::PerspectiveCamera c;
+    c.width = width, c.height = height;
+    c.x = position_x.value(t), c.y = position_y.value(t);
+    c.altitude = altitude.value(t);
+    c.pitch_deg = pitch.value(t);
+    c.heading_deg = heading.value(t);
+    c.fov_deg = fov.value(t);
+    c.plane = plane;
+    return c;
+}
+
+bool CameraConfig::antialiased() const {
+    switch (antialias) {
+        case AntiAliasMode::Off: return false;
+        case AntiAliasMode::Blend:
+        case AntiAliasMode::Nearest: return true;
+        case AntiAliasMode::Auto: break;
+    }
+    if (type == Type::Perspective) return true;
+    for (const auto& k : zoom.keys)
+        if (k.second < 1.0) return true;
+    return false;
+}
+
+render::AntiAlias CameraConfig::antialias_options() const {
+    render::AntiAlias a;
+    a.enabled = antialias != AntiAliasMode::Off;
+    a.blend = antialias != AntiAliasMode::Nearest;
+    a.anisotropic = anisotropic;
+    a.filter_px = filter;
+    a.cutoff = cutoff;
+    return a;
+}
+
+namespace detail {
+namespace {
+
+namespace fs = std::filesystem;
+const auto kPositive = [](double v) { return v > 0.0; };
+
+std::string num(double v) {
+    std::ostringstream s;
+    s << v;
+    return s.str();
+}
+
+/// Times at which keyframed camera values should be checked: every key and a sampling between.
+std::vector<double> check_times(const std::vector<const sim::Keyframed*>& ks) {
+    std::set<double> t = {0.0};
+    double lo = 0.0, hi = 0.0;
+    for (const auto* k : ks)
+        for (const auto& key : k->keys) {
+            t.insert(key.first);
+            lo = std::min(lo, key.first), hi = std::max(hi, key.first);
+        }
+    for (int i = 0; i <= 64 && hi > lo; ++i) t.insert(lo + (hi - lo) * i / 64.0);
+    return {t.begin(), t.end()};
+}
+
+}  // namespace
+
+void read_camera_view(Reader& r, CameraConfig& c, int width, int height) {
+    const std::array<std::string_view, 2> types = {"orthographic", "perspective"};
+    c.type = r.choice("type", types, 0) == 1 ? CameraConfig::Type::Perspective
+                                              : CameraConfig::Type::Orthographic;
+    const bool persp = c.type == CameraConfig::Type::Perspective;
+    static const char* kPerspKeys[] = {"position", "position_x", "position_y", "height",
+                                       "pitch",    "heading",    "fov",        "plane"};
+    static const char* kOrthoKeys[] = {"center", "center_x", "center_y", "zoom"};
+    if (!persp) {
+        for (const char* k : kPerspKeys)
+            if (r.has(k))
+                r.fail(r.node(k), k, "applies to perspective cameras (set type = \"perspective\")");
+    } else {
+        for (const char* k : kOrthoKeys)
+            if (r.has(k))
+                r.fail(r.node(k), k,
+                       "applies to orthographic cameras; a perspective camera is placed with "
+                       "position, height, pitch, heading and fov");
+        c.position_x = sim::Keyframed(width / 2.0);
+        c.position_y = sim::Keyframed(height / 2.0);
+        if (r.node("position")) {
+            auto p = r.pair("position", "[x, y]: the camera's foot on the plane, texture units");
+            c.position_x = sim::Keyframed((*p)[0]);
+            c.position_y = sim::Keyframed((*p)[1]);
+        }
+        if (r.has("position_x")) c.position_x = r.keyframed("position_x", width / 2.0);
+        if (r.has("position_y")) c.position_y = r.keyframed("position_y", height / 2.0);
+        c.altitude = r.keyframed("height", 100.0, kPositive,
+                               "a height > 0 above the plane (texture units)");
+        c.pitch = r.keyframed("pitch", 20.0, [](double v) { return v >= -90.0 && v <= 90.0; },
+                              "an angle in [-90, 90] degrees below the horizon (above it for the sky)");
+        c.heading = r.keyframed("heading", 0.0);
+        c.fov = r.keyframed("fov", 60.0, [](double v) { return v > 0.0 && v < 180.0; },
+                            "a vertical field of view in (0, 180) degrees");
+        const std::array<std::string_view, 2> planes = {"ground", "sky"};
+        c.plane = r.choice("plane", planes, 0) == 1 ? render::Plane::Sky : render::Plane::Ground;
+        // The camera must see some of the plane at every time.
+        for (double t : check_times({&c.pitch, &c.fov, &c.altitude})) {
+            try {
+                render::PerspectiveView v(c.perspective(width, height, t));
+            } catch (const ValueError&) {
+                const double p = c.pitch.value(t), f = c.fov.value(t);
+                std::ostringstream m;
+                m << "the camera sees no part of the "
+                  << (c.plane == render::Plane::Ground ? "ground" : "sky") << " plane";
+                if (!c.pitch.is_constant() || !c.fov.is_constant()) m << " at t = " << t << " s";
+                m << " (pitch " << num(p) << ", fov " << num(f) << "): expected pitch > -fov/2 = "
+                  << num(-0.5 * f) << " degrees "
+                  << (c.plane == render::Plane::Ground ? "below" : "above") << " the horizon";
+                r.fail(r.node("pitch") ? r.node("pitch") : r.node("fov"), "pitch", m.str());
+            }
+        }
+    }
+    const std::array<std::string_view, 4> modes = {"auto", "blend", "nearest", "off"};
+    c.antialias = static_cast<CameraConfig::AntiAliasMode>(r.choice("antialias", modes, 0));
+    c.filter = r.number("filter", 0.5, [](double v) { return v > 0.0 && v <= 8.0; },
+                        "a pixel filter standard deviation in (0, 8] pixels");
+    c.cutoff = r.number("cutoff", 0.01, [](double v) { return v > 0.0 && v <= 0.5; },
+                        "a fraction in (0, 0.5] of the texture's standard deviation");
+    c.anisotropic = r.boolean("anisotropic", true);
+}
+
+void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base) {
+    const toml::node* n = layer.node("orientation");
+    p.orientation = sim::OrientationMode::Fixed;
+    if (!n) return;
+    if (n->is_string()) {
+        p.orientation = static_cast<sim::OrientationMode>(
+            layer.choice("orientation", sim::kOrientationModeNames, 0));
+        return;
+    }
+    static const char* kExpected =
+        "a mode (fixed, random, flow, vorticity) or a field table such as { type = \"circular\", "
+        "center = [x, y] }";
+    if (!n->is_table()) layer.fail(n, "orientation", std::string("expected ") + kExpected);
+    Reader f = *layer.table("orientation");
+    const std::array<std::string_view, 10> types = {"constant", "radial", "circular", "polyline",
+                                                    "sine",     "image",  "fixed",    "random",
+                                                    "flow",     "vorticity"};
+    if (!f.has("type"))
+        f.fail(nullptr, "type",
+               "missing: expected one of constant, radial, circular, polyline, sine, image, fixed, "
+               "random, flow, vorticity");
+    const size_t type = f.choice("type", types, 0);
+    auto center = [&](sim::Keyframed& x, sim::Keyframed& y) {
+        if (f.node("center")) {
+            auto c = f.pair("center", "[x, y] in texture units");
+            x = sim::Keyframed((*c)[0]);
+            y = sim::Keyframed((*c)[1]);
+        } else if (f.has("center_x") || f.has("center_y")) {
+            x = f.keyframed("center_x", 0.0);
+            y = f.keyframed("center_y", 0.0);
+        } else {
+            f.fail(nullptr, "center", "missing: expected [x, y] in texture units");
+        }
+        f.node("center_x"), f.node("center_y");
+    };
+    std::shared_ptr<sim::OrientationField> field;
+    switch (type) {
+        case 0:  // constant
+            field = sim::make_constant_orientation(f.keyframed("angle", 0.0));
+            break;
+        case 1:
+        case 2: {  // radial, circular
+            sim::Keyframed cx, cy;
+            center(cx, cy);
+            if (type == 1)
+                field = sim::make_radial_orientation(cx, cy);
+            else
+                field = sim::make_circular_orientation(cx, cy, f.boolean("clockwise", false));
+            break;
+        }
+        case 3: {  // polyline
+            const toml::node* pn = f.node("points");
+            const toml::array* a = pn ? pn->as_array() : nullptr;
+            static const char* kPoints =
+                "expected at least two [x, y] points, consecutive points distinct";
+            if (!a || a->size() < 2) f.fail(pn, "points", kPoints);
+            std::vector<std::array<double, 2>> pts;
+            for (const auto& e : *a) {
+                const toml::array* q = e.as_array();
+                if (!q || q->size() != 2 || !(*q)[0].is_number() || !(*q)[1].is_number())
+                    f.fail(pn, "points", kPoints);
+                const std::array<double, 2> v{(*q)[0].value<double>().value_or(0),
+                                              (*q)[1].value<double>().value_or(0)};
+                if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || (!pts.empty() && pts.back() == v))
+                    f.fail(pn, "points", kPoints);
+                pts.push_back(v);
+            }
+            const double smooth = f.number("smooth", 0.0, [](double v) { return v >= 0.0; },
+                                           "a distance >= 0 in texture units (0: nearest segment)");
+            field = sim::make_polyline_orientation(std::move(pts), smooth);
+            break;
+        }
+        case 4: {  // sine
+            const double amp = f.number("amplitude", 16.0);
+            const double wl = f.number("wavelength", 128.0, kPositive, "a wavelength > 0 (texture units)");
+            const double phase = f.number("phase", 0.0);
+            const double angle = f.number("angle", 0.0);
+            double ox = 0.0, oy = 0.0;
+            if (auto o = f.pair("origin", "[x, y] in texture units")) ox = (*o)[0], oy = (*o)[1];
+            field = sim::make_sine_orientation(amp, wl, phase, angle, ox, oy);
+            break;
+        }
+        case 5: {  // image
+            const toml::node* pn = f.node("path");
+            const std::string rel = f.string("path", "");
+            if (rel.empty())
+                f.fail(pn, "path", "expected the path of an orientation image (1 channel: angle in "
+                                   "radians; 2 channels: direction x, y)");
+            const fs::path path = fs::path(rel).is_absolute() ? fs::path(rel) : base / rel;
+            auto in = OIIO::ImageInput::open(path.string());
+            if (!in) {
+                std::string e = OIIO::geterror();
+                std::replace(e.begin(), e.end(), '\n', ' ');
+                f.fail(pn, "path", "cannot read: " + e);
+            }
+            const auto& spec = in->spec();
+            if (spec.nchannels != 1 && spec.nchannels != 2)
+                f.fail(pn, "path", "expected an image with 1 channel (angle in radians) or 2 "
+                                   "(direction x, y), found " + std::to_string(spec.nchannels));
+            sim::OrientationGrid g;
+            g.width = spec.width, g.height = spec.height, g.channels = spec.nchannels;
+            g.values.resize(size_t(g.width) * g.height * g.channels);
+            if (!in->read_image(0, 0, 0, g.channels, OIIO::TypeDesc::FLOAT, g.values.data())) {
+                std::string e = in->geterror();
+                std::replace(e.begin(), e.end(), '\n', ' ');
+                f.fail(pn, "path", "cannot read: " + e);
+            }
+            // Integer images store [0, 1]: an angle channel spans [0, pi] (an orientation), a
+            // direction map [-1, 1] (grey is no direction, as for the image flow).
+            if (spec.format != OIIO::TypeDesc::FLOAT && spec.format != OIIO::TypeDesc::HALF)
+                for (float& v : g.values)
+                    v = g.channels == 1 ? v * 3.14159265f : 2.0f * v - 1.0f;
+            g.spacing = f.number("spacing", 1.0, kPositive, "texture units per image pixel, > 0");
+            if (auto o = f.pair("origin", "[x, y] in texture units")) g.origin_x = (*o)[0], g.origin_y = (*o)[1];
+            field = sim::make_grid_orientation(std::move(g));
+            break;
+        }
+        default: {  // the named modes as a table
+            p.orientation = static_cast<sim::OrientationMode>(type - 6);
+            f.finish();
+            return;
+        }
+    }
+    p.orientation = sim::OrientationMode::Field;
+    p.orientation_field = std::move(field);
+    p.orientation_jitter = f.number("jitter", 0.0, [](double v) { return v >= 0.0; },
+                                    "an angle >= 0 in radians (uniform random offset per impulse)");
+    f.finish();
+}
+
+}  // namespace detail
+}  // namespace impulse::scenes

@@ -1,0 +1,61 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// Cameras and orientation fields in scene files, and the camera-dependent part of rendering a
+// layer (internal to impulse::scenes).
+
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "scenes/reader.h"
+#include "scenes/scenes.h"
+
+namespace impulse::scenes::detail {
+
+/// The [camera] keys other than the orthographic center/zoom (already read into `c`): type,
+/// the perspective keys, the anti-aliasing keys. Fails on perspective keys given to an
+/// orthographic camera and vice versa, and on cameras that cannot see the plane.
+void read_camera_view(Reader& r, CameraConfig& c, int width, int height);
+
+/// layer.orientation: a mode name ("fixed", "random", "flow", "vorticity") or a field table
+/// { type = "constant" | "radial" | "circular" | "polyline" | "sine" | "image", ... }.
+/// Images are read here (OpenImageIO) relative to `base`.
+void read_orientation(Reader& layer, sim::ProcessConfig& process, const std::filesystem::path& base);
+
+/// Per-layer kernel pyramids and the per-frame perspective geometry, used by Renderer::render.
+class CameraPipeline {
+public:
+    CameraPipeline(const Scene& scene, const std::vector<kernels::Kernel>& kernels);
+    ~CameraPipeline();
+    /// True when frames go through the pyramid (perspective, or orthographic anti-aliasing).
+    bool active() const { return m_active; }
+    /// Texture box layer `layer`'s impulses must cover at time t_s (`view`: the orthographic
+    /// view; its box when nothing applies). Empty when the layer is faded to its mean.
+    sim::Box box(size_t layer, const render::View& view, double t_s);
+    /// Adds the layer's impulses to `out` (frame size) as the camera sees them at time t_s.
+    void accumulate(size_t layer, const sim::Impulses& impulses, const render::View& view, double t_s,
+                    render::Frame& out, const render::EvalOptions& options);
+    /// The largest box over the camera's keys (for budget estimates); `view0`: the orthographic
+    /// view at its widest.
+    sim::Box estimate_box(size_t layer, const render::View& view0) const;
+    /// The layer's pyramid (null when not active).
+    const kernels::KernelPyramid* pyramid(size_t layer) const;
+    /// Counts of the last perspective evaluation of a layer.
+    const render::PerspectiveStats& stats(size_t layer) const { return m_stats.at(layer); }
+
+private:
+    void prepare(double t_s);
+    const Scene* m_scene;
+    const std::vector<kernels::Kernel>* m_kernels;
+    bool m_active = false;
+    render::AntiAlias m_aa;
+    std::vector<std::unique_ptr<kernels::KernelPyramid>> m_pyramids;
+    std::vector<render::PerspectiveStats> m_stats;
+    // perspective geometry of the frame at m_t
+    std::optional<double> m_t;
+    std::unique_ptr<render::PerspectiveView> m_view;
+    render::PixelCoords m_coords;
+};
+
+}  // namespace impulse::scenes::detail

@@ -1,0 +1,91 @@
+// SPDX-License-Identifier: Apache-2.0
+// The camera-dependent part of rendering a layer: kernel pyramids per layer, the perspective
+// geometry of a frame, the texture box the impulses must cover, and the evaluation.
+
+#include <algorithm>
+#include <set>
+
+#include "scenes/camera_detail.h"
+
+namespace impulse::scenes::detail {
+
+CameraPipeline::CameraPipeline(const Scene& scene, const std::vector<kernels::Kernel>& kernels)
+    : m_scene(&scene), m_kernels(&kernels) {
+    const CameraConfig& c = scene.camera;
+    m_active = c.type == CameraConfig::Type::Perspective || c.antialiased();
+    m_stats.resize(kernels.size());
+    if (!m_active) return;
+    m_aa = c.antialias_options();
+    kernels::PyramidParams pp;
+    // Levels below a quarter of the cut-off are never drawn (faded out).
+    pp.min_sd_fraction = std::min(1e-3, 0.25 * m_aa.cutoff);
+    for (const auto& k : kernels) m_pyramids.push_back(std::make_unique<kernels::KernelPyramid>(k, pp));
+}
+
+CameraPipeline::~CameraPipeline() = default;
+
+const kernels::KernelPyramid* CameraPipeline::pyramid(size_t layer) const {
+    return m_active ? m_pyramids.at(layer).get() : nullptr;
+}
+
+void CameraPipeline::prepare(double t) {
+    if (m_t && *m_t == t) return;
+    const auto& o = m_scene->output;
+    m_view = std::make_unique<render::PerspectiveView>(m_scene->camera.perspective(o.width, o.height, t));
+    m_coords = render::pixel_coords(*m_view);
+    m_t = t;
+}
+
+sim::Box CameraPipeline::box(size_t layer, const render::View& view, double t) {
+    if (!m_active) return view.box();
+    const kernels::KernelPyramid& pyr = *m_pyramids.at(layer);
+    if (m_scene->camera.type == CameraConfig::Type::Perspective) {
+        prepare(t);
+        const sim::Box b = render::perspective_region(pyr, *m_view, m_aa);
+        if (b.x1 >= b.x0) return b;
+        const auto& c = m_view->camera();
+        return {c.x, c.y, c.x, c.y};  // nothing to draw: a point (a few impulses, no work)
+    }
+    if (!(render::filtered_fade(pyr, view, m_aa) > 0.0)) {
+        // The layer is its mean: ask for next to nothing (a point, never an inverted box).
+        const sim::Box v = view.box();
+        const double cx = 0.5 * (v.x0 + v.x1), cy = 0.5 * (v.y0 + v.y1);
+        return {cx, cy, cx, cy};
+    }
+    // The simulator adds the kernel's own radius; the blended levels reach further.
+    return view.box().expanded(std::max(0.0, render::filtered_support(pyr, view, m_aa) - pyr.radius(0)));
+}
+
+void CameraPipeline::accumulate(size_t layer, const sim::Impulses& impulses, const render::View& view,
+                                double t, render::Frame& out, const render::EvalOptions& options) {
+    if (!m_active) return render::accumulate(m_kernels->at(layer), impulses, view, out, options);
+    const kernels::KernelPyramid& pyr = *m_pyramids.at(layer);
+    if (m_scene->camera.type == CameraConfig::Type::Perspective) {
+        prepare(t);
+        render::accumulate_perspective(pyr, impulses, *m_view, m_coords, out, m_aa, options,
+                                       &m_stats.at(layer));
+        return;
+    }
+    render::accumulate_filtered(pyr, impulses, view, out, m_aa, options);
+}
+
+sim::Box CameraPipeline::estimate_box(size_t layer, const render::View& view0) const {
+    if (!m_active) return view0.box();
+    const kernels::KernelPyramid& pyr = *m_pyramids.at(layer);
+    const CameraConfig& c = m_scene->camera;
+    if (c.type == CameraConfig::Type::Orthographic)
+        return view0.box().expanded(std::max(0.0, render::filtered_support(pyr, view0, m_aa) - pyr.radius(0)));
+    std::set<double> times = {0.0};
+    for (const auto* k : {&c.position_x, &c.position_y, &c.altitude, &c.pitch, &c.heading, &c.fov})
+        for (const auto& key : k->keys) times.insert(key.first);
+    const auto& o = m_scene->output;
+    sim::Box best{0, 0, 0, 0};
+    for (double t : times) {
+        const render::PerspectiveView v(c.perspective(o.width, o.height, t));
+        const sim::Box b = render::perspective_region(pyr, v, m_aa);
+        if (b.x1 >= b.x0 && b.area() > best.area()) best = b;
+    }
+    return best;
+}
+
+}  // namespace impulse::scenes::detail
