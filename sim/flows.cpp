@@ -31,6 +31,16 @@ public:
         for (size_t i = 0; i < n; ++i) vx[i] += ux, vy[i] += uy;
     }
     double max_speed(const Box&) const override { return std::hypot(m_vx.max_abs(), m_vy.max_abs()); }
+    std::array<double, 4> velocity_bounds(const Box&) const override {
+        auto range = [](const Keyframed& k) {  // interpolation never leaves the keys' range
+            double lo = k.keys.front().second, hi = lo;
+            for (const auto& key : k.keys) lo = std::min(lo, key.second), hi = std::max(hi, key.second);
+            return std::pair{lo, hi};
+        };
+        const auto [x0, x1] = range(m_vx);
+        const auto [y0, y1] = range(m_vy);
+        return {x0, x1, y0, y1};
+    }
 
 private:
     Keyframed m_vx, m_vy;
@@ -370,6 +380,15 @@ double FlowSum::max_speed(const Box& region) const {
     for (const auto& f : m_terms) s += f->max_speed(region);
     return s;
 }
+std::array<double, 4> FlowSum::velocity_bounds(const Box& region) const {
+    std::array<double, 4> b{0, 0, 0, 0};
+    for (const auto& f : m_terms) {
+        const auto t = f->velocity_bounds(region);
+        for (int i = 0; i < 4; ++i) b[i] += t[i];
+    }
+    return b;
+}
+
 void FlowSum::prepare(const Box& region) {
     for (auto& f : m_terms) f->prepare(region);
 }

@@ -83,6 +83,12 @@ public:
                      double* vy, double* div, double* curl) const = 0;
     /// Upper bound of |v| over `region` and all time.
     virtual double max_speed(const Box& region) const = 0;
+    /// Bounds {vx_min, vx_max, vy_min, vy_max} over `region` and all time (default: +-max_speed);
+    /// the birth region extends upstream only as far as these allow (design.md §3).
+    virtual std::array<double, 4> velocity_bounds(const Box& region) const {
+        const double s = max_speed(region);
+        return {-s, s, -s, s};
+    }
     /// Called (single-threaded) before a frame is integrated over `region`; lets a flow build
     /// caches. Default: nothing.
     virtual void prepare(const Box& region) { (void)region; }
@@ -96,6 +102,7 @@ public:
     void add(double t_s, size_t n, const double* x, const double* y, double* vx, double* vy,
              double* div, double* curl) const override;
     double max_speed(const Box& region) const override;
+    std::array<double, 4> velocity_bounds(const Box& region) const override;
     void prepare(const Box& region) override;
 
 private:

@@ -120,6 +120,23 @@ struct LayerSimulator::State {
         return t;
     }
 
+    /// The birth region for `view`: the view plus the kernel support, extended upstream by
+    /// how far the flow can carry a particle into the view within one lifetime (a particle born
+    /// left of the view can only enter moving right, so the left margin is max(vx) T, etc.).
+    Box birth_region(const Box& view) const {
+        const double R = support_radius;
+        Box r = view.expanded(R);
+        if (!flow || config.lifetime_s <= 0) return r;
+        travel(view);  // refuses flows beyond max_travel
+        const double T = config.lifetime_s;
+        for (int it = 0; it < 4; ++it) {
+            const auto b = flow->velocity_bounds(r.expanded(1.0));
+            r = {view.x0 - R - std::max(0.0, b[1]) * T, view.y0 - R - std::max(0.0, b[3]) * T,
+                 view.x1 + R + std::max(0.0, -b[0]) * T, view.y1 + R + std::max(0.0, -b[2]) * T};
+        }
+        return r;
+    }
+
     void integrate(Particles& p, const std::vector<size_t>& order, int64_t target);
 };
 
@@ -134,7 +151,7 @@ const ProcessConfig& LayerSimulator::config() const { return m_state->config; }
 void LayerSimulator::reset() { m_state->valid = false; }
 double LayerSimulator::travel_bound(const Box& view) const { return m_state->travel(view); }
 Box LayerSimulator::birth_region(const Box& view) const {
-    return view.expanded(m_state->support_radius + m_state->travel(view));
+    return m_state->birth_region(view);
 }
 
 void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& order,
@@ -230,7 +247,7 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
     const bool still = c.lifetime_s <= 0;
     const int64_t target = (S.timing.start_frame + frame) * S.substeps;
     const double travel = S.travel(view);
-    const Box region = view.expanded(S.support_radius + travel);
+    const Box region = S.birth_region(view);
     if (S.flow && !still) S.flow->prepare(region.expanded(travel + 1.0));
 
     // Reuse the previous frame's particles only when moving forward in time.
