@@ -519,19 +519,44 @@ struct RadialTable {
 
 struct LayerSpectrum {
     kernels::Kernel kernel;
+    double zoom = 1.0;
     double scale = 0.0;  ///< gain^2 lambda E[a^2] (1/T int w^2): S_tex = scale |H|^2
     bool aliasing = false;
-    RadialTable table;   ///< S in value^2 px^2 at |k| cycles/px
+    bool fixed_anisotropic = false;  ///< every impulse has the kernel's own, anisotropic shape
+    RadialTable table;   ///< angular mean of S in value^2 px^2 at |k| cycles/px
+    double far_alias = 0.0;  ///< images m with max(|mx|, |my|) in [2, 8], summed at k = 0
+    /// S at (fx, fy) cycles per pixel, exact (orientation and aspect included), no aliasing.
+    double exact(double fx, double fy) const {
+        return zoom * zoom * scale * kernel.power_spectrum(fx * zoom, fy * zoom);
+    }
 };
 
+/// Annuli below this index hold too few DFT bins (about 2 pi b) for their mean to stand for the
+/// angular average of an anisotropic spectrum: there the bins are evaluated exactly.
+constexpr double kExactAnnuli = 16.0;
+
 LayerSpectrum layer_spectrum(const scenes::LayerConfig& layer, double zoom, int n_max) {
-    LayerSpectrum L{kernels::Kernel(layer.kernel), 0.0, false, {}};
+    LayerSpectrum L{kernels::Kernel(layer.kernel), zoom, 0.0, false, false, {}, 0.0};
     const kernels::Kernel& k = L.kernel;
     L.scale = scenes::layer_theory(layer).variance / k.integral_sq();
-    // S_px(rho) = zoom^2 S_tex(rho zoom): a pixel is 1/zoom texture units (docs/scenes.md).
-    const auto S = [&](double rho) { return zoom * zoom * L.scale * k.radial_power_spectrum(rho * zoom); };
     const double R_px = k.radius() * zoom;
     const bool iso = isotropic(k);
+    // A random orientation per impulse averages the spectrum over angle: then the angular mean is
+    // the spectrum. Flow- or vorticity-driven orientations are approximated by it too.
+    L.fixed_anisotropic = !iso && layer.process.orientation == sim::OrientationMode::Fixed;
+    // S_px(rho) = zoom^2 S_tex(rho zoom): a pixel is 1/zoom texture units (docs/scenes.md).
+    // Anisotropic kernels: the angular mean over 36 directions of Kernel::power_spectrum (the
+    // average Kernel::radial_power_spectrum takes over 180, which costs five times as much for
+    // a table whose points are 1/8 of an oscillation apart anyway).
+    const auto S = [&](double rho, int n = 36) {
+        if (iso) return zoom * zoom * L.scale * k.radial_power_spectrum(rho * zoom);
+        double sum = 0;
+        for (int i = 0; i < n; ++i) {
+            const double a = std::numbers::pi * (i + 0.5) / n;
+            sum += L.exact(rho * std::cos(a), rho * std::sin(a));
+        }
+        return sum / n;
+    };
     // Pixel sampling aliases frequencies beyond Nyquist onto the grid; the nearest images
     // (|m| <= 1 per axis) are added where the spectrum at Nyquist is not negligible.
     L.aliasing = iso || S(0.5) > 1e-7 * L.scale * k.integral_sq();
@@ -539,13 +564,26 @@ LayerSpectrum layer_spectrum(const scenes::LayerConfig& layer, double zoom, int 
     // The spectrum of a kernel of radius R oscillates on a scale of about 1/(2R). Isotropic
     // kernels (one quadrature per point) get 64 points per oscillation, enough for the cubic to
     // follow the nulls to well under the sampling error of a 1024^2 frame (checked against
-    // rendered frames), but no finer than 1/8 of the DFT bin spacing; the others (an angular
-    // average of 180 quadratures per point) get 4, an approximation near their nulls.
+    // rendered frames), but no finer than 1/8 of the DFT bin spacing; the others (36 directions
+    // per point) get 4, an approximation near the nulls of the angular mean.
     L.table.step = iso ? std::max(1.0 / (128.0 * std::max(R_px, 0.5)), 1.0 / (8.0 * n_max))
                        : 1.0 / (8.0 * std::max(R_px, 0.5));
     const size_t n = static_cast<size_t>(std::ceil(rho_max / L.table.step)) + 3;
     L.table.value.assign(n, 0.0);
     tbb::parallel_for(size_t(0), n, [&](size_t i) { L.table.value[i] = S(double(i) * L.table.step); });
+    if (L.aliasing) {
+        // Kernels cut off with a jump (a Gabor or Gaussian truncated at R) have spectra with
+        // slow power-law tails, whose far images still add up: sum them once at k = 0 on a
+        // coarse table (a white floor; they vary little across the band) out to |m| = 8.
+        RadialTable tail;
+        tail.step = std::max(L.table.step, 1.0 / (2.0 * std::max(R_px, 0.5)));
+        const size_t nt = static_cast<size_t>(std::ceil(8.0 * std::numbers::sqrt2 / tail.step)) + 3;
+        tail.value.assign(nt, 0.0);
+        tbb::parallel_for(size_t(0), nt, [&](size_t i) { tail.value[i] = S(double(i) * tail.step, 12); });
+        for (int my = -8; my <= 8; ++my)
+            for (int mx = -8; mx <= 8; ++mx)
+                if (std::max(std::abs(mx), std::abs(my)) >= 2) L.far_alias += tail(std::hypot(mx, my));
+    }
     return L;
 }
 
@@ -553,14 +591,18 @@ LayerSpectrum layer_spectrum(const scenes::LayerConfig& layer, double zoom, int 
 std::vector<double> layer_grid(const LayerSpectrum& L, int w, int h) {
     std::vector<double> g(size_t(w) * h);
     const int m = L.aliasing ? 1 : 0;
+    const int side = std::min(w, h);
     tbb::parallel_for(0, h, [&](int ky) {
         const double fy = analysis::Periodogram::frequency(ky, h);
         for (int kx = 0; kx < w; ++kx) {
             const double fx = analysis::Periodogram::frequency(kx, w);
             double s = 0;
+            const bool exact = L.fixed_anisotropic && std::hypot(fx, fy) * side < kExactAnnuli;
             for (int my = -m; my <= m; ++my)
-                for (int mx = -m; mx <= m; ++mx) s += L.table(std::hypot(fx + mx, fy + my));
-            g[size_t(ky) * w + kx] = s;
+                for (int mx = -m; mx <= m; ++mx)
+                    s += (exact && mx == 0 && my == 0) ? L.exact(fx, fy)
+                                                       : L.table(std::hypot(fx + mx, fy + my));
+            g[size_t(ky) * w + kx] = s + L.far_alias;
         }
     });
     return g;

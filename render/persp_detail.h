@@ -52,6 +52,8 @@ struct PerspItem {
     /// line: half the second derivative of the image position along the axis per texture unit
     /// moved along it (pixels / unit^2): the chord's image centroid sits at curv * q(v).
     float curv = 0;
+    /// line: d ln(s_minor) / d(image offset along the axis): the keystone (nearer is wider).
+    float keystone = 0;
     float var_lo = 0, var_hi = 0;  ///< line: extra blur along the major axis, pixels^2, per level
     uint32_t probe0 = 0, nprobe = 0;  ///< probes: range in the probe array
     int x0 = 0, y0 = 0, x1 = -1, y1 = -1;  ///< pixels touched (inclusive), clipped to the image

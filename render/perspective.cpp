@@ -13,7 +13,6 @@
 #include <limits>
 #include <numbers>
 #include <sstream>
-#include <cstdlib>
 
 #include "render/persp_detail.h"
 #include "util/errors.h"
@@ -24,12 +23,12 @@ namespace {
 constexpr double kPi = std::numbers::pi;
 constexpr double kDeg = kPi / 180.0;
 constexpr float kFar = 1e18f;          // texture coordinate of pixels that miss the plane
-constexpr int kMaxProbeHalf = 32;       // at most 2 * 8 + 1 probes per impulse
-static int probe_cap() { static int v = getenv("IMP_PCAP") ? atoi(getenv("IMP_PCAP")) : 8; return v; }
-static double line_from() { static double v = getenv("IMP_LF") ? atof(getenv("IMP_LF")) : 0.25; return v; }
+constexpr int kMaxProbeHalf = 8;       // at most 2 * 8 + 1 probes per impulse
 // The line form is used once the blur along the major axis reaches this fraction of the level's
-// support radius. Empirical: with variance matching, the relative error of the line form is
-// about kurtosis/24 * (q / (sigma_e^2 + q))^2, under 1 % for the cosine kernel from 0.25.
+// support radius (empirical: against supersampled references of a cosine kernel the line form
+// is within 1-3 % of a single impulse's filtered kernel from there on, better than probes,
+// whose texture-space Gaussian ignores the perspective bend of the footprint).
+constexpr double kLineFrom = 0.25;
 
 
 bool cpu_has_avx2() {
@@ -58,7 +57,7 @@ double blur2(const kernels::KernelPyramid& pyr, int l) { return l == 0 ? 0.0 : p
 
 Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_major, double s_minor) {
     Plan p;
-    const double c = aa.filter_px;
+    const double c = aa.filter_px * aa.footprint_scale;
     const double sM = c * s_major, sm = c * s_minor;
     // The cut-off holds for unfiltered renders too (enabled = false): it bounds the work.
     p.fade = aa.fade ? fade_weight(pyr.sd_fraction(sM), aa.cutoff) : 1.0;
@@ -82,7 +81,7 @@ Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_m
     const bool line_ok = pyr.radial() && pyr.tables(p.blend.lo).nonnegative &&
                          pyr.tables(p.blend.hi).nonnegative;
     int m = static_cast<int>(std::ceil(3.0 * se / spacing));
-    if (line_ok && (se >= line_from() * pyr.radius(p.blend.lo) || m > probe_cap())) {
+    if (line_ok && (se >= kLineFrom * pyr.radius(p.blend.lo) || m > kMaxProbeHalf)) {
         p.mode = detail::kPerspLine;
         p.var_lo = std::max(0.0, sM * sM - blur2(pyr, p.blend.lo));
         p.var_hi = std::max(0.0, sM * sM - blur2(pyr, p.blend.hi));
@@ -91,17 +90,17 @@ Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_m
         p.along = 4.0 * std::sqrt(sM * sM + R * R / 3.0) + R;
         return p;
     }
-    if (m > probe_cap()) {
+    if (m > kMaxProbeHalf) {
         // Too anisotropic for the probe budget (grid kernels): widen the isotropic part until
         // 3 sqrt(sM^2 - si^2) <= 2 m sqrt(s0^2 + si^2) with m = kMaxProbeHalf.
-        const double mm = probe_cap();
+        const double mm = kMaxProbeHalf;
         const double s2 = (9.0 * sM * sM - 4.0 * mm * mm * s0 * s0) / (9.0 + 4.0 * mm * mm);
         si = std::max(si, std::sqrt(std::max(0.0, s2)));
         p.blend = pyr.select(si, aa.blend);
         spacing = pyr.probe_spacing(p.blend.lo);
         se = std::sqrt(std::max(0.0, sM * sM - si * si));
         if (3.0 * se < spacing) return single(sM);
-        m = std::min(probe_cap(), static_cast<int>(std::ceil(3.0 * se / spacing)));
+        m = std::min(kMaxProbeHalf, static_cast<int>(std::ceil(3.0 * se / spacing)));
     }
     // Probes add what the blended levels do not carry along the axis.
     const double carried = (1.0 - p.blend.weight) * blur2(pyr, p.blend.lo) + p.blend.weight * blur2(pyr, p.blend.hi);
@@ -162,12 +161,12 @@ double fade_weight(double sd, double cutoff) {
 
 double filtered_fade(const kernels::KernelPyramid& pyr, const View& view, const AntiAlias& aa) {
     if (!aa.enabled || !aa.fade) return 1.0;
-    return fade_weight(pyr.sd_fraction(aa.filter_px * view.scale), aa.cutoff);
+    return fade_weight(pyr.sd_fraction(aa.filter_px * aa.footprint_scale * view.scale), aa.cutoff);
 }
 
 double filtered_support(const kernels::KernelPyramid& pyr, const View& view, const AntiAlias& aa) {
     if (!aa.enabled) return pyr.radius(0);
-    const auto b = pyr.select(aa.filter_px * view.scale, aa.blend);
+    const auto b = pyr.select(aa.filter_px * aa.footprint_scale * view.scale, aa.blend);
     return pyr.radius(std::max(b.lo, b.hi));
 }
 
@@ -178,7 +177,7 @@ void accumulate_filtered(const kernels::KernelPyramid& pyr, const sim::Impulses&
     if (!aa.enabled) return accumulate(pyr.base(), impulses, view, out, options);
     const double fade = filtered_fade(pyr, view, aa);
     if (!(fade > 0.0)) return;
-    const auto b = pyr.select(aa.filter_px * view.scale, aa.blend);
+    const auto b = pyr.select(aa.filter_px * aa.footprint_scale * view.scale, aa.blend);
     const bool two = b.lo != b.hi && b.weight > 0.0;
     if (!two && fade == 1.0) return accumulate(pyr.level(b.lo), impulses, view, out, options);
     // Two passes in a fixed order (every pixel: all of level lo, then all of level hi).
@@ -512,6 +511,11 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
                         view.image_point(x - h * f.ex, y - h * f.ey, bx, by)) {
                         const double d2 = (ax - 2.0 * sx + bx) * f.ix + (ay - 2.0 * sy + by) * f.iy;
                         it.curv = static_cast<float>(0.5 * d2 / (h * h));
+                        // across scale at +-h along: its log-derivative per image pixel
+                        const double sp = view.footprint(x + h * f.ex, y + h * f.ey).s_minor;
+                        const double sn = view.footprint(x - h * f.ex, y - h * f.ey).s_minor;
+                        const double du = (ax - bx) * f.ix + (ay - by) * f.iy;
+                        if (du != 0.0) it.keystone = static_cast<float>(std::log(sp / sn) / du);
                     }
                 }
                 const double ism2 = 1.0 / (f.s_major * f.s_major);

@@ -52,6 +52,9 @@ struct AntiAlias {
     /// > 0: drop impulses farther than this from the camera's foot on the plane, in texture units
     /// (bounds unfiltered reference renders, which have no cut-off).
     double max_distance = 0.0;
+    /// Pixel footprints are multiplied by this (tests): a render at k times the resolution with
+    /// footprint_scale k applies the 1x filter, sampled k times finer. >= 1.
+    double footprint_scale = 1.0;
 };
 
 /// Fade factor in [0, 1] for a remaining standard deviation fraction `sd` (0 at or below

@@ -244,7 +244,8 @@ TEST_CASE("EXR and PNG output carry the frame and its provenance", "[cli]") {
         const std::string text = read_file(info);
         fs::remove(info);
         CHECK_THAT(text, Contains("impulse:scene_hash: \"" + loaded.hash + "\""));
-        CHECK_THAT(text, Contains("impulse:seed: \"" + std::to_string(loaded.layers[0].process.seed) + "\""));
+        CHECK_THAT(text, Contains("impulse:seed: \"" + std::to_string(loaded.seed) + "\""));
+        CHECK_THAT(text, Contains("impulse:layer_seeds: \"" + std::to_string(loaded.layers[0].process.seed)));
         CHECK_THAT(text, Contains("impulse:frame: \"2\""));
     } else {
         WARN("oiiotool not installed: EXR metadata not checked");
