@@ -12,7 +12,7 @@ struct RenderOptions {
     std::vector<std::string> sets;
     long long seed = -1;  ///< -1: the scene's own
     int threads = 0;
-    int tile = 64;
+    int tile = 128;
     bool resume = false;
     bool quiet = false;
 };

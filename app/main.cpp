@@ -42,7 +42,7 @@ int main(int argc, char** argv) {
         ->allow_extra_args(false);
     render->add_option("--threads", ro.threads, "Worker threads (default: all cores); output does not depend on it")
         ->check(CLI::Range(1, 1024));
-    render->add_option("--tile", ro.tile, "Tile size in pixels (default 64); output does not depend on it")
+    render->add_option("--tile", ro.tile, "Tile size in pixels (default 128); output does not depend on it")
         ->check(CLI::Range(8, 4096));
     render->add_option("--codec", ro.codec, "Video codec: auto, h264, prores, ffv1, vp9 (overrides output.codec)");
     render->add_flag("--resume", ro.resume, "Image sequences: skip frames whose files already exist");

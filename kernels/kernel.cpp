@@ -116,6 +116,12 @@ void validate(const KernelParams& p) {
     }
 }
 
+float EnvelopePolynomial::evaluate_monomial(float q) const {
+    float p = monomial.back();
+    for (size_t j = monomial.size() - 1; j-- > 0;) p = std::fma(p, q, monomial[j]);
+    return p;
+}
+
 float EnvelopePolynomial::evaluate(float q) const {
     // Clenshaw's recurrence for sum c_j T_j(t), t = 2q - 1.
     const float t = 2.0f * q - 1.0f;
@@ -204,6 +210,34 @@ Kernel::Kernel(const KernelParams& params) : m_params(params) {
         }
         m_poly.max_error = err;
         if (err < 1e-6 * std::abs(e0) || degree >= 40) break;
+    }
+    if (m_poly.max_error < 1e-6 * std::abs(e0)) {
+        // Monomial form in q: T_j(2q - 1) expanded by T_{j+1} = 2 (2q - 1) T_j - T_{j-1} in
+        // double, kept only if float Horner stays within the same error (cancellation between
+        // large alternating coefficients rules it out for high degrees).
+        const size_t n = m_poly.coefficients.size();
+        std::vector<double> mono(n, 0.0), tm1(n, 0.0), t0(n, 0.0), t1(n, 0.0);
+        t0[0] = 1.0;                 // T_0
+        t1[0] = -1.0, t1[1] = 2.0;   // T_1 = 2q - 1
+        mono[0] += m_poly.coefficients[0];
+        if (n > 1)
+            for (size_t k = 0; k < n; ++k) mono[k] += m_poly.coefficients[1] * t1[k];
+        for (size_t j = 2; j < n; ++j) {
+            std::vector<double> t2(n, 0.0);
+            for (size_t k = 0; k < n; ++k) {
+                t2[k] = -2.0 * t1[k] - t0[k];
+                if (k > 0) t2[k] += 4.0 * t1[k - 1];
+            }
+            for (size_t k = 0; k < n; ++k) mono[k] += m_poly.coefficients[j] * t2[k];
+            t0 = t1, t1 = t2;
+        }
+        m_poly.monomial.assign(mono.begin(), mono.end());
+        double err = 0.0;
+        for (int i = 0; i <= 4000; ++i) {
+            const double q = i / 4000.0 * (1.0 - 1e-9);
+            err = std::max(err, std::abs(m_poly.evaluate_monomial(static_cast<float>(q)) - envelope(q)));
+        }
+        if (!(err < 1e-6 * std::abs(e0))) m_poly.monomial.clear();
     }
     if (!(m_poly.max_error < 1e-6 * std::abs(e0))) {
         // The polynomial cannot follow this envelope (e.g. an oscillating sampled profile or

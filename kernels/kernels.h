@@ -67,6 +67,12 @@ struct EnvelopePolynomial {
     double max_error = 0.0;           ///< measured on a dense grid
     /// Evaluate in float (same arithmetic as the renderer's inner loop; q in [0, 1]).
     float evaluate(float q) const;
+    /// The same polynomial in the monomial basis of q (m_0 + m_1 q + ...), evaluated by Horner
+    /// with fused multiply-adds: half the work of Clenshaw. Filled only when that evaluation is
+    /// as accurate as the Chebyshev one (true for low degrees, e.g. the cosine bump).
+    std::vector<float> monomial;
+    /// Horner-with-fma evaluation of `monomial` (the renderer's arithmetic).
+    float evaluate_monomial(float q) const;
 };
 
 /// A kernel with its closed-form or quadrature statistics. Immutable, cheap to copy.

@@ -32,6 +32,8 @@ struct LoopKernel {
     float aspect = 1;
     const float* coeffs = nullptr;  ///< Chebyshev coefficients of the envelope in q
     int ncoeffs = 0;                ///< odd, 5 .. 41
+    const float* mono = nullptr;    ///< the same polynomial in powers of q (Horner with fma),
+    int nmono = 0;                  ///< when accurate enough; preferred when set
 };
 
 /// Prepared impulses in pixel coordinates (pixel i's centre is at i), structure of arrays.
@@ -43,8 +45,13 @@ struct LoopImpulses {
     const float* sin_t = nullptr;
 };
 
+/// Columns of slack on each side of a tile row: spans are rounded up to whole vectors of 8 and
+/// may run into it (those pixels are discarded).
+inline constexpr int kPad = 8;
+
 /// Adds the impulses idx[0..n) to the tile covering pixels [tx0, tx0+tw) x [ty0, ty0+th);
-/// `acc` is tw*th floats, row-major. Impulses are summed in the order given.
+/// `acc` holds th rows of tw + 2 kPad floats, pixel (x, y) at
+/// acc[(y - ty0) * (tw + 2 kPad) + kPad + (x - tx0)]. Impulses are summed in the order given.
 void eval_tile_base(const LoopKernel& k, const LoopImpulses& p, const uint32_t* idx, size_t n,
                     int tx0, int ty0, int tw, int th, float* acc);
 void eval_tile_avx2(const LoopKernel& k, const LoopImpulses& p, const uint32_t* idx, size_t n,

@@ -18,7 +18,8 @@ using detail::LoopImpulses;
 using detail::LoopKernel;
 
 bool cpu_has_avx2() {
-    static const bool has = __builtin_cpu_supports("avx2");
+    // The fast build uses AVX2 and FMA instructions.
+    static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
     return has;
 }
 
@@ -50,6 +51,10 @@ LoopKernel loop_kernel(const kernels::Kernel& k, const View& view) {
     }
     lk.coeffs = k.polynomial().coefficients.data();
     lk.ncoeffs = static_cast<int>(k.polynomial().coefficients.size());
+    if (!k.polynomial().monomial.empty()) {
+        lk.mono = k.polynomial().monomial.data();
+        lk.nmono = static_cast<int>(k.polynomial().monomial.size());
+    }
     lk.aspect = static_cast<float>(p.aspect);
     if (!k.envelope_table().empty()) {
         lk.table = k.envelope_table().data();
@@ -143,12 +148,13 @@ void accumulate(const kernels::Kernel& kernel, const sim::Impulses& impulses, co
         const int a = t % ntx, b = t / ntx;
         const int x0 = a * T, y0 = b * T;
         const int tw = std::min(T, view.width - x0), th = std::min(T, view.height - y0);
-        std::vector<float> acc(size_t(tw) * th, 0.0f);
+        const int stride = tw + 2 * detail::kPad;
+        std::vector<float> acc(size_t(stride) * th, 0.0f);
         eval_tile(lk, li, bins.data() + count[t], count[t + 1] - count[t], x0, y0, tw, th,
                   acc.data(), options.use_avx2);
         for (int y = 0; y < th; ++y) {
             float* dst = out.data.data() + size_t(y0 + y) * view.width + x0;
-            const float* src = acc.data() + size_t(y) * tw;
+            const float* src = acc.data() + size_t(y) * stride + detail::kPad;
             for (int x = 0; x < tw; ++x) dst[x] += src[x];
         }
     };
@@ -166,9 +172,11 @@ void accumulate_region(const kernels::Kernel& kernel, const sim::Impulses& impul
     const Prepared prep = prepare(kernel, impulses, view);
     std::vector<uint32_t> idx;
     select(prep, lk.radius_px, x0, y0, x0 + w, y0 + h, idx);
-    std::vector<float> acc(size_t(w) * h, 0.0f);
+    const int stride = w + 2 * detail::kPad;
+    std::vector<float> acc(size_t(stride) * h, 0.0f);
     eval_tile(lk, prep.view(), idx.data(), idx.size(), x0, y0, w, h, acc.data(), options.use_avx2);
-    for (size_t i = 0; i < acc.size(); ++i) tile[i] += acc[i];
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) tile[size_t(y) * w + x] += acc[size_t(y) * stride + detail::kPad + x];
 }
 
 void accumulate_naive(const kernels::Kernel& kernel, const sim::ProcessConfig& config,

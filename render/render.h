@@ -36,7 +36,7 @@ struct Frame {
 };
 
 struct EvalOptions {
-    int tile_size = 64;  ///< square tiles in pixels, >= 8; the result does not depend on it
+    int tile_size = 128;  ///< square tiles in pixels, >= 8; the result does not depend on it
     bool parallel = true;  ///< false: the serial path through the same code (debugging)
     bool use_avx2 = true;  ///< false: baseline SSE2 loops (bit-identical; for tests)
 };
