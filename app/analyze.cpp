@@ -9,8 +9,8 @@
 
 #include <algorithm>
 #include <climits>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <numbers>
 #include <span>
@@ -268,7 +268,8 @@ PeriodogramSummary summarize(const analysis::Periodogram& p) {
                 best = v;
                 // one member of the conjugate pair, canonically the one with fx > 0 (or fy > 0)
                 const bool flip = fx < 0 || (fx == 0 && fy < 0);
-                s.peak_fx = flip ? -fx : fx, s.peak_fy = flip ? -fy : fy, s.peak_power = v;
+                s.peak_fx = (flip ? -fx : fx) + 0.0, s.peak_fy = (flip ? -fy : fy) + 0.0;
+                s.peak_power = v;
             }
         }
     }
@@ -417,7 +418,8 @@ CommonLevel common_level(const std::vector<std::vector<double>>& profiles,
     double scatter = 0;
     std::vector<size_t> H;
     for (size_t b = 0; b < mean.power.size(); ++b)
-        if (mean.count[b] >= 64 && mean.frequency[b] > 0 && mean.frequency[b] < 0.5 && mean.power[b] > 0) {
+        if (mean.count[b] >= 64 && mean.frequency[b] > 0 && mean.frequency[b] < 0.5 &&
+            mean.power[b] > 0) {
             H.push_back(b);
             scatter += inflation / (0.5 * double(mean.count[b]));
         }
@@ -456,7 +458,9 @@ struct Censored {
     double gain = 1.0;  ///< P(a < Z < b): the linear gain of the clip (Price's theorem)
 };
 Censored censored_normal(double a, double b) {
-    const auto phi = [](double z) { return std::exp(-0.5 * z * z) / std::sqrt(2 * std::numbers::pi); };
+    const auto phi = [](double z) {
+        return std::exp(-0.5 * z * z) / std::sqrt(2 * std::numbers::pi);
+    };
     const auto cdf = [](double z) { return 0.5 * std::erfc(-z / std::numbers::sqrt2); };
     const double Pa = cdf(a), Pb = cdf(b), pa = phi(a), pb = phi(b);
     Censored c;
@@ -523,8 +527,8 @@ struct LayerSpectrum {
     double scale = 0.0;  ///< gain^2 lambda E[a^2] (1/T int w^2): S_tex = scale |H|^2
     bool aliasing = false;
     bool fixed_anisotropic = false;  ///< every impulse has the kernel's own, anisotropic shape
-    RadialTable table;   ///< angular mean of S in value^2 px^2 at |k| cycles/px
-    double far_alias = 0.0;  ///< images m with max(|mx|, |my|) in [2, 8], summed at k = 0
+    RadialTable table;               ///< angular mean of S in value^2 px^2 at |k| cycles/px
+    double far_alias = 0.0;          ///< images m with max(|mx|, |my|) in [2, 8], summed at k = 0
     /// S at (fx, fy) cycles per pixel, exact (orientation and aspect included), no aliasing.
     double exact(double fx, double fy) const {
         return zoom * zoom * scale * kernel.power_spectrum(fx * zoom, fy * zoom);
@@ -548,7 +552,8 @@ LayerSpectrum layer_spectrum(const scenes::LayerConfig& layer, double zoom, int 
     // Anisotropic kernels: the angular mean over 36 directions of Kernel::power_spectrum (the
     // average Kernel::radial_power_spectrum takes over 180, which costs five times as much for
     // a table whose points are 1/8 of an oscillation apart anyway).
-    const auto S = [&](double rho, int n = 36) {
+    const auto S = [&](double rho) {
+        const int n = 36;
         if (iso) return zoom * zoom * L.scale * k.radial_power_spectrum(rho * zoom);
         double sum = 0;
         for (int i = 0; i < n; ++i) {
@@ -570,19 +575,32 @@ LayerSpectrum layer_spectrum(const scenes::LayerConfig& layer, double zoom, int 
                        : 1.0 / (8.0 * std::max(R_px, 0.5));
     const size_t n = static_cast<size_t>(std::ceil(rho_max / L.table.step)) + 3;
     L.table.value.assign(n, 0.0);
-    tbb::parallel_for(size_t(0), n, [&](size_t i) { L.table.value[i] = S(double(i) * L.table.step); });
+    tbb::parallel_for(size_t(0), n,
+                      [&](size_t i) { L.table.value[i] = S(double(i) * L.table.step); });
     if (L.aliasing) {
         // Kernels cut off with a jump (a Gabor or Gaussian truncated at R) have spectra with
-        // slow power-law tails, whose far images still add up: sum them once at k = 0 on a
-        // coarse table (a white floor; they vary little across the band) out to |m| = 8.
-        RadialTable tail;
-        tail.step = std::max(L.table.step, 1.0 / (2.0 * std::max(R_px, 0.5)));
-        const size_t nt = static_cast<size_t>(std::ceil(8.0 * std::numbers::sqrt2 / tail.step)) + 3;
-        tail.value.assign(nt, 0.0);
-        tbb::parallel_for(size_t(0), nt, [&](size_t i) { tail.value[i] = S(double(i) * tail.step, 12); });
-        for (int my = -8; my <= 8; ++my)
-            for (int mx = -8; mx <= 8; ++mx)
-                if (std::max(std::abs(mx), std::abs(my)) >= 2) L.far_alias += tail(std::hypot(mx, my));
+        // slow power-law tails whose far images still add up: sum the images with
+        // max(|mx|, |my|) in [2, M] once, at k = 0, as a white floor (they vary little across
+        // the band). Isotropic: S depends on |m| only, M = 8; otherwise the exact 2-D spectrum
+        // at the lattice points, M = 4 (the quadratures get slower as |k| grows). One half-plane
+        // is evaluated: S(m) = S(-m).
+        const int M = iso ? 8 : 4;
+        std::vector<std::pair<int, int>> points;
+        for (int my = 0; my <= M; ++my)
+            for (int mx = -M; mx <= M; ++mx)
+                if (std::max(std::abs(mx), my) >= 2 && (my > 0 || mx > 0) && (!iso || (mx >= my)))
+                    points.push_back({mx, my});
+        std::vector<double> value(points.size());
+        tbb::parallel_for(size_t(0), points.size(), [&](size_t i) {
+            const auto [mx, my] = points[i];
+            const double v = iso ? S(std::hypot(mx, my)) : L.exact(mx, my);
+            // multiplicity: the point and its mirror -m; for isotropic kernels also the other
+            // members of the 8-fold symmetry class (mx >= my >= 0 listed once)
+            int mult = 2;
+            if (iso) mult = (my == 0 || mx == my) ? 4 : 8;
+            value[i] = mult * v;
+        });
+        for (double v : value) L.far_alias += v;
     }
     return L;
 }
@@ -617,14 +635,14 @@ std::vector<double> hann_smooth(std::vector<double> g, int w, int h) {
     std::vector<double> t(g.size());
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x)
-            t[size_t(y) * w + x] = (2.0 / 3.0) * g[size_t(y) * w + x] +
-                                   (1.0 / 6.0) * (g[size_t(y) * w + (x + 1) % w] +
-                                                  g[size_t(y) * w + (x + w - 1) % w]);
+            t[size_t(y) * w + x] =
+                (2.0 / 3.0) * g[size_t(y) * w + x] +
+                (1.0 / 6.0) * (g[size_t(y) * w + (x + 1) % w] + g[size_t(y) * w + (x + w - 1) % w]);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x)
-            g[size_t(y) * w + x] = (2.0 / 3.0) * t[size_t(y) * w + x] +
-                                   (1.0 / 6.0) * (t[size_t((y + 1) % h) * w + x] +
-                                                  t[size_t((y + h - 1) % h) * w + x]);
+            g[size_t(y) * w + x] =
+                (2.0 / 3.0) * t[size_t(y) * w + x] +
+                (1.0 / 6.0) * (t[size_t((y + 1) % h) * w + x] + t[size_t((y + h - 1) % h) * w + x]);
     return g;
 }
 
@@ -707,8 +725,8 @@ TimeCorrelation scene_time_correlation(const scenes::Scene& scene, size_t n, siz
 }
 
 TheoryComparison compare_with_theory(const scenes::Scene& scene, const std::string& path,
-                                     AnalysisResult& R, const TimeCorrelation& tc, bool mapped, double lo, double hi,
-                                     double clipped) {
+                                     AnalysisResult& R, const TimeCorrelation& tc, bool mapped,
+                                     double lo, double hi, double clipped) {
     TheoryComparison T;
     T.scene = path;
     T.hash = scene.hash;
@@ -723,8 +741,9 @@ TheoryComparison compare_with_theory(const scenes::Scene& scene, const std::stri
     T.zoom = scene.camera.zoom.value(0.0);
     if (!zoom_constant) T.no_spectrum = "camera zoom is animated";
     if (!zoom_constant)
-        R.notes.push_back("camera zoom is animated: no theoretical spectrum or autocovariance; the "
-                          "sampling errors of mean and variance use the zoom at t = 0");
+        R.notes.push_back(
+            "camera zoom is animated: no theoretical spectrum or autocovariance; the "
+            "sampling errors of mean and variance use the zoom at t = 0");
     if (scene.output.width != R.width || scene.output.height != R.height)
         R.notes.push_back("scene output.size " + std::to_string(scene.output.width) + "x" +
                           std::to_string(scene.output.height) + " differs from the input " +
@@ -739,7 +758,8 @@ TheoryComparison compare_with_theory(const scenes::Scene& scene, const std::stri
     Censored cens;
     double quant = 0.0;
     if (mapped) {
-        if (sd_field > 0) cens = censored_normal((lo - th.mean) / sd_field, (hi - th.mean) / sd_field);
+        if (sd_field > 0)
+            cens = censored_normal((lo - th.mean) / sd_field, (hi - th.mean) / sd_field);
         const double step = (hi - lo) / (std::ldexp(1.0, std::min(R.bits, 24)) - 1.0);
         quant = step * step / 12.0;
     }
@@ -760,7 +780,8 @@ TheoryComparison compare_with_theory(const scenes::Scene& scene, const std::stri
         const double ea4 = sim::amplitude_fourth_moment(p.amplitude);
         const bool animated = p.lifetime_s > 0;
         any_animated = any_animated || animated;
-        const double W2 = animated ? sim::envelope_sq_integral(p.envelope, p.lifetime_s) / p.lifetime_s : 1.0;
+        const double W2 =
+            animated ? sim::envelope_sq_integral(p.envelope, p.lifetime_s) / p.lifetime_s : 1.0;
         const double W4 = animated ? envelope_fourth_mean(p.envelope, p.lifetime_s) : 1.0;
         const double lambda_px = p.intensity / (T.zoom * T.zoom);
         const double lv = scenes::layer_theory(layer).variance;
@@ -770,10 +791,12 @@ TheoryComparison compare_with_theory(const scenes::Scene& scene, const std::stri
         const kernels::Kernel k(layer.kernel);
         K4 += g2 * g2 * lambda_px * ea4 * W4 * std::pow(layer.gain, 4) *
               std::pow(k.integral_sq() * T.zoom * T.zoom, 2);
-        if (layer.flow) diff_known = false;
+        if (layer.flow)
+            diff_known = false;
         else if (animated)
-            diff_var += 2.0 * g2 * lv *
-                        (1.0 - envelope_correlation(p.envelope, p.lifetime_s, 1.0 / scene.output.fps));
+            diff_var +=
+                2.0 * g2 * lv *
+                (1.0 - envelope_correlation(p.envelope, p.lifetime_s, 1.0 / scene.output.fps));
 
         const LayerSpectrum ls = layer_spectrum(layer, T.zoom, std::max(w, h));
         std::vector<double> lg = layer_grid(ls, w, h);
@@ -797,7 +820,8 @@ TheoryComparison compare_with_theory(const scenes::Scene& scene, const std::stri
     double s2 = 0;
     for (size_t i = 1; i < grid.size(); ++i) s2 += grid[i] * grid[i];
     T.sd_frame_variance = std::sqrt(2.0 * s2 / (N * N) + K4 / N);
-    T.sd_variance = std::sqrt(2.0 * s2 / (N * N) / tc.n_eff_variance + K4 / N / tc.n_eff_population);
+    T.sd_variance =
+        std::sqrt(2.0 * s2 / (N * N) / tc.n_eff_variance + K4 / N / tc.n_eff_population);
     const double field_var = mapped ? th.variance * cens.variance : th.variance;
     // E[pooled sample variance] = sigma^2 - Var(pooled mean).
     T.variance = field_var + quant - T.sd_mean * T.sd_mean;
@@ -828,7 +852,8 @@ TheoryComparison compare_with_theory(const scenes::Scene& scene, const std::stri
         S.common.assign(na, 0.0);
         const double infl = hann ? kHannInflation : 1.0;
         for (size_t b = 0; b < na; ++b) {
-            if (M.count[b] == 0 || !(M.frequency[b] > 0 && M.frequency[b] < 0.5) || !(S.power[b] > 0))
+            if (M.count[b] == 0 || !(M.frequency[b] > 0 && M.frequency[b] < 0.5) ||
+                !(S.power[b] > 0))
                 continue;
             double c = 0;
             for (size_t l = 0; l < layer_annuli.size(); ++l)
@@ -882,14 +907,15 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
     for (size_t j = 0; j < frames.size(); ++j) {
         const Image& f = frames[j];
         if (f.width != w || f.height != h || f.data.size() != size_t(w) * h)
-            throw ValueError(opt.input + ": frame " + std::to_string(first_frame + long(j)) + " is " +
-                             std::to_string(f.width) + "x" + std::to_string(f.height) +
+            throw ValueError(opt.input + ": frame " + std::to_string(first_frame + long(j)) +
+                             " is " + std::to_string(f.width) + "x" + std::to_string(f.height) +
                              ", the first is " + std::to_string(w) + "x" + std::to_string(h));
         size_t bad = 0;
         for (float v : f.data) bad += !std::isfinite(v);
         if (bad)
-            throw ValueError(opt.input + ": frame " + std::to_string(first_frame + long(j)) + " has " +
-                             std::to_string(bad) + " non-finite values (NaN or infinity)");
+            throw ValueError(opt.input + ": frame " + std::to_string(first_frame + long(j)) +
+                             " has " + std::to_string(bad) +
+                             " non-finite values (NaN or infinity)");
     }
 
     AnalysisResult R;
@@ -940,8 +966,8 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
         R.moments = analysis::moments(all);
         const double sd = std::sqrt(R.moments.variance);
         const double half = sd > 0 ? kHistogramHalfWidthSd * sd : 0.5;
-        R.histogram = analysis::histogram(all, R.moments.mean - half, R.moments.mean + half,
-                                          kHistogramBins);
+        R.histogram =
+            analysis::histogram(all, R.moments.mean - half, R.moments.mean + half, kHistogramBins);
     }
 
     // Periodicity decides the window: none for torus frames, Hann otherwise.
@@ -991,10 +1017,12 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
         tc = scene_time_correlation(*scene, n, quarter);
     } else if (n >= size_t(kMinFramesForTime)) {
         std::vector<double> means(n), vars(n);
-        for (size_t j = 0; j < n; ++j) means[j] = R.frame_stats[j].mean, vars[j] = R.frame_stats[j].variance;
+        for (size_t j = 0; j < n; ++j)
+            means[j] = R.frame_stats[j].mean, vars[j] = R.frame_stats[j].variance;
         std::vector<std::vector<double>> rel;
         for (size_t b = 0; b < R.spectrum.power.size(); ++b) {
-            if (R.spectrum.count[b] == 0 || !(R.spectrum.frequency[b] > 0 && R.spectrum.frequency[b] < 0.5) ||
+            if (R.spectrum.count[b] == 0 ||
+                !(R.spectrum.frequency[b] > 0 && R.spectrum.frequency[b] < 0.5) ||
                 !(R.spectrum.power[b] > 0))
                 continue;
             std::vector<double> s(n);
@@ -1023,8 +1051,9 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
                           "spectrum are rough estimates and the drift z may be off by tens of "
                           "percent; give --scene for the exact correlation of an animated scene");
     if (!tc.converged)
-        R.notes.push_back("frames are correlated over more than half of the sequence: the "
-                          "correlation time is a lower bound and the z values are approximate");
+        R.notes.push_back(
+            "frames are correlated over more than half of the sequence: the "
+            "correlation time is a lower bound and the z values are approximate");
 
     if (scene) {
         R.theory = compare_with_theory(*scene, scene_path, R, tc, mapped, lo, hi, clipped);
@@ -1040,8 +1069,9 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
     st.t_limit = kZLimit;
     if (n < size_t(kMinFramesForTime)) {
         st.available = false;
-        st.reason = n == 1 ? "one frame" : "needs >= " + std::to_string(kMinFramesForTime) +
-                                               " frames (" + std::to_string(n) + " given)";
+        st.reason = n == 1 ? "one frame"
+                           : "needs >= " + std::to_string(kMinFramesForTime) + " frames (" +
+                                 std::to_string(n) + " given)";
     } else {
         st.available = true;
         std::vector<double> vars(n);
@@ -1058,7 +1088,8 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
         st.q_eff = tc.q_eff;
         std::vector<double> pairs, common;
         for (size_t b = 0; b < R.spectrum.power.size(); ++b) {
-            if (R.spectrum.count[b] == 0 || !(R.spectrum.frequency[b] > 0 && R.spectrum.frequency[b] < 0.5))
+            if (R.spectrum.count[b] == 0 ||
+                !(R.spectrum.frequency[b] > 0 && R.spectrum.frequency[b] < 0.5))
                 continue;
             pairs.push_back(0.5 * double(R.spectrum.count[b]));
             common.push_back(R.theory && R.theory->spectrum ? R.theory->spectrum->common[b] : NAN);
@@ -1077,22 +1108,25 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
             const double c = std::isfinite(c_data) ? c_data : (i < common.size() ? common[i] : 0.0);
             const double cq = c / q_eff_level;
             st.common_variance = std::max(st.common_variance, cq);
-            st.z_corrected[i] =
-                st.drift.z[i] * std::sqrt((1.0 / (pr * double(quarter))) / (1.0 / (pr * tc.q_eff) + cq));
+            st.z_corrected[i] = st.drift.z[i] * std::sqrt((1.0 / (pr * double(quarter))) /
+                                                          (1.0 / (pr * tc.q_eff) + cq));
             st.max_abs_z_corrected = std::max(st.max_abs_z_corrected, std::abs(st.z_corrected[i]));
         }
         st.z_threshold = bonferroni_threshold(static_cast<int>(st.drift.z.size()), kFamilyAlpha);
-        st.stationary = std::abs(st.trend.t) < st.t_limit && st.max_abs_z_corrected < st.z_threshold;
+        st.stationary =
+            std::abs(st.trend.t) < st.t_limit && st.max_abs_z_corrected < st.z_threshold;
         const size_t block = n / kTrendBlocks;
         if (double(block) < 2.0 * R.tau_variance)
             R.notes.push_back("trend blocks of " + std::to_string(block) +
                               " frames are shorter than twice the correlation time of the frame "
-                              "variance (" + format_number(R.tau_variance, 3) +
+                              "variance (" +
+                              format_number(R.tau_variance, 3) +
                               " frames): the trend's standard error may be low and t inflated");
     }
     if (!raw && !mapped)
-        R.notes.push_back("display values in [0, 1] (8/16-bit source); give --scene to map them "
-                          "back to field values and compare with theory");
+        R.notes.push_back(
+            "display values in [0, 1] (8/16-bit source); give --scene to map them "
+            "back to field values and compare with theory");
     if (kind == "video")
         R.notes.push_back("video: lossy compression alters the fine-scale spectrum and adds noise");
 

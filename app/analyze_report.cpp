@@ -39,7 +39,9 @@ std::string fixed(double v, int decimals) {
 std::string yes_no(bool b) { return b ? "yes" : "no"; }
 
 std::string source_text(const AnalysisResult& r) {
-    std::string s = r.kind == "image" ? "one image" : r.kind == "sequence" ? "image sequence" : "video";
+    std::string s = r.kind == "image"      ? "one image"
+                    : r.kind == "sequence" ? "image sequence"
+                                           : "video";
     s += r.raw ? ", float (raw field values)"
                : ", " + std::to_string(r.bits) + "-bit (display values)";
     return s;
@@ -63,7 +65,8 @@ std::string correlation_text(const AnalysisResult& r) {
 
 /// "name = value < limit" or ">= limit": a verdict's number against its threshold.
 std::string against(const std::string& name, double value, double limit, int decimals) {
-    return name + " = " + fixed(value, 2) + (value < limit ? " < " : " >= ") + fixed(limit, decimals);
+    return name + " = " + fixed(value, 2) + (value < limit ? " < " : " >= ") +
+           fixed(limit, decimals);
 }
 
 std::string z_text(double z, double limit) { return against("|z|", std::abs(z), limit, 0); }
@@ -172,11 +175,16 @@ private:
 std::string esc(const std::string& s) {
     std::string o;
     for (char c : s) {
-        if (c == '&') o += "&amp;";
-        else if (c == '<') o += "&lt;";
-        else if (c == '>') o += "&gt;";
-        else if (c == '"') o += "&quot;";
-        else o += c;
+        if (c == '&')
+            o += "&amp;";
+        else if (c == '<')
+            o += "&lt;";
+        else if (c == '>')
+            o += "&gt;";
+        else if (c == '"')
+            o += "&quot;";
+        else
+            o += c;
     }
     return o;
 }
@@ -251,7 +259,9 @@ std::string svg_plot(const Plot& p) {
     y0 -= pad, y1 += pad;
 
     const double pw = kW - kL - kR, ph = kH - kT - kB;
-    const auto X = [&](double x) { return kL + ((p.logx ? std::log10(x) : x) - x0) / (x1 - x0) * pw; };
+    const auto X = [&](double x) {
+        return kL + ((p.logx ? std::log10(x) : x) - x0) / (x1 - x0) * pw;
+    };
     const auto Y = [&](double y) {
         double v = p.logy ? std::log10(y) : y;
         v = std::clamp(v, y0, y1);
@@ -266,8 +276,8 @@ std::string svg_plot(const Plot& p) {
       << "\" width=\"" << kW << "\" height=\"" << kH << "\" role=\"img\">\n";
     o << "<title>" << esc(p.title) << "</title>\n";
     o << "<rect x=\"0\" y=\"0\" width=\"" << kW << "\" height=\"" << kH << "\" fill=\"#fff\"/>\n";
-    o << "<text x=\"" << kW / 2 << "\" y=\"20\" text-anchor=\"middle\" class=\"pt\">" << esc(p.title)
-      << "</text>\n";
+    o << "<text x=\"" << kW / 2 << "\" y=\"20\" text-anchor=\"middle\" class=\"pt\">"
+      << esc(p.title) << "</text>\n";
     // Ticks and grid.
     o << "<g class=\"ax\">\n";
     const auto xticks = [&]() {
@@ -316,8 +326,8 @@ std::string svg_plot(const Plot& p) {
       << "\" fill=\"none\" stroke=\"#333\"/>\n";
     o << "<text x=\"" << kL + pw / 2 << "\" y=\"" << kH - 8 << "\" text-anchor=\"middle\">"
       << esc(p.xlabel) << "</text>\n";
-    o << "<text transform=\"translate(16," << kT + ph / 2 << ") rotate(-90)\" text-anchor=\"middle\">"
-      << esc(p.ylabel) << "</text>\n</g>\n";
+    o << "<text transform=\"translate(16," << kT + ph / 2
+      << ") rotate(-90)\" text-anchor=\"middle\">" << esc(p.ylabel) << "</text>\n</g>\n";
 
     // Bands, reference lines, series.
     for (const auto& b : p.bands) {
@@ -342,7 +352,8 @@ std::string svg_plot(const Plot& p) {
             for (size_t i = 0; i + 1 < s.x.size(); ++i) {
                 if (!ok(s.x[i], s.y[i])) continue;
                 const double xa = X(s.x[i]), xb = X(s.x[i + 1]);
-                const double yt = Y(s.y[i]), yb = Y(p.logy ? std::pow(10.0, y0) : std::max(y0, 0.0));
+                const double yt = Y(s.y[i]),
+                             yb = Y(p.logy ? std::pow(10.0, y0) : std::max(y0, 0.0));
                 o << "<rect x=\"" << xa << "\" y=\"" << std::min(yt, yb) << "\" width=\""
                   << std::max(0.0, xb - xa - 0.5) << "\" height=\"" << std::abs(yb - yt)
                   << "\" fill=\"" << s.color << "\" fill-opacity=\"0.75\"/>\n";
@@ -351,7 +362,8 @@ std::string svg_plot(const Plot& p) {
             o << "<g fill=\"" << s.color << "\">";
             for (size_t i = 0; i < s.x.size(); ++i)
                 if (ok(s.x[i], s.y[i]))
-                    o << "<circle cx=\"" << X(s.x[i]) << "\" cy=\"" << Y(s.y[i]) << "\" r=\"1.8\"/>";
+                    o << "<circle cx=\"" << X(s.x[i]) << "\" cy=\"" << Y(s.y[i])
+                      << "\" r=\"1.8\"/>";
             o << "</g>\n";
         } else {
             // A polyline, broken where a value cannot be drawn.
@@ -359,9 +371,9 @@ std::string svg_plot(const Plot& p) {
             size_t count = 0;
             const auto flush = [&]() {
                 if (count >= 2)
-                    o << "<polyline points=\"" << pts.str() << "\" fill=\"none\" stroke=\"" << s.color
-                      << "\" stroke-width=\"1.6\"" << (s.dashed ? " stroke-dasharray=\"6,4\"" : "")
-                      << "/>\n";
+                    o << "<polyline points=\"" << pts.str() << "\" fill=\"none\" stroke=\""
+                      << s.color << "\" stroke-width=\"1.6\""
+                      << (s.dashed ? " stroke-dasharray=\"6,4\"" : "") << "/>\n";
                 pts.str("");
                 count = 0;
             };
@@ -411,13 +423,15 @@ std::string svg_plot(const Plot& p) {
 
 /// Viridis-like colour ramp on [0, 1] (five anchors of matplotlib's viridis, linear between).
 std::string ramp(double t) {
-    static const double a[5][3] = {{68, 1, 84}, {59, 82, 139}, {33, 145, 140}, {94, 201, 98}, {253, 231, 37}};
+    static const double a[5][3] = {
+        {68, 1, 84}, {59, 82, 139}, {33, 145, 140}, {94, 201, 98}, {253, 231, 37}};
     t = std::clamp(t, 0.0, 1.0) * 4.0;
     const int i = std::min(3, int(t));
     const double f = t - i;
     char buf[16];
     std::snprintf(buf, sizeof buf, "#%02x%02x%02x", int(a[i][0] + f * (a[i + 1][0] - a[i][0])),
-                  int(a[i][1] + f * (a[i + 1][1] - a[i][1])), int(a[i][2] + f * (a[i + 1][2] - a[i][2])));
+                  int(a[i][1] + f * (a[i + 1][1] - a[i][1])),
+                  int(a[i][2] + f * (a[i + 1][2] - a[i][2])));
     return buf;
 }
 
@@ -438,8 +452,8 @@ std::string svg_heatmap(const PeriodogramSummary& s, int w, int h) {
     for (int r = 0; r < s.heat_height; ++r)
         for (int c = 0; c < s.heat_width; ++c) {
             const double v = s.heat[size_t(r) * s.heat_width + c];
-            o << "<rect x=\"" << x0 + c * cw << "\" y=\"" << y0 + r * ch << "\" width=\"" << cw + 0.05
-              << "\" height=\"" << ch + 0.05 << "\" fill=\""
+            o << "<rect x=\"" << x0 + c * cw << "\" y=\"" << y0 + r * ch << "\" width=\""
+              << cw + 0.05 << "\" height=\"" << ch + 0.05 << "\" fill=\""
               << (std::isfinite(v) ? ramp((v - lo) / (hi - lo)) : std::string("#000")) << "\"/>";
         }
     o << "</g>\n<g class=\"ax\">";
@@ -459,8 +473,9 @@ std::string svg_heatmap(const PeriodogramSummary& s, int w, int h) {
     // Colour bar.
     const double bx = x0 + side + 40;
     for (int i = 0; i < 50; ++i)
-        o << "<rect x=\"" << bx << "\" y=\"" << y0 + side - (i + 1) * side / 50 << "\" width=\"16\" height=\""
-          << side / 50 + 0.2 << "\" fill=\"" << ramp((i + 0.5) / 50) << "\"/>";
+        o << "<rect x=\"" << bx << "\" y=\"" << y0 + side - (i + 1) * side / 50
+          << "\" width=\"16\" height=\"" << side / 50 + 0.2 << "\" fill=\"" << ramp((i + 0.5) / 50)
+          << "\"/>";
     for (int d = 0; d <= 8; d += 2)
         o << "<text x=\"" << bx + 22 << "\" y=\"" << y0 + side - d / 8.0 * side + 4 << "\">"
           << fmt(lo + d, 3) << "</text>";
@@ -507,7 +522,8 @@ std::vector<std::string> plots(const AnalysisResult& r) {
                 const double x = hg.lo + (hg.hi - hg.lo) * i / 256.0;
                 const double z = (x - T->mean) / sd;
                 g.x.push_back(x);
-                g.y.push_back(total * bw * std::exp(-0.5 * z * z) / (sd * std::sqrt(2 * std::numbers::pi)));
+                g.y.push_back(total * bw * std::exp(-0.5 * z * z) /
+                              (sd * std::sqrt(2 * std::numbers::pi)));
             }
             p.series.push_back(g);
         }
@@ -521,17 +537,20 @@ std::vector<std::string> plots(const AnalysisResult& r) {
         p.ylabel = "power (value^2 pixel^2)";
         p.logx = p.logy = true;
         Series s;
-        s.label = measured + " (" + std::to_string(r.frames) + (r.frames == 1 ? " frame)" : " frames)");
+        s.label =
+            measured + " (" + std::to_string(r.frames) + (r.frames == 1 ? " frame)" : " frames)");
         s.kind = Series::Points;
         for (size_t b = 0; b < r.spectrum.power.size(); ++b)
-            if (r.spectrum.count[b] > 0) s.x.push_back(r.spectrum.frequency[b]), s.y.push_back(r.spectrum.power[b]);
+            if (r.spectrum.count[b] > 0)
+                s.x.push_back(r.spectrum.frequency[b]), s.y.push_back(r.spectrum.power[b]);
         p.series.push_back(s);
         if (T && T->spectrum) {
             Series t;
             t.label = "theory";
             t.color = red;
             for (size_t b = 0; b < r.spectrum.power.size(); ++b)
-                if (r.spectrum.count[b] > 0) t.x.push_back(r.spectrum.frequency[b]), t.y.push_back(T->spectrum->power[b]);
+                if (r.spectrum.count[b] > 0)
+                    t.x.push_back(r.spectrum.frequency[b]), t.y.push_back(T->spectrum->power[b]);
             p.series.push_back(t);
         }
         out.push_back(svg_plot(p));
@@ -545,9 +564,11 @@ std::vector<std::string> plots(const AnalysisResult& r) {
         s.label = "z";
         s.kind = Series::Points;
         for (size_t b = 0; b < T->spectrum->z.size(); ++b)
-            if (std::isfinite(T->spectrum->z[b])) s.x.push_back(r.spectrum.frequency[b]), s.y.push_back(T->spectrum->z[b]);
+            if (std::isfinite(T->spectrum->z[b]))
+                s.x.push_back(r.spectrum.frequency[b]), s.y.push_back(T->spectrum->z[b]);
         p.series.push_back(s);
-        p.hlines.push_back({T->spectrum->threshold, "Bonferroni limit +-" + fixed(T->spectrum->threshold, 2), "#777"});
+        p.hlines.push_back({T->spectrum->threshold,
+                            "Bonferroni limit +-" + fixed(T->spectrum->threshold, 2), "#777"});
         p.hlines.push_back({-T->spectrum->threshold, "", "#777"});
         out.push_back(svg_plot(p));
     }
@@ -575,15 +596,16 @@ std::vector<std::string> plots(const AnalysisResult& r) {
     }
     if (r.frames > 1) {
         const auto x = iota_from(size_t(r.frames), double(r.first_frame));
-        const auto per_frame = [&](const std::string& title, const std::string& ylabel,
-                                   auto get, double theory, double sd, size_t from) {
+        const auto per_frame = [&](const std::string& title, const std::string& ylabel, auto get,
+                                   double theory, double sd, size_t from) {
             Plot p;
             p.title = title;
             p.xlabel = "frame";
             p.ylabel = ylabel;
             Series s;
             s.label = measured;
-            for (size_t j = from; j < r.frame_stats.size(); ++j) s.x.push_back(x[j]), s.y.push_back(get(r.frame_stats[j]));
+            for (size_t j = from; j < r.frame_stats.size(); ++j)
+                s.x.push_back(x[j]), s.y.push_back(get(r.frame_stats[j]));
             p.series.push_back(s);
             if (std::isfinite(theory)) {
                 if (sd > 0) {
@@ -598,14 +620,18 @@ std::vector<std::string> plots(const AnalysisResult& r) {
             }
             out.push_back(svg_plot(p));
         };
-        per_frame("Per-frame mean", "mean", [](const analysis::FrameStats& f) { return f.mean; },
-                  T ? T->mean : NAN, T ? T->sd_frame_mean : 0.0, 0);
-        per_frame("Per-frame variance", "variance", [](const analysis::FrameStats& f) { return f.variance; },
-                  T ? T->variance + T->sd_mean * T->sd_mean - T->sd_frame_mean * T->sd_frame_mean : NAN,
-                  T ? T->sd_frame_variance : 0.0, 0);
-        per_frame("Per-frame difference variance (frame - previous)", "variance of the difference",
-                  [](const analysis::FrameStats& f) { return f.diff_variance; },
-                  T && T->diff_variance ? *T->diff_variance : NAN, 0.0, 1);
+        per_frame(
+            "Per-frame mean", "mean", [](const analysis::FrameStats& f) { return f.mean; },
+            T ? T->mean : NAN, T ? T->sd_frame_mean : 0.0, 0);
+        per_frame(
+            "Per-frame variance", "variance",
+            [](const analysis::FrameStats& f) { return f.variance; },
+            T ? T->variance + T->sd_mean * T->sd_mean - T->sd_frame_mean * T->sd_frame_mean : NAN,
+            T ? T->sd_frame_variance : 0.0, 0);
+        per_frame(
+            "Per-frame difference variance (frame - previous)", "variance of the difference",
+            [](const analysis::FrameStats& f) { return f.diff_variance; },
+            T && T->diff_variance ? *T->diff_variance : NAN, 0.0, 1);
     }
     if (r.stationarity.available) {
         const auto& st = r.stationarity;
@@ -619,7 +645,8 @@ std::vector<std::string> plots(const AnalysisResult& r) {
         s.x = st.drift.frequency;
         s.y = st.z_corrected;
         p.series.push_back(s);
-        p.hlines.push_back({st.z_threshold, "Bonferroni limit +-" + fixed(st.z_threshold, 2), "#777"});
+        p.hlines.push_back(
+            {st.z_threshold, "Bonferroni limit +-" + fixed(st.z_threshold, 2), "#777"});
         p.hlines.push_back({-st.z_threshold, "", "#777"});
         out.push_back(svg_plot(p));
     }
@@ -632,7 +659,8 @@ void write_atomically(const std::string& path, const std::string& text) {
     std::error_code ec;
     if (!dir.empty() && !fs::is_directory(dir, ec))
         throw IoError(path + ": cannot write: directory " + dir.string() + " does not exist");
-    const fs::path tmp = dir / ("." + p.filename().string() + ".partial-" + std::to_string(::getpid()));
+    const fs::path tmp =
+        dir / ("." + p.filename().string() + ".partial-" + std::to_string(::getpid()));
     {
         std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
         if (!out) throw IoError(path + ": cannot write " + tmp.string());
@@ -675,15 +703,14 @@ std::string to_text(const AnalysisResult& r) {
     const auto& p = r.periodogram;
     line("periodogram", "window " + p.window + " (" + (p.periodic ? "periodic" : "not periodic") +
                             ": wrap/interior step ratio x " + fmt(p.wrap_ratio_x, 3) + ", y " +
-                            fmt(p.wrap_ratio_y, 3) + "), averaged over " + std::to_string(r.frames) +
-                            (r.frames == 1 ? " frame" : " frames"));
+                            fmt(p.wrap_ratio_y, 3) + "), averaged over " +
+                            std::to_string(r.frames) + (r.frames == 1 ? " frame" : " frames"));
     line("", "total power " + fmt(p.total_power) + ", centroid |k| " + fmt(p.centroid, 4) +
                  " cycles/px, peak " + fmt(p.peak_power, 4) + " at (" + fmt(p.peak_fx, 4) + ", " +
                  fmt(p.peak_fy, 4) + ")");
     line("", "anisotropy " + fmt(p.anisotropy, 3) + " (0 = isotropic), axis " +
                  fixed(p.orientation_deg, 1) + " deg from +x towards +y (image rows down)");
-    if (r.frames > 1)
-        line("correlation", "frames per independent frame " + correlation_text(r));
+    if (r.frames > 1) line("correlation", "frames per independent frame " + correlation_text(r));
 
     const auto& st = r.stationarity;
     if (st.available) {
@@ -715,7 +742,8 @@ std::string to_text(const AnalysisResult& r) {
             double dv = 0;
             for (size_t j = 1; j < r.frame_stats.size(); ++j) dv += r.frame_stats[j].diff_variance;
             dv /= double(r.frame_stats.size() - 1);
-            line("diff var", "measured " + fmt(dv) + " (mean over frames), theory " + fmt(*T.diff_variance));
+            line("diff var",
+                 "measured " + fmt(dv) + " (mean over frames), theory " + fmt(*T.diff_variance));
         }
         if (T.spectrum)
             line("spectrum", "max|z| " + fixed(T.spectrum->max_abs_z, 2) + " over " +
@@ -751,7 +779,8 @@ std::string to_text(const AnalysisResult& r) {
         char buf[64];
         std::snprintf(buf, sizeof buf, "  %12.5g %10llu ", r.histogram.lo + bw * double(i),
                       static_cast<unsigned long long>(r.histogram.counts[i]));
-        o << buf << std::string(size_t(40.0 * double(r.histogram.counts[i]) / double(most) + 0.5), '#')
+        o << buf
+          << std::string(size_t(40.0 * double(r.histogram.counts[i]) / double(most) + 0.5), '#')
           << "\n";
     }
     const bool spec_theory = r.theory && r.theory->spectrum;
@@ -765,7 +794,8 @@ std::string to_text(const AnalysisResult& r) {
         o << buf;
         if (spec_theory) {
             const auto& S = *r.theory->spectrum;
-            std::snprintf(buf, sizeof buf, " %13.6g %8s %7s", S.power[b], fmt(S.ratio[b], 4).c_str(),
+            std::snprintf(buf, sizeof buf, " %13.6g %8s %7s", S.power[b],
+                          fmt(S.ratio[b], 4).c_str(),
                           std::isfinite(S.z[b]) ? fixed(S.z[b], 2).c_str() : "-");
             o << buf;
         }
@@ -799,7 +829,8 @@ std::string to_text(const AnalysisResult& r) {
 std::string to_json(const AnalysisResult& r) {
     Json j;
     j.open('{');
-    j.key("input").str(r.input).key("kind").str(r.kind).key("values").str(r.raw ? "raw" : "display");
+    j.key("input").str(r.input).key("kind").str(r.kind).key("values").str(r.raw ? "raw"
+                                                                                : "display");
     j.key("bits").integer(r.bits).key("width").integer(r.width).key("height").integer(r.height);
     j.key("frames").integer(r.frames).key("first_frame").integer(r.first_frame);
     const auto& m = r.moments;
@@ -815,7 +846,15 @@ std::string to_json(const AnalysisResult& r) {
     j.key("periodogram").open('{').key("window").str(p.window).key("periodic").boolean(p.periodic);
     j.key("wrap_step_ratio").open('[').num(p.wrap_ratio_x).num(p.wrap_ratio_y).close(']');
     j.key("total_power").num(p.total_power);
-    j.key("peak").open('{').key("fx").num(p.peak_fx).key("fy").num(p.peak_fy).key("power").num(p.peak_power).close('}');
+    j.key("peak")
+        .open('{')
+        .key("fx")
+        .num(p.peak_fx)
+        .key("fy")
+        .num(p.peak_fy)
+        .key("power")
+        .num(p.peak_power)
+        .close('}');
     j.key("centroid_cpp").num(p.centroid).key("anisotropy").num(p.anisotropy);
     j.key("orientation_deg").num(p.orientation_deg).close('}');
     j.key("radial_spectrum").open('{');
@@ -828,23 +867,44 @@ std::string to_json(const AnalysisResult& r) {
     j.close('}');
     j.key("autocovariance").open('{').key("max_lag").integer(r.max_lag);
     j.key("value").nums(r.autocovariance);
-    if (r.theory && !r.theory->autocovariance.empty()) j.key("theory").nums(r.theory->autocovariance);
+    if (r.theory && !r.theory->autocovariance.empty())
+        j.key("theory").nums(r.theory->autocovariance);
     j.close('}');
     j.key("per_frame").open('{');
     std::vector<double> a, b, c;
-    for (const auto& f : r.frame_stats) a.push_back(f.mean), b.push_back(f.variance), c.push_back(f.diff_variance);
+    for (const auto& f : r.frame_stats)
+        a.push_back(f.mean), b.push_back(f.variance), c.push_back(f.diff_variance);
     j.key("mean").nums(a).key("variance").nums(b).key("diff_variance").nums(c).close('}');
-    j.key("frame_correlation").open('{').key("source").str(r.tau_source).key("mean").num(r.tau_mean);
+    j.key("frame_correlation")
+        .open('{')
+        .key("source")
+        .str(r.tau_source)
+        .key("mean")
+        .num(r.tau_mean);
     j.key("variance").num(r.tau_variance).key("spectrum").num(r.tau_spectrum).close('}');
     const auto& st = r.stationarity;
     j.key("stationarity").open('{').key("available").boolean(st.available);
     if (st.available) {
-        j.key("trend").open('{').key("slope").num(st.trend.slope).key("stderr").num(st.trend.stderr_slope);
-        j.key("t").num(st.trend.t).key("blocks").integer(st.trend_blocks).key("limit").num(st.t_limit).close('}');
+        j.key("trend")
+            .open('{')
+            .key("slope")
+            .num(st.trend.slope)
+            .key("stderr")
+            .num(st.trend.stderr_slope);
+        j.key("t")
+            .num(st.trend.t)
+            .key("blocks")
+            .integer(st.trend_blocks)
+            .key("limit")
+            .num(st.t_limit)
+            .close('}');
         j.key("spectral_drift").open('{').key("quarter_frames").integer(st.quarter);
         j.key("max_abs_z").num(st.drift.max_abs_z).key("q_eff").num(st.q_eff);
         j.key("common_level_relative_variance").num(st.common_variance);
-        j.key("max_abs_z_corrected").num(st.max_abs_z_corrected).key("threshold").num(st.z_threshold);
+        j.key("max_abs_z_corrected")
+            .num(st.max_abs_z_corrected)
+            .key("threshold")
+            .num(st.z_threshold);
         j.key("z_corrected").nums(st.z_corrected);
         j.key("frequency").nums(st.drift.frequency).key("z").nums(st.drift.z).close('}');
         j.key("stationary").boolean(st.stationary);
@@ -857,27 +917,47 @@ std::string to_json(const AnalysisResult& r) {
         const auto& T = *r.theory;
         j.open('{').key("scene").str(T.scene).key("hash").str(T.hash).key("zoom").num(T.zoom);
         j.key("mapped").boolean(T.mapped);
-        if (T.mapped) j.key("range").open('[').num(T.map_lo).num(T.map_hi).close(']').key("clipped_fraction").num(T.clipped_fraction);
+        if (T.mapped)
+            j.key("range")
+                .open('[')
+                .num(T.map_lo)
+                .num(T.map_hi)
+                .close(']')
+                .key("clipped_fraction")
+                .num(T.clipped_fraction);
         j.key("field_mean").num(T.field_mean).key("field_variance").num(T.field_variance);
         j.key("mean").open('{').key("measured").num(m.mean).key("expected").num(T.mean);
         j.key("sd").num(T.sd_mean).key("sd_frame").num(T.sd_frame_mean).key("z").num(T.z_mean);
         j.key("limit").num(T.z_limit).key("agrees").boolean(T.mean_agrees).close('}');
         j.key("variance").open('{').key("measured").num(m.variance).key("expected").num(T.variance);
-        j.key("sd").num(T.sd_variance).key("sd_frame").num(T.sd_frame_variance).key("z").num(T.z_variance);
+        j.key("sd")
+            .num(T.sd_variance)
+            .key("sd_frame")
+            .num(T.sd_frame_variance)
+            .key("z")
+            .num(T.z_variance);
         j.key("limit").num(T.z_limit).key("agrees").boolean(T.variance_agrees).close('}');
         j.key("spectrum");
         if (T.spectrum) {
-            j.open('{').key("compared").integer(T.spectrum->compared).key("max_abs_z").num(T.spectrum->max_abs_z);
+            j.open('{')
+                .key("compared")
+                .integer(T.spectrum->compared)
+                .key("max_abs_z")
+                .num(T.spectrum->max_abs_z);
             j.key("threshold").num(T.spectrum->threshold).key("agrees");
-            if (T.spectrum->not_judged.empty()) j.boolean(T.spectrum->agrees);
-            else j.null().key("not_judged").str(T.spectrum->not_judged);
+            if (T.spectrum->not_judged.empty())
+                j.boolean(T.spectrum->agrees);
+            else
+                j.null().key("not_judged").str(T.spectrum->not_judged);
             j.close('}');
         } else {
             j.null().key("no_spectrum").str(T.no_spectrum);
         }
         j.key("diff_variance");
-        if (T.diff_variance) j.num(*T.diff_variance);
-        else j.null();
+        if (T.diff_variance)
+            j.num(*T.diff_variance);
+        else
+            j.null();
         j.close('}');
     } else {
         j.null();
@@ -908,7 +988,8 @@ std::string to_html(const AnalysisResult& r) {
       << "h1{font-size:20px} h2{font-size:16px;margin-top:28px}\n"
       << "table{border-collapse:collapse;font-size:13px;background:#fff}\n"
       << "td,th{border:1px solid #ddd;padding:3px 8px;text-align:left;vertical-align:top}\n"
-      << "th{background:#f0f0f0}\n.yes{color:#1a7f37;font-weight:600}.no{color:#c62828;font-weight:600}"
+      << "th{background:#f0f0f0}\n.yes{color:#1a7f37;font-weight:600}.no{color:#c62828;font-weight:"
+         "600}"
          ".na{color:#777}\n"
       << ".plots{display:flex;flex-wrap:wrap;gap:12px}\n"
       << "figure{margin:0;border:1px solid #ddd;background:#fff}\n"
@@ -926,7 +1007,8 @@ std::string to_html(const AnalysisResult& r) {
     o << "<h2>Summary</h2>\n<table>\n";
     const auto& m = r.moments;
     row("input", esc(r.input + ": " + source_text(r)));
-    row("size", std::to_string(r.width) + "x" + std::to_string(r.height) + ", " + esc(frames_text(r)));
+    row("size",
+        std::to_string(r.width) + "x" + std::to_string(r.height) + ", " + esc(frames_text(r)));
     row("mean", fmt(m.mean));
     row("variance", fmt(m.variance) + " (sd " + fmt(std::sqrt(m.variance)) + ")");
     row("skewness / excess kurtosis", fmt(m.skewness, 4) + " / " + fmt(m.excess_kurtosis, 4));
@@ -936,12 +1018,14 @@ std::string to_html(const AnalysisResult& r) {
                            ", wrap/interior step ratio " + fmt(p.wrap_ratio_x, 3) + ", " +
                            fmt(p.wrap_ratio_y, 3) + "); total power " + fmt(p.total_power) +
                            "; centroid |k| " + fmt(p.centroid, 4) + " cycles/px; anisotropy " +
-                           fmt(p.anisotropy, 3) + " (axis " + fixed(p.orientation_deg, 1) + "&deg;)");
+                           fmt(p.anisotropy, 3) + " (axis " + fixed(p.orientation_deg, 1) +
+                           "&deg;)");
     if (r.frames > 1) row("frame correlation", esc(correlation_text(r)));
     const auto& st = r.stationarity;
     if (st.available) {
         row("trend of frame variance", "slope " + fmt(st.trend.slope, 4) + " per frame, stderr " +
-                                           fmt(st.trend.stderr_slope, 4) + ", t " + fixed(st.trend.t, 2));
+                                           fmt(st.trend.stderr_slope, 4) + ", t " +
+                                           fixed(st.trend.t, 2));
         row("spectral drift", "max|z| " + fixed(st.drift.max_abs_z, 2) + " (independent frames), " +
                                   fixed(st.max_abs_z_corrected, 2) + " for " + fmt(st.q_eff, 3) +
                                   " independent frames per quarter");
@@ -953,12 +1037,13 @@ std::string to_html(const AnalysisResult& r) {
         const auto& T = *r.theory;
         row("scene", esc(T.scene) + " (hash " + esc(T.hash) + "), zoom " + fmt(T.zoom));
         if (T.mapped)
-            row("display mapping", "v &rarr; " + fmt(T.map_lo) + " + v (" + fmt(T.map_hi) + " &minus; " +
-                                       fmt(T.map_lo) + "), " + fixed(100 * T.clipped_fraction, 3) +
-                                       " % clipped");
-        row("mean vs theory", fmt(m.mean) + " vs " + fmt(T.mean) + " &plusmn; " + fmt(T.sd_mean, 3) +
-                                  ", z " + fixed(T.z_mean, 2) + ": agrees " + verdict(T.mean_agrees) +
-                                  " (" + esc(z_text(T.z_mean, T.z_limit)) + ")");
+            row("display mapping", "v &rarr; " + fmt(T.map_lo) + " + v (" + fmt(T.map_hi) +
+                                       " &minus; " + fmt(T.map_lo) + "), " +
+                                       fixed(100 * T.clipped_fraction, 3) + " % clipped");
+        row("mean vs theory", fmt(m.mean) + " vs " + fmt(T.mean) + " &plusmn; " +
+                                  fmt(T.sd_mean, 3) + ", z " + fixed(T.z_mean, 2) + ": agrees " +
+                                  verdict(T.mean_agrees) + " (" + esc(z_text(T.z_mean, T.z_limit)) +
+                                  ")");
         row("variance vs theory", fmt(m.variance) + " vs " + fmt(T.variance) + " &plusmn; " +
                                       fmt(T.sd_variance, 3) + ", z " + fixed(T.z_variance, 2) +
                                       ": agrees " + verdict(T.variance_agrees) + " (" +
@@ -967,9 +1052,9 @@ std::string to_html(const AnalysisResult& r) {
             row("spectrum vs theory", "agrees " + verdict(T.spectrum->agrees) + " (" +
                                           esc(spectrum_threshold_text(*T.spectrum)) + ")");
         else
-            row("spectrum vs theory",
-                "agrees <span class=\"na\">n/a</span> (" +
-                    esc(T.spectrum ? T.spectrum->not_judged : T.no_spectrum) + ")");
+            row("spectrum vs theory", "agrees <span class=\"na\">n/a</span> (" +
+                                          esc(T.spectrum ? T.spectrum->not_judged : T.no_spectrum) +
+                                          ")");
     }
     for (const auto& n : r.notes) row("note", esc(n));
     o << "</table>\n<h2>Plots</h2>\n<div class=\"plots\">\n";

@@ -161,7 +161,8 @@ private:
                 if (m_i >= m_s.size()) return false;
                 if (m_s[m_i] == 'u') {
                     for (int k = 0; k < 4; ++k)
-                        if (++m_i >= m_s.size() || !std::isxdigit(static_cast<unsigned char>(m_s[m_i])))
+                        if (++m_i >= m_s.size() ||
+                            !std::isxdigit(static_cast<unsigned char>(m_s[m_i])))
                             return false;
                 } else if (std::string("\"\\/bfnrt").find(m_s[m_i]) == std::string::npos) {
                     return false;
@@ -178,18 +179,21 @@ private:
         const size_t start = m_i;
         if (m_i < m_s.size() && m_s[m_i] == '-') ++m_i;
         if (m_i >= m_s.size() || !std::isdigit(static_cast<unsigned char>(m_s[m_i]))) return false;
-        if (m_s[m_i] == '0') ++m_i;
+        if (m_s[m_i] == '0')
+            ++m_i;
         else
             while (m_i < m_s.size() && std::isdigit(static_cast<unsigned char>(m_s[m_i]))) ++m_i;
         if (m_i < m_s.size() && m_s[m_i] == '.') {
             ++m_i;
-            if (m_i >= m_s.size() || !std::isdigit(static_cast<unsigned char>(m_s[m_i]))) return false;
+            if (m_i >= m_s.size() || !std::isdigit(static_cast<unsigned char>(m_s[m_i])))
+                return false;
             while (m_i < m_s.size() && std::isdigit(static_cast<unsigned char>(m_s[m_i]))) ++m_i;
         }
         if (m_i < m_s.size() && (m_s[m_i] == 'e' || m_s[m_i] == 'E')) {
             ++m_i;
             if (m_i < m_s.size() && (m_s[m_i] == '+' || m_s[m_i] == '-')) ++m_i;
-            if (m_i >= m_s.size() || !std::isdigit(static_cast<unsigned char>(m_s[m_i]))) return false;
+            if (m_i >= m_s.size() || !std::isdigit(static_cast<unsigned char>(m_s[m_i])))
+                return false;
             while (m_i < m_s.size() && std::isdigit(static_cast<unsigned char>(m_s[m_i]))) ++m_i;
         }
         return m_i > start;
@@ -264,7 +268,8 @@ TEST_CASE("analyze reports the analysis estimators' own numbers", "[app][analyze
     const AnalysisResult r = impulse::app::analyze_input(opt);
 
     std::vector<Image> frames;
-    for (int i = 0; i < 20; ++i) frames.push_back(read_image(impulse::app::expand_pattern(pattern, i)));
+    for (int i = 0; i < 20; ++i)
+        frames.push_back(read_image(impulse::app::expand_pattern(pattern, i)));
     REQUIRE(r.kind == "sequence");
     REQUIRE(r.raw);
     REQUIRE(r.frames == 20);
@@ -291,7 +296,8 @@ TEST_CASE("analyze reports the analysis estimators' own numbers", "[app][analyze
     CHECK(r.histogram.above == h.above);
 
     std::vector<impulse::analysis::Periodogram> ps;
-    for (const auto& f : frames) ps.push_back(impulse::analysis::periodogram(f, impulse::analysis::Window::None));
+    for (const auto& f : frames)
+        ps.push_back(impulse::analysis::periodogram(f, impulse::analysis::Window::None));
     const auto radial = impulse::analysis::radial_average(impulse::analysis::average(ps));
     CHECK(r.spectrum.power == radial.power);
     CHECK(r.spectrum.frequency == radial.frequency);
@@ -300,8 +306,8 @@ TEST_CASE("analyze reports the analysis estimators' own numbers", "[app][analyze
     REQUIRE(r.max_lag == 96 / 4);
     std::vector<double> acov(size_t(r.max_lag) + 1, 0.0);
     for (const auto& f : frames) {
-        const auto a = impulse::analysis::radial_autocovariance(impulse::analysis::autocovariance(f),
-                                                                f.width, f.height, r.max_lag);
+        const auto a = impulse::analysis::radial_autocovariance(
+            impulse::analysis::autocovariance(f), f.width, f.height, r.max_lag);
         for (size_t i = 0; i < a.size(); ++i) acov[i] += a[i];
     }
     for (double& v : acov) v *= 1.0 / 20.0;
@@ -347,7 +353,8 @@ TEST_CASE("analyze windows a frame that is not periodic", "[app][analyze]") {
     CHECK_FALSE(r.stationarity.available);
 }
 
-TEST_CASE("analyze --scene agrees with the theory of a rendered still scene", "[app][analyze][stats]") {
+TEST_CASE("analyze --scene agrees with the theory of a rendered still scene",
+          "[app][analyze][stats]") {
     TempDir dir;
     const std::string image = dir / "still.exr";
     render_scene(kStill, {}, image, 0, 0);
@@ -390,7 +397,8 @@ TEST_CASE("analyze --scene agrees with the theory of a rendered still scene", "[
     }
 }
 
-TEST_CASE("analyze maps 8-bit display values back through the scene's range", "[app][analyze][stats]") {
+TEST_CASE("analyze maps 8-bit display values back through the scene's range",
+          "[app][analyze][stats]") {
     TempDir dir;
     // A range wide enough (about +-5.4 sd) that nothing clips: then the 8-bit rounding, white
     // noise of variance step^2 / 12, is all that separates the file from the field.
@@ -431,7 +439,8 @@ TEST_CASE("analyze maps 8-bit display values back through the scene's range", "[
     }
 }
 
-TEST_CASE("analyze --scene on an animated sequence: theory and stationarity", "[app][analyze][stats]") {
+TEST_CASE("analyze --scene on an animated sequence: theory and stationarity",
+          "[app][analyze][stats]") {
     TempDir dir;
     const std::string pattern = dir / "a_%03d.exr";
     render_scene(kAnimated, {}, pattern, 0, 59);
@@ -491,12 +500,40 @@ TEST_CASE("analyze output: JSON parses, HTML has one titled <svg> per plot", "[a
     const std::string json = impulse::app::to_json(r);
     JsonChecker checker(json);
     REQUIRE(checker.valid());
-    for (const char* key : {"input", "width", "height", "frames", "moments", "mean", "variance",
-                            "skewness", "excess_kurtosis", "min", "max", "histogram", "counts",
-                            "periodogram", "radial_spectrum", "frequency", "power", "count",
-                            "theory", "ratio", "z", "autocovariance", "per_frame",
-                            "diff_variance", "stationarity", "trend", "slope", "stderr", "t",
-                            "spectral_drift", "max_abs_z", "threshold", "stationary", "agrees"})
+    for (const char* key : {"input",
+                            "width",
+                            "height",
+                            "frames",
+                            "moments",
+                            "mean",
+                            "variance",
+                            "skewness",
+                            "excess_kurtosis",
+                            "min",
+                            "max",
+                            "histogram",
+                            "counts",
+                            "periodogram",
+                            "radial_spectrum",
+                            "frequency",
+                            "power",
+                            "count",
+                            "theory",
+                            "ratio",
+                            "z",
+                            "autocovariance",
+                            "per_frame",
+                            "diff_variance",
+                            "stationarity",
+                            "trend",
+                            "slope",
+                            "stderr",
+                            "t",
+                            "spectral_drift",
+                            "max_abs_z",
+                            "threshold",
+                            "stationary",
+                            "agrees"})
         CHECK(checker.has_key(key));
     CHECK(count(json, "{") == count(json, "}"));
     CHECK(count(json, "[") == count(json, "]"));
@@ -596,7 +633,8 @@ TEST_CASE("impulse analyze on the command line", "[app][analyze][cli]") {
     CHECK(count(read_file(report), "<svg ") == 4);
     // Only the report is left in the directory (no temporary file).
     int files = 0;
-    for ([[maybe_unused]] const auto& e : fs::directory_iterator(fs::path(report).parent_path())) ++files;
+    for ([[maybe_unused]] const auto& e : fs::directory_iterator(fs::path(report).parent_path()))
+        ++files;
     CHECK(files == 4);  // s.exr, out.txt, err.txt, r.html
 
     CHECK(run("'" + image + "'") == 0);
