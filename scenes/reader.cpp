@@ -84,8 +84,14 @@ const toml::node* Reader::node(std::string_view key) {
 }
 
 std::string Reader::location(const toml::node* n, std::string_view key) const {
-    auto it = m_source.overrides.find(key_path(key));
-    if (it != m_source.overrides.end()) return "--set " + it->second;
+    // The value, or a table containing it, may come from a --set override.
+    for (std::string path = key_path(key);;) {
+        auto it = m_source.overrides.find(path);
+        if (it != m_source.overrides.end()) return "--set " + it->second;
+        const size_t dot = path.rfind('.');
+        if (dot == std::string::npos) break;
+        path.resize(dot);
+    }
     const toml::node* at = n ? n : m_self;
     const auto& src = at->source();
     std::ostringstream s;

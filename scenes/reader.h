@@ -7,6 +7,7 @@
 #include <toml++/toml.h>
 
 #include <array>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <optional>
@@ -83,8 +84,8 @@ private:
     std::set<std::string, std::less<>> m_known;
 };
 
-/// The [shading] table (scenes/shading_config.cpp).
-render::Shading read_shading(std::optional<Reader> r);
+/// The [shading] table (scenes/shading_config.cpp); `base` resolves relative paths.
+render::Shading read_shading(std::optional<Reader> r, const std::filesystem::path& base);
 
 /// Text of a node's value as written (for messages).
 std::string value_text(const toml::node& n);

@@ -1,7 +1,12 @@
 // SPDX-License-Identifier: Apache-2.0
 // The [shading] table: colour ramps (named or explicit), height-field relief, background.
 
+#include <OpenImageIO/imageio.h>
+
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <map>
 
 #include "scenes/reader.h"
@@ -28,6 +33,23 @@ const std::map<std::string, Ramp>& named_ramps() {
     return ramps;
 }
 
+/// Reads an image's pixels as floats (all channels); false with a message on failure.
+bool read_rgb_pixels(const std::string& path, std::vector<float>& px, int& channels, std::string& error) {
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) {
+        error = "cannot read: " + OIIO::geterror();
+        return false;
+    }
+    const auto& spec = in->spec();
+    channels = spec.nchannels;
+    px.resize(size_t(spec.width) * spec.height * channels);
+    if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, px.data())) {
+        error = "cannot read: " + in->geterror();
+        return false;
+    }
+    return true;
+}
+
 /// A colour: [r, g, b] or [r, g, b, a] with components in [0, 1], or "#rrggbb".
 bool parse_color(const toml::node& n, float c[4]) {
     c[3] = 1.0f;
@@ -49,12 +71,56 @@ bool parse_color(const toml::node& n, float c[4]) {
     return true;
 }
 
+/// Standard normal quantile by bisection on erfc (only used to place ramp stops).
+double normal_quantile(double p) {
+    double lo = -10.0, hi = 10.0;
+    for (int i = 0; i < 100; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
 }  // namespace
 
-render::Shading read_shading(std::optional<Reader> r) {
+render::Shading read_shading(std::optional<Reader> r, const std::filesystem::path& base) {
     render::Shading s;
     if (!r) return s;
-    if (const toml::node* n = r->node("ramp")) {
+    if (const toml::node* n = r->node("ramp"); n && n->is_table()) {
+        // The colour mapping of a colour exemplar (Lewis 1986 §3 resynthesis in colour): the
+        // exemplar's pixels sorted by luminance into `stops` quantile bins, each bin's mean
+        // colour placed where the same quantile of the (near-Gaussian) field falls on the
+        // display scale, t = (Phi^-1(quantile) + 3) / 6 for the default mean +- 3 sd range.
+        Reader t = *r->table("ramp");
+        const toml::node* pn = t.node("exemplar");
+        const std::string rel = t.string("exemplar", "");
+        const int stops = static_cast<int>(t.integer("stops", 16, 2, 256));
+        if (rel.empty()) t.fail(pn, "exemplar", "expected the path of a colour image to take the colours from");
+        t.finish();
+        const std::filesystem::path path = std::filesystem::path(rel).is_absolute() ? std::filesystem::path(rel) : base / rel;
+        std::vector<float> px;
+        int channels = 0;
+        std::string error;
+        if (!read_rgb_pixels(path.string(), px, channels, error)) t.fail(pn, "exemplar", error);
+        std::vector<std::pair<float, size_t>> order;  // (luminance, pixel)
+        const size_t npix = px.size() / channels;
+        for (size_t i = 0; i < npix; ++i) {
+            const float* c = px.data() + i * channels;
+            const float y = channels >= 3 ? 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2] : c[0];
+            order.emplace_back(y, i);
+        }
+        std::sort(order.begin(), order.end());
+        for (int b = 0; b < stops; ++b) {
+            const size_t i0 = npix * b / stops, i1 = std::max(i0 + 1, npix * (b + 1) / stops);
+            double sum[3] = {0, 0, 0};
+            for (size_t k = i0; k < i1; ++k)
+                for (int ch = 0; ch < 3; ++ch) sum[ch] += px[order[k].second * channels + (channels >= 3 ? ch : 0)];
+            render::ColorStop cs;
+            cs.t = std::clamp((normal_quantile((b + 0.5) / stops) + 3.0) / 6.0, 0.0, 1.0);
+            cs.r = float(sum[0] / (i1 - i0)), cs.g = float(sum[1] / (i1 - i0)), cs.b = float(sum[2] / (i1 - i0));
+            s.ramp.push_back(cs);
+        }
+    } else if (n) {
         if (auto name = n->value<std::string_view>()) {
             auto it = named_ramps().find(std::string(*name));
             if (it == named_ramps().end()) {
@@ -78,7 +144,7 @@ render::Shading read_shading(std::optional<Reader> r) {
             }
             if (s.ramp.empty()) r->fail(n, "ramp", what);
         } else {
-            r->fail(n, "ramp", "expected a ramp name or a list of stops, found " + type_name(*n));
+            r->fail(n, "ramp", "expected a ramp name, a list of stops or { exemplar = \"path\" }, found " + type_name(*n));
         }
     }
     s.relief = r->number("relief", 0.0, [](double v) { return v >= 0.0; }, "a relief >= 0 (0: flat)");
