@@ -3,7 +3,7 @@
 
 #include "app/commands.h"
 
-#include <tbb/task_arena.h>
+#include <tbb/global_control.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -12,6 +12,7 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <future>
 #include <fstream>
 #include <iostream>
 #include <regex>
@@ -171,12 +172,44 @@ int run_render(const RenderOptions& opt) {
     g_interrupted = false;
     auto previous = std::signal(SIGINT, on_sigint);
     Progress progress(last - first + 1, opt.quiet);
-    render::Frame frame;
+    // Frame f + 1 renders while frame f is shaded and written (two frame buffers): on two
+    // cores the encoder and the renderer overlap instead of taking turns.
+    render::Frame frames[2];
     std::vector<float> rgb;
     long long written = 0, skipped = 0;
-    // --threads maps to a task arena: every parallel loop below runs inside it.
-    tbb::task_arena arena(opt.threads > 0 ? opt.threads : tbb::task_arena::automatic);
-    arena.execute([&] {
+    // --threads caps TBB's workers process-wide (a task arena would serialise the two threads
+    // of the pipeline: an arena admits one outside thread at a time by default).
+    std::unique_ptr<tbb::global_control> cap;
+    if (opt.threads > 0)
+        cap = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                    opt.threads);
+    auto emit = [&](const render::Frame& frame, long long f, const std::string& target) {
+        const double t = (std::llround(out.start_s * out.fps) + f) / out.fps;
+        if (video) {
+            render::shade(frame, mapping, sc.shading, rgb);
+            writer.write_frame(rgb.data());
+            return;
+        }
+        render::Metadata m = meta;
+        m.emplace_back("frame", std::to_string(f));
+        m.emplace_back("time", std::to_string(t));
+        // EXR keeps the raw field; display formats get the shading (grey by default).
+        const bool exr = fs::path(target).extension() == ".exr";
+        if (!exr && colour_shading(sc.shading)) {
+            render::shade(frame, mapping, sc.shading, rgb);
+            render::write_rgb_image(target, out.width, out.height, rgb, m, out.bits == 16);
+        } else {
+            render::write_image(target, frame, mapping, m, out.bits == 16);
+        }
+    };
+    std::future<void> pending;  // the previous frame's output
+    auto finish_pending = [&] {
+        if (!pending.valid()) return;
+        pending.get();  // rethrows an output error
+        ++written;
+        progress.update(written + skipped);
+    };
+    int slot = 0;
     for (long long f = first; f <= last; ++f) {
         if (g_interrupted) break;
         const std::string target = sequence ? expand_pattern(opt.output, f) : opt.output;
@@ -184,28 +217,13 @@ int run_render(const RenderOptions& opt) {
             ++skipped;
             continue;
         }
-        renderer.render(f, frame, eo);
-        const double t = (std::llround(out.start_s * out.fps) + f) / out.fps;
-        if (video) {
-            render::shade(frame, mapping, sc.shading, rgb);
-            writer.write_frame(rgb.data());
-        } else {
-            render::Metadata m = meta;
-            m.emplace_back("frame", std::to_string(f));
-            m.emplace_back("time", std::to_string(t));
-            // EXR keeps the raw field; display formats get the shading (grey by default).
-            const bool exr = fs::path(target).extension() == ".exr";
-            if (!exr && colour_shading(sc.shading)) {
-                render::shade(frame, mapping, sc.shading, rgb);
-                render::write_rgb_image(target, out.width, out.height, rgb, m, out.bits == 16);
-            } else {
-                render::write_image(target, frame, mapping, m, out.bits == 16);
-            }
-        }
-        ++written;
-        progress.update(written + skipped);
+        renderer.render(f, frames[slot], eo);
+        finish_pending();
+        pending = std::async(std::launch::async,
+                             [&, s = slot, f, target] { emit(frames[s], f, target); });
+        slot ^= 1;
     }
-    });
+    finish_pending();
     progress.done();
     std::signal(SIGINT, previous);
     if (video) writer.close();  // on interruption too: what was encoded stays playable

@@ -5,6 +5,7 @@
 // beside the target, which close() renames into place. Reading: decode every frame, for
 // probing and for luma analysis.
 
+#include <tbb/parallel_for.h>
 #include <unistd.h>
 
 #include <array>
@@ -514,7 +515,8 @@ void VideoWriter::write_frame(const float* rgb) {
     if (!is_open()) throw ValueError("write_frame: video writer is not open");
     Impl& m = *m_impl;
     const int row_values = m.width * 3;
-    for (int y = 0; y < m.height; ++y) {
+    // Quantise rows in parallel (independent rows: the bytes do not depend on the split).
+    tbb::parallel_for(0, m.height, [&](int y) {
         const float* src = rgb + static_cast<size_t>(y) * row_values;
         uint8_t* row = m.rgb.get() + static_cast<size_t>(y) * m.rgb_stride;
         if (m.deep) {
@@ -527,7 +529,7 @@ void VideoWriter::write_frame(const float* rgb) {
                 row[i] = static_cast<uint8_t>(clamp01(src[i]) * 255.0f + 0.5f);
             }
         }
-    }
+    });
 
     // The encoder may still hold a reference to the previous frame's buffers (x264 lookahead):
     // make_writable copies only in that case.
