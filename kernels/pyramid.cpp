@@ -61,7 +61,8 @@ double radial_low_pass_at(const Kernel& base, double s, double r) {
     const double a = std::max(0.0, r - 8.0 * s), b = std::min(R, r + 8.0 * s);
     if (!(a < b)) return 0.0;
     // Panels no wider than s/2 (the Gaussian) nor R/16 (the kernel's own shape; 16-point rule).
-    const int panels = std::max(1, static_cast<int>(std::ceil((b - a) / std::min(0.5 * s, R / 16.0))));
+    const int panels =
+        std::max(1, static_cast<int>(std::ceil((b - a) / std::min(0.5 * s, R / 16.0))));
     const double inv_s2 = 1.0 / (s * s);
     return detail::integrate(
         [&](double p) {
@@ -107,7 +108,8 @@ Kernel grid_low_pass(const Kernel& base, double s) {
     const double db = R / mb;
     const int nb = 2 * mb + 1;
     const std::vector<double> h = sample_grid(k0, mb);
-    const int ml = std::clamp(static_cast<int>(std::ceil(Rl / std::max(db, s / 6.0))), 8, kMaxGridHalf);
+    const int ml =
+        std::clamp(static_cast<int>(std::ceil(Rl / std::max(db, s / 6.0))), 8, kMaxGridHalf);
     const double dl = Rl / ml;
     const int nl = 2 * ml + 1;
     // Weights: the Gaussian sampled at the input nodes, normalised by its sum over the whole
@@ -289,7 +291,8 @@ KernelPyramid::KernelPyramid(const Kernel& base, const PyramidParams& params) {
         throw ValueError("pyramid: min_sd_fraction must be in (0, 1)");
     if (params.max_levels < 2) throw ValueError("pyramid: max_levels must be >= 2");
     m_radial = is_radial(base);
-    const double s0 = params.sigma0 > 0.0 ? params.sigma0 : derive_sigma0(base, params.level0_tolerance);
+    const double s0 =
+        params.sigma0 > 0.0 ? params.sigma0 : derive_sigma0(base, params.level0_tolerance);
     const double v0 = base.integral_sq();
     m_levels.push_back(base);
     m_sigma.push_back(s0);

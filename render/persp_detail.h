@@ -12,14 +12,14 @@ namespace impulse::render::detail {
 
 /// One pyramid level as the loops see it.
 struct PerspLevel {
-    float radius = 1, inv_r2 = 1;          ///< support R_l and 1 / R_l^2
-    const float* table = nullptr;          ///< radial: h_l at q = r^2 / R_l^2, linear
+    float radius = 1, inv_r2 = 1;  ///< support R_l and 1 / R_l^2
+    const float* table = nullptr;  ///< radial: h_l at q = r^2 / R_l^2, linear
     int table_n = 0;
-    const float* line_p = nullptr;         ///< radial: line mass P and chord variance q at
-    const float* line_q = nullptr;         ///< t = v^2 / R_l^2, linear; and the chord's
-    const float* line_k4 = nullptr;        ///< fourth cumulant (Edgeworth correction)
+    const float* line_p = nullptr;   ///< radial: line mass P and chord variance q at
+    const float* line_q = nullptr;   ///< t = v^2 / R_l^2, linear; and the chord's
+    const float* line_k4 = nullptr;  ///< fourth cumulant (Edgeworth correction)
     int line_n = 0;
-    const float* grid = nullptr;           ///< grid levels: n x n over [-R_l, R_l]^2, bilinear
+    const float* grid = nullptr;  ///< grid levels: n x n over [-R_l, R_l]^2, bilinear
     int grid_n = 0;
 };
 
@@ -32,30 +32,30 @@ enum PerspMode : uint8_t { kPerspSingle = 0, kPerspProbes = 1, kPerspLine = 2 };
 
 /// One probe of an impulse: its offset from the impulse, weight and clipped image box.
 struct PerspProbe {
-    float dx = 0, dy = 0;   ///< offset along the major axis, texture units
-    float w = 0;            ///< impulse weight * fade * Gaussian probe weight
+    float dx = 0, dy = 0;                  ///< offset along the major axis, texture units
+    float w = 0;                           ///< impulse weight * fade * Gaussian probe weight
     int x0 = 0, y0 = 0, x1 = -1, y1 = -1;  ///< pixels touched (inclusive), clipped to the image
 };
 
 /// An impulse prepared for the loops.
 struct PerspItem {
-    float px = 0, py = 0;   ///< texture position relative to the origin
-    float sx = 0, sy = 0;   ///< image position
-    float w = 0;            ///< weight * fade (single, line)
-    float cs = 1, sn = 0;   ///< cos, sin of the total orientation (grid kernels)
-    float a = 0;            ///< weight of level hi in the blend
-    int16_t lo = 0, hi = 0; ///< levels
+    float px = 0, py = 0;    ///< texture position relative to the origin
+    float sx = 0, sy = 0;    ///< image position
+    float w = 0;             ///< weight * fade (single, line)
+    float cs = 1, sn = 0;    ///< cos, sin of the total orientation (grid kernels)
+    float a = 0;             ///< weight of level hi in the blend
+    int16_t lo = 0, hi = 0;  ///< levels
     uint8_t mode = kPerspSingle;
-    float ix = 0, iy = 1;   ///< line: image direction of the footprint's major axis
-    float inv_smaj = 1;     ///< line: 1 / s_major (pixels per texture unit along the major axis)
-    float smin = 1;         ///< line: s_minor (texture units per pixel across)
+    float ix = 0, iy = 1;  ///< line: image direction of the footprint's major axis
+    float inv_smaj = 1;    ///< line: 1 / s_major (pixels per texture unit along the major axis)
+    float smin = 1;        ///< line: s_minor (texture units per pixel across)
     /// line: half the second derivative of the image position along the axis per texture unit
     /// moved along it (pixels / unit^2): the chord's image centroid sits at curv * q(v).
     float curv = 0;
     /// line: d ln(s_minor) / d(image offset along the axis): the keystone (nearer is wider).
     float keystone = 0;
     float var_lo = 0, var_hi = 0;  ///< line: extra blur along the major axis, pixels^2, per level
-    uint32_t probe0 = 0, nprobe = 0;  ///< probes: range in the probe array
+    uint32_t probe0 = 0, nprobe = 0;       ///< probes: range in the probe array
     int x0 = 0, y0 = 0, x1 = -1, y1 = -1;  ///< pixels touched (inclusive), clipped to the image
 };
 

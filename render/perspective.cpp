@@ -22,14 +22,16 @@ namespace {
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kDeg = kPi / 180.0;
-constexpr float kFar = 1e18f;          // texture coordinate of pixels that miss the plane
-constexpr int kMaxProbeHalf = 8;       // at most 2 * 8 + 1 probes per impulse
+constexpr float kFar = 1e18f;     // texture coordinate of pixels that miss the plane
+constexpr int kMaxProbeHalf = 8;  // at most 2 * 8 + 1 probes per impulse
 // The line form is used once the blur along the major axis reaches this fraction of the level's
 // support radius (empirical: against supersampled references of a cosine kernel the line form
 // is within 1-3 % of a single impulse's filtered kernel from there on, better than probes,
 // whose texture-space Gaussian ignores the perspective bend of the footprint).
 constexpr double kLineFrom = 0.25;
 
+/// The pixel filter's standard deviation in (possibly supersampled) pixels.
+double filter_sigma_px(const AntiAlias& aa) { return aa.filter_px * aa.footprint_scale; }
 
 bool cpu_has_avx2() {
     static const bool has = __builtin_cpu_supports("avx2");
@@ -53,11 +55,14 @@ struct Plan {
 };
 
 /// Variance of the Gaussian blur level l actually carries (level 0, the kernel itself, none).
-double blur2(const kernels::KernelPyramid& pyr, int l) { return l == 0 ? 0.0 : pyr.sigma(l) * pyr.sigma(l); }
+double blur2(const kernels::KernelPyramid& pyr, int l) {
+    return l == 0 ? 0.0 : pyr.sigma(l) * pyr.sigma(l);
+}
 
-Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_major, double s_minor) {
+Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_major,
+              double s_minor) {
     Plan p;
-    const double c = aa.filter_px * aa.footprint_scale;
+    const double c = filter_sigma_px(aa);
     const double sM = c * s_major, sm = c * s_minor;
     // The cut-off holds for unfiltered renders too (enabled = false): it bounds the work.
     p.fade = aa.fade ? fade_weight(pyr.sd_fraction(sM), aa.cutoff) : 1.0;
@@ -78,8 +83,8 @@ Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_m
     double spacing = pyr.probe_spacing(p.blend.lo);
     double se = std::sqrt(std::max(0.0, sM * sM - si * si));
     if (3.0 * se < spacing) return single(sM);  // sM <= 1.2 si: anisotropy below notice
-    const bool line_ok = pyr.radial() && pyr.tables(p.blend.lo).nonnegative &&
-                         pyr.tables(p.blend.hi).nonnegative;
+    const bool line_ok =
+        pyr.radial() && pyr.tables(p.blend.lo).nonnegative && pyr.tables(p.blend.hi).nonnegative;
     int m = static_cast<int>(std::ceil(3.0 * se / spacing));
     if (line_ok && (se >= kLineFrom * pyr.radius(p.blend.lo) || m > kMaxProbeHalf)) {
         p.mode = detail::kPerspLine;
@@ -103,8 +108,10 @@ Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_m
         m = std::min(kMaxProbeHalf, static_cast<int>(std::ceil(3.0 * se / spacing)));
     }
     // Probes add what the blended levels do not carry along the axis.
-    const double carried = (1.0 - p.blend.weight) * blur2(pyr, p.blend.lo) + p.blend.weight * blur2(pyr, p.blend.hi);
+    const double carried =
+        (1.0 - p.blend.weight) * blur2(pyr, p.blend.lo) + p.blend.weight * blur2(pyr, p.blend.hi);
     se = std::sqrt(std::max(0.0, sM * sM - carried));
+    m = std::clamp(static_cast<int>(std::ceil(3.0 * se / spacing)), 1, kMaxProbeHalf);
     p.mode = detail::kPerspProbes;
     p.m = m;
     p.sigma_e = se;
@@ -161,12 +168,12 @@ double fade_weight(double sd, double cutoff) {
 
 double filtered_fade(const kernels::KernelPyramid& pyr, const View& view, const AntiAlias& aa) {
     if (!aa.enabled || !aa.fade) return 1.0;
-    return fade_weight(pyr.sd_fraction(aa.filter_px * aa.footprint_scale * view.scale), aa.cutoff);
+    return fade_weight(pyr.sd_fraction(filter_sigma_px(aa) * view.scale), aa.cutoff);
 }
 
 double filtered_support(const kernels::KernelPyramid& pyr, const View& view, const AntiAlias& aa) {
     if (!aa.enabled) return pyr.radius(0);
-    const auto b = pyr.select(aa.filter_px * aa.footprint_scale * view.scale, aa.blend);
+    const auto b = pyr.select(filter_sigma_px(aa) * view.scale, aa.blend);
     return pyr.radius(std::max(b.lo, b.hi));
 }
 
@@ -177,7 +184,7 @@ void accumulate_filtered(const kernels::KernelPyramid& pyr, const sim::Impulses&
     if (!aa.enabled) return accumulate(pyr.base(), impulses, view, out, options);
     const double fade = filtered_fade(pyr, view, aa);
     if (!(fade > 0.0)) return;
-    const auto b = pyr.select(aa.filter_px * aa.footprint_scale * view.scale, aa.blend);
+    const auto b = pyr.select(filter_sigma_px(aa) * view.scale, aa.blend);
     const bool two = b.lo != b.hi && b.weight > 0.0;
     if (!two && fade == 1.0) return accumulate(pyr.level(b.lo), impulses, view, out, options);
     // Two passes in a fixed order (every pixel: all of level lo, then all of level hi).
@@ -208,12 +215,18 @@ PerspectiveCamera PerspectiveCamera::window(int x0, int y0, int w, int h, int sa
 }
 
 PerspectiveView::PerspectiveView(const PerspectiveCamera& cam) : m_cam(cam) {
-    auto num = [](double v) { std::ostringstream s; s << v; return s.str(); };
+    auto num = [](double v) {
+        std::ostringstream s;
+        s << v;
+        return s.str();
+    };
     require(cam.width >= 1 && cam.height >= 1, "perspective camera: image size must be >= 1x1");
     require(std::isfinite(cam.altitude) && cam.altitude > 0.0,
-            "height = " + num(cam.altitude) + ": expected a height > 0 above the plane (texture units)");
-    require(std::isfinite(cam.fov_deg) && cam.fov_deg > 0.0 && cam.fov_deg < 180.0,
-            "fov = " + num(cam.fov_deg) + ": expected a vertical field of view in (0, 180) degrees");
+            "height = " + num(cam.altitude) +
+                ": expected a height > 0 above the plane (texture units)");
+    require(
+        std::isfinite(cam.fov_deg) && cam.fov_deg > 0.0 && cam.fov_deg < 180.0,
+        "fov = " + num(cam.fov_deg) + ": expected a vertical field of view in (0, 180) degrees");
     require(std::isfinite(cam.pitch_deg) && cam.pitch_deg >= -90.0 && cam.pitch_deg <= 90.0,
             "pitch = " + num(cam.pitch_deg) + ": expected an angle in [-90, 90] degrees");
     require(std::isfinite(cam.heading_deg) && std::isfinite(cam.x) && std::isfinite(cam.y),
@@ -235,8 +248,9 @@ PerspectiveView::PerspectiveView(const PerspectiveCamera& cam) : m_cam(cam) {
     if (!(s * dz < 0.0)) {
         std::ostringstream m;
         m << "pitch = " << cam.pitch_deg << ": the camera sees no part of the "
-          << (cam.plane == Plane::Ground ? "ground" : "sky") << " plane (expected pitch > -fov/2 = "
-          << -0.5 * cam.fov_deg << " degrees, so the plane enters the frame)";
+          << (cam.plane == Plane::Ground ? "ground" : "sky")
+          << " plane (expected pitch > -fov/2 = " << -0.5 * cam.fov_deg
+          << " degrees, so the plane enters the frame)";
         throw ValueError(m.str());
     }
 }
@@ -362,7 +376,8 @@ bool project_box(const PerspectiveView& view, const std::array<std::array<double
         }
         xa = std::min(xa, px), xb = std::max(xb, px), ya = std::min(ya, py), yb = std::max(yb, py);
     }
-    xa = std::max(xa, -1e12), ya = std::max(ya, -1e12), xb = std::min(xb, 1e12), yb = std::min(yb, 1e12);
+    xa = std::max(xa, -1e12), ya = std::max(ya, -1e12), xb = std::min(xb, 1e12),
+    yb = std::min(yb, 1e12);
     return true;
 }
 
@@ -386,7 +401,8 @@ std::vector<detail::PerspLevel> loop_levels(const kernels::KernelPyramid& pyr) {
         if (pyr.radial()) {
             const auto& t = pyr.tables(l);
             L.table = t.table.data(), L.table_n = static_cast<int>(t.table.size());
-            L.line_p = t.line_mass.data(), L.line_q = t.line_var.data(), L.line_k4 = t.line_k4.data();
+            L.line_p = t.line_mass.data(), L.line_q = t.line_var.data(),
+            L.line_k4 = t.line_k4.data();
             L.line_n = static_cast<int>(t.line_mass.size());
         } else {
             L.grid = pyr.grid(l).data(), L.grid_n = pyr.grid_n(l);
@@ -423,7 +439,8 @@ sim::Box perspective_region(const kernels::KernelPyramid& pyr, const Perspective
             keep[size_t(k)] = p.keep;
             // The line form's long axis points along the depth, where the neighbouring rows
             // are: only its across extent widens the region.
-            ext[size_t(k)] = 1.25 * (p.mode == detail::kPerspLine ? p.across : std::max(p.along, p.across));
+            ext[size_t(k)] =
+                1.25 * (p.mode == detail::kPerspLine ? p.across : std::max(p.along, p.across));
         }
         RowBox b;
         for (int k = 0; k <= kSamples; ++k) {
@@ -469,15 +486,19 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
     std::vector<detail::PerspItem> items(n);
     std::vector<uint8_t> live(n, 0);
     std::vector<std::vector<detail::PerspProbe>> chunk_probes(chunks);
-    std::vector<std::array<size_t, 4>> chunk_counts(chunks);
+    std::vector<std::array<size_t, 5>> chunk_counts(chunks);
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
         auto& probes = chunk_probes[c];
         auto& counts = chunk_counts[c];
-        counts = {0, 0, 0, 0};
+        counts = {0, 0, 0, 0, 0};
+        auto area = [](int x0, int y0, int x1, int y1) {
+            return x1 >= x0 && y1 >= y0 ? size_t(x1 - x0 + 1) * size_t(y1 - y0 + 1) : size_t(0);
+        };
         std::array<double, 2 * kMaxProbeHalf + 1> t{}, w{};
         for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
             const double x = imp.x[i], y = imp.y[i];
-            if (aa.max_distance > 0.0 && std::hypot(x - cam.x, y - cam.y) > aa.max_distance) continue;
+            if (aa.max_distance > 0.0 && std::hypot(x - cam.x, y - cam.y) > aa.max_distance)
+                continue;
             if (!(view.depth(x, y) > 0.0)) continue;
             const auto f = view.footprint(x, y);
             const Plan p = plan_for(pyr, aa, f.s_major, f.s_minor);
@@ -525,7 +546,8 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
                 // chord variance at most R^2/3); across: the projected support.
                 const double R = p.across;
                 const double sd = std::sqrt((std::max(p.var_lo, p.var_hi) + R * R / 3.0) * ism2);
-                const double ax = 4.0 * sd * std::abs(f.ix) + 1.0, ay = 4.0 * sd * std::abs(f.iy) + 1.0;
+                const double ax = 4.0 * sd * std::abs(f.ix) + 1.0,
+                             ay = 4.0 * sd * std::abs(f.iy) + 1.0;
                 double xa = sx, xb = sx, ya = sy, yb = sy;
                 for (double sgn : {-1.0, 1.0}) {
                     double qx, qy;
@@ -548,10 +570,12 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
                     const double ox = t[size_t(j)] * f.ex, oy = t[size_t(j)] * f.ey;
                     pr.dx = static_cast<float>(ox), pr.dy = static_cast<float>(oy);
                     pr.w = static_cast<float>(static_cast<double>(it.w) * w[size_t(j)]);
-                    if (!square_box(view, x + ox, y + oy, p.across, W, H, pr.x0, pr.y0, pr.x1, pr.y1))
+                    if (!square_box(view, x + ox, y + oy, p.across, W, H, pr.x0, pr.y0, pr.x1,
+                                    pr.y1))
                         continue;
                     it.x0 = std::min(it.x0, pr.x0), it.y0 = std::min(it.y0, pr.y0);
                     it.x1 = std::max(it.x1, pr.x1), it.y1 = std::max(it.y1, pr.y1);
+                    counts[4] += area(pr.x0, pr.y0, pr.x1, pr.y1);
                     probes.push_back(pr);
                 }
                 it.nprobe = static_cast<uint32_t>(probes.size()) - it.probe0;
@@ -560,6 +584,8 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
                 counts[3] += it.nprobe;
             }
             live[i] = any ? 1 : 0;
+            if (any && p.mode != detail::kPerspProbes)
+                counts[4] += area(it.x0, it.y0, it.x1, it.y1);
         }
     });
     std::vector<detail::PerspProbe> probes;
@@ -579,7 +605,9 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
         *stats = {};
         stats->impulses = n;
         for (const auto& c : chunk_counts) {
-            stats->single += c[0], stats->probes += c[1], stats->line += c[2], stats->probe_count += c[3];
+            stats->single += c[0], stats->probes += c[1], stats->line += c[2],
+                stats->probe_count += c[3];
+            stats->pixels += c[4];
         }
         size_t kept = 0;
         for (uint8_t l : live) kept += l;
@@ -603,7 +631,8 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
         if (!live[i]) continue;
         const auto& it = items[i];
         for (int b = it.y0 / T; b <= it.y1 / T; ++b)
-            for (int a = it.x0 / T; a <= it.x1 / T; ++a) bins[fill[size_t(b) * ntx + a]++] = uint32_t(i);
+            for (int a = it.x0 / T; a <= it.x1 / T; ++a)
+                bins[fill[size_t(b) * ntx + a]++] = uint32_t(i);
     }
 
     const bool avx2 = options.use_avx2 && cpu_has_avx2();

@@ -42,13 +42,13 @@ namespace impulse::render {
 
 /// Anti-aliasing options (scene keys camera.antialias, filter, cutoff, anisotropic).
 struct AntiAlias {
-    bool enabled = true;        ///< false: the unfiltered kernel everywhere ("off"; the
-                                ///< perspective cut-off still applies unless `fade` is false)
-    bool blend = true;          ///< false: nearest level instead of blending two ("nearest")
-    bool anisotropic = true;    ///< false: isotropic levels from the major axis only
-    double filter_px = 0.5;     ///< pixel filter standard deviation in pixels, > 0
-    double cutoff = 0.01;       ///< fade out where the remaining sd < cutoff * unfiltered sd, (0, 1)
-    bool fade = true;           ///< false: no fade and no cut-off (test references only)
+    bool enabled = true;      ///< false: the unfiltered kernel everywhere ("off"; the
+                              ///< perspective cut-off still applies unless `fade` is false)
+    bool blend = true;        ///< false: nearest level instead of blending two ("nearest")
+    bool anisotropic = true;  ///< false: isotropic levels from the major axis only
+    double filter_px = 0.5;   ///< pixel filter: a Gaussian of this sd in pixels, > 0
+    double cutoff = 0.01;     ///< fade out where the remaining sd < cutoff * unfiltered sd, (0, 1)
+    bool fade = true;         ///< false: no fade and no cut-off (test references only)
     /// > 0: drop impulses farther than this from the camera's foot on the plane, in texture units
     /// (bounds unfiltered reference renders, which have no cut-off).
     double max_distance = 0.0;
@@ -91,12 +91,12 @@ enum class Plane { Ground, Sky };
 /// Pitch: angle of the view axis below the horizon (ground) or above it (sky); 90 looks
 /// straight down (up) and shows the plane like the orthographic view.
 struct PerspectiveCamera {
-    int width = 0, height = 0;       ///< image size in pixels
-    double x = 0.0, y = 0.0;         ///< the camera's foot on the plane, texture units
-    double altitude = 100.0;         ///< distance from the plane, texture units, > 0
-    double pitch_deg = 20.0;         ///< in [-90, 90]
+    int width = 0, height = 0;  ///< image size in pixels
+    double x = 0.0, y = 0.0;    ///< the camera's foot on the plane, texture units
+    double altitude = 100.0;    ///< distance from the plane, texture units, > 0
+    double pitch_deg = 20.0;    ///< in [-90, 90]
     double heading_deg = 0.0;
-    double fov_deg = 60.0;           ///< vertical field of view, in (0, 180)
+    double fov_deg = 60.0;  ///< vertical field of view, in (0, 180)
     Plane plane = Plane::Ground;
     /// Internal: focal length and principal point in pixels (0 / NaN: from fov and the image
     /// centre). Set by `window` for supersampling and strips.
@@ -139,8 +139,8 @@ public:
 private:
     PerspectiveCamera m_cam;
     double m_f = 0, m_cx = 0, m_cy = 0;
-    double m_z = 0;                  // eye height above the plane along the plane normal sign
-    double m_F[3], m_R[3], m_U[3];   // forward, right, up (image up) unit vectors
+    double m_z = 0;                 // eye height above the plane along the plane normal sign
+    double m_F[3], m_R[3], m_U[3];  // forward, right, up (image up) unit vectors
 };
 
 /// Texture coordinates of the pixel centres of a view, relative to an origin (so floats stay
@@ -163,10 +163,11 @@ sim::Box perspective_region(const kernels::KernelPyramid& pyramid, const Perspec
 
 /// Counts of the last perspective evaluation (for benchmarks and tests).
 struct PerspectiveStats {
-    size_t impulses = 0;        ///< impulses given
-    size_t culled = 0;          ///< faded out, behind the camera, beyond max_distance or off-image
+    size_t impulses = 0;  ///< impulses given
+    size_t culled = 0;    ///< faded out, behind the camera, beyond max_distance or off-image
     size_t single = 0, probes = 0, line = 0;  ///< impulses per filter form
-    size_t probe_count = 0;     ///< probes evaluated
+    size_t probe_count = 0;                   ///< probes evaluated
+    size_t pixels = 0;  ///< pixel evaluations (sum of the impulses' and probes' boxes)
 };
 
 /// Adds sum_k w_k h_k(X(p) - x_k) to `out` (resized to the view, not cleared) for every pixel p

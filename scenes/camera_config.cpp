@@ -29,10 +29,13 @@ render::PerspectiveCamera CameraConfig::perspective(int width, int height, doubl
 
 bool CameraConfig::antialiased() const {
     switch (antialias) {
-        case AntiAliasMode::Off: return false;
+        case AntiAliasMode::Off:
+            return false;
         case AntiAliasMode::Blend:
-        case AntiAliasMode::Nearest: return true;
-        case AntiAliasMode::Auto: break;
+        case AntiAliasMode::Nearest:
+            return true;
+        case AntiAliasMode::Auto:
+            break;
     }
     if (type == Type::Perspective) return true;
     for (const auto& k : zoom.keys)
@@ -80,7 +83,7 @@ std::vector<double> check_times(const std::vector<const sim::Keyframed*>& ks) {
 void read_camera_view(Reader& r, CameraConfig& c, int width, int height) {
     const std::array<std::string_view, 2> types = {"orthographic", "perspective"};
     c.type = r.choice("type", types, 0) == 1 ? CameraConfig::Type::Perspective
-                                              : CameraConfig::Type::Orthographic;
+                                             : CameraConfig::Type::Orthographic;
     const bool persp = c.type == CameraConfig::Type::Perspective;
     static const char* kPerspKeys[] = {"position", "position_x", "position_y", "height",
                                        "pitch",    "heading",    "fov",        "plane"};
@@ -104,13 +107,15 @@ void read_camera_view(Reader& r, CameraConfig& c, int width, int height) {
         }
         if (r.has("position_x")) c.position_x = r.keyframed("position_x", width / 2.0);
         if (r.has("position_y")) c.position_y = r.keyframed("position_y", height / 2.0);
-        c.altitude = r.keyframed("height", 100.0, kPositive,
-                               "a height > 0 above the plane (texture units)");
-        c.pitch = r.keyframed("pitch", 20.0, [](double v) { return v >= -90.0 && v <= 90.0; },
-                              "an angle in [-90, 90] degrees below the horizon (above it for the sky)");
+        c.altitude =
+            r.keyframed("height", 100.0, kPositive, "a height > 0 above the plane (texture units)");
+        c.pitch = r.keyframed(
+            "pitch", 20.0, [](double v) { return v >= -90.0 && v <= 90.0; },
+            "an angle in [-90, 90] degrees below the horizon (above it for the sky)");
         c.heading = r.keyframed("heading", 0.0);
-        c.fov = r.keyframed("fov", 60.0, [](double v) { return v > 0.0 && v < 180.0; },
-                            "a vertical field of view in (0, 180) degrees");
+        c.fov = r.keyframed(
+            "fov", 60.0, [](double v) { return v > 0.0 && v < 180.0; },
+            "a vertical field of view in (0, 180) degrees");
         const std::array<std::string_view, 2> planes = {"ground", "sky"};
         c.plane = r.choice("plane", planes, 0) == 1 ? render::Plane::Sky : render::Plane::Ground;
         // The camera must see some of the plane at every time.
@@ -123,8 +128,8 @@ void read_camera_view(Reader& r, CameraConfig& c, int width, int height) {
                 m << "the camera sees no part of the "
                   << (c.plane == render::Plane::Ground ? "ground" : "sky") << " plane";
                 if (!c.pitch.is_constant() || !c.fov.is_constant()) m << " at t = " << t << " s";
-                m << " (pitch " << num(p) << ", fov " << num(f) << "): expected pitch > -fov/2 = "
-                  << num(-0.5 * f) << " degrees "
+                m << " (pitch " << num(p) << ", fov " << num(f)
+                  << "): expected pitch > -fov/2 = " << num(-0.5 * f) << " degrees "
                   << (c.plane == render::Plane::Ground ? "below" : "above") << " the horizon";
                 r.fail(r.node("pitch") ? r.node("pitch") : r.node("fov"), "pitch", m.str());
             }
@@ -132,10 +137,12 @@ void read_camera_view(Reader& r, CameraConfig& c, int width, int height) {
     }
     const std::array<std::string_view, 4> modes = {"auto", "blend", "nearest", "off"};
     c.antialias = static_cast<CameraConfig::AntiAliasMode>(r.choice("antialias", modes, 0));
-    c.filter = r.number("filter", 0.5, [](double v) { return v > 0.0 && v <= 8.0; },
-                        "a pixel filter standard deviation in (0, 8] pixels");
-    c.cutoff = r.number("cutoff", 0.01, [](double v) { return v > 0.0 && v <= 0.5; },
-                        "a fraction in (0, 0.5] of the texture's standard deviation");
+    c.filter = r.number(
+        "filter", 0.5, [](double v) { return v > 0.0 && v <= 8.0; },
+        "a pixel filter standard deviation in (0, 8] pixels");
+    c.cutoff = r.number(
+        "cutoff", 0.01, [](double v) { return v > 0.0 && v <= 0.5; },
+        "a fraction in (0, 0.5] of the texture's standard deviation");
     c.anisotropic = r.boolean("anisotropic", true);
 }
 
@@ -153,8 +160,8 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
         "center = [x, y] }";
     if (!n->is_table()) layer.fail(n, "orientation", std::string("expected ") + kExpected);
     Reader f = *layer.table("orientation");
-    const std::array<std::string_view, 10> types = {"constant", "radial", "circular", "polyline",
-                                                    "sine",     "image",  "fixed",    "random",
+    const std::array<std::string_view, 10> types = {"constant", "radial",   "circular", "polyline",
+                                                    "sine",     "image",    "fixed",    "random",
                                                     "flow",     "vorticity"};
     if (!f.has("type"))
         f.fail(nullptr, "type",
@@ -202,18 +209,21 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
                     f.fail(pn, "points", kPoints);
                 const std::array<double, 2> v{(*q)[0].value<double>().value_or(0),
                                               (*q)[1].value<double>().value_or(0)};
-                if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || (!pts.empty() && pts.back() == v))
+                if (!std::isfinite(v[0]) || !std::isfinite(v[1]) ||
+                    (!pts.empty() && pts.back() == v))
                     f.fail(pn, "points", kPoints);
                 pts.push_back(v);
             }
-            const double smooth = f.number("smooth", 0.0, [](double v) { return v >= 0.0; },
-                                           "a distance >= 0 in texture units (0: nearest segment)");
+            const double smooth = f.number(
+                "smooth", 0.0, [](double v) { return v >= 0.0; },
+                "a distance >= 0 in texture units (0: nearest segment)");
             field = sim::make_polyline_orientation(std::move(pts), smooth);
             break;
         }
         case 4: {  // sine
             const double amp = f.number("amplitude", 16.0);
-            const double wl = f.number("wavelength", 128.0, kPositive, "a wavelength > 0 (texture units)");
+            const double wl =
+                f.number("wavelength", 128.0, kPositive, "a wavelength > 0 (texture units)");
             const double phase = f.number("phase", 0.0);
             const double angle = f.number("angle", 0.0);
             double ox = 0.0, oy = 0.0;
@@ -225,8 +235,9 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
             const toml::node* pn = f.node("path");
             const std::string rel = f.string("path", "");
             if (rel.empty())
-                f.fail(pn, "path", "expected the path of an orientation image (1 channel: angle in "
-                                   "radians; 2 channels: direction x, y)");
+                f.fail(pn, "path",
+                       "expected the path of an orientation image (1 channel: angle in "
+                       "radians; 2 channels: direction x, y)");
             const fs::path path = fs::path(rel).is_absolute() ? fs::path(rel) : base / rel;
             auto in = OIIO::ImageInput::open(path.string());
             if (!in) {
@@ -236,8 +247,10 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
             }
             const auto& spec = in->spec();
             if (spec.nchannels != 1 && spec.nchannels != 2)
-                f.fail(pn, "path", "expected an image with 1 channel (angle in radians) or 2 "
-                                   "(direction x, y), found " + std::to_string(spec.nchannels));
+                f.fail(pn, "path",
+                       "expected an image with 1 channel (angle in radians) or 2 "
+                       "(direction x, y), found " +
+                           std::to_string(spec.nchannels));
             sim::OrientationGrid g;
             g.width = spec.width, g.height = spec.height, g.channels = spec.nchannels;
             g.values.resize(size_t(g.width) * g.height * g.channels);
@@ -249,10 +262,10 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
             // Integer images store [0, 1]: an angle channel spans [0, pi] (an orientation), a
             // direction map [-1, 1] (grey is no direction, as for the image flow).
             if (spec.format != OIIO::TypeDesc::FLOAT && spec.format != OIIO::TypeDesc::HALF)
-                for (float& v : g.values)
-                    v = g.channels == 1 ? v * 3.14159265f : 2.0f * v - 1.0f;
+                for (float& v : g.values) v = g.channels == 1 ? v * 3.14159265f : 2.0f * v - 1.0f;
             g.spacing = f.number("spacing", 1.0, kPositive, "texture units per image pixel, > 0");
-            if (auto o = f.pair("origin", "[x, y] in texture units")) g.origin_x = (*o)[0], g.origin_y = (*o)[1];
+            if (auto o = f.pair("origin", "[x, y] in texture units"))
+                g.origin_x = (*o)[0], g.origin_y = (*o)[1];
             field = sim::make_grid_orientation(std::move(g));
             break;
         }
@@ -264,8 +277,9 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
     }
     p.orientation = sim::OrientationMode::Field;
     p.orientation_field = std::move(field);
-    p.orientation_jitter = f.number("jitter", 0.0, [](double v) { return v >= 0.0; },
-                                    "an angle >= 0 in radians (uniform random offset per impulse)");
+    p.orientation_jitter = f.number(
+        "jitter", 0.0, [](double v) { return v >= 0.0; },
+        "an angle >= 0 in radians (uniform random offset per impulse)");
     f.finish();
 }
 

@@ -21,7 +21,8 @@ void read_camera_view(Reader& r, CameraConfig& c, int width, int height);
 /// layer.orientation: a mode name ("fixed", "random", "flow", "vorticity") or a field table
 /// { type = "constant" | "radial" | "circular" | "polyline" | "sine" | "image", ... }.
 /// Images are read here (OpenImageIO) relative to `base`.
-void read_orientation(Reader& layer, sim::ProcessConfig& process, const std::filesystem::path& base);
+void read_orientation(Reader& layer, sim::ProcessConfig& process,
+                      const std::filesystem::path& base);
 
 /// Per-layer kernel pyramids and the per-frame perspective geometry, used by Renderer::render.
 class CameraPipeline {
@@ -34,8 +35,8 @@ public:
     /// view; its box when nothing applies). Empty when the layer is faded to its mean.
     sim::Box box(size_t layer, const render::View& view, double t_s);
     /// Adds the layer's impulses to `out` (frame size) as the camera sees them at time t_s.
-    void accumulate(size_t layer, const sim::Impulses& impulses, const render::View& view, double t_s,
-                    render::Frame& out, const render::EvalOptions& options);
+    void accumulate(size_t layer, const sim::Impulses& impulses, const render::View& view,
+                    double t_s, render::Frame& out, const render::EvalOptions& options);
     /// The largest box over the camera's keys (for budget estimates); `view0`: the orthographic
     /// view at its widest.
     sim::Box estimate_box(size_t layer, const render::View& view0) const;

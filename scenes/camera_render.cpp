@@ -19,7 +19,8 @@ CameraPipeline::CameraPipeline(const Scene& scene, const std::vector<kernels::Ke
     kernels::PyramidParams pp;
     // Levels below a quarter of the cut-off are never drawn (faded out).
     pp.min_sd_fraction = std::min(1e-3, 0.25 * m_aa.cutoff);
-    for (const auto& k : kernels) m_pyramids.push_back(std::make_unique<kernels::KernelPyramid>(k, pp));
+    for (const auto& k : kernels)
+        m_pyramids.push_back(std::make_unique<kernels::KernelPyramid>(k, pp));
 }
 
 CameraPipeline::~CameraPipeline() = default;
@@ -31,7 +32,8 @@ const kernels::KernelPyramid* CameraPipeline::pyramid(size_t layer) const {
 void CameraPipeline::prepare(double t) {
     if (m_t && *m_t == t) return;
     const auto& o = m_scene->output;
-    m_view = std::make_unique<render::PerspectiveView>(m_scene->camera.perspective(o.width, o.height, t));
+    m_view = std::make_unique<render::PerspectiveView>(
+        m_scene->camera.perspective(o.width, o.height, t));
     m_coords = render::pixel_coords(*m_view);
     m_t = t;
 }
@@ -53,11 +55,13 @@ sim::Box CameraPipeline::box(size_t layer, const render::View& view, double t) {
         return {cx, cy, cx, cy};
     }
     // The simulator adds the kernel's own radius; the blended levels reach further.
-    return view.box().expanded(std::max(0.0, render::filtered_support(pyr, view, m_aa) - pyr.radius(0)));
+    return view.box().expanded(
+        std::max(0.0, render::filtered_support(pyr, view, m_aa) - pyr.radius(0)));
 }
 
-void CameraPipeline::accumulate(size_t layer, const sim::Impulses& impulses, const render::View& view,
-                                double t, render::Frame& out, const render::EvalOptions& options) {
+void CameraPipeline::accumulate(size_t layer, const sim::Impulses& impulses,
+                                const render::View& view, double t, render::Frame& out,
+                                const render::EvalOptions& options) {
     if (!m_active) return render::accumulate(m_kernels->at(layer), impulses, view, out, options);
     const kernels::KernelPyramid& pyr = *m_pyramids.at(layer);
     if (m_scene->camera.type == CameraConfig::Type::Perspective) {
@@ -74,7 +78,8 @@ sim::Box CameraPipeline::estimate_box(size_t layer, const render::View& view0) c
     const kernels::KernelPyramid& pyr = *m_pyramids.at(layer);
     const CameraConfig& c = m_scene->camera;
     if (c.type == CameraConfig::Type::Orthographic)
-        return view0.box().expanded(std::max(0.0, render::filtered_support(pyr, view0, m_aa) - pyr.radius(0)));
+        return view0.box().expanded(
+            std::max(0.0, render::filtered_support(pyr, view0, m_aa) - pyr.radius(0)));
     std::set<double> times = {0.0};
     for (const auto* k : {&c.position_x, &c.position_y, &c.altitude, &c.pitch, &c.heading, &c.fov})
         for (const auto& key : k->keys) times.insert(key.first);

@@ -50,12 +50,14 @@ class PolylineOrientation final : public OrientationField {
 public:
     PolylineOrientation(std::vector<std::array<double, 2>> p, double smooth)
         : m_points(std::move(p)), m_smooth(smooth) {
-        if (m_points.size() < 2) throw ValueError("polyline orientation: expected at least 2 points");
+        if (m_points.size() < 2)
+            throw ValueError("polyline orientation: expected at least 2 points");
         for (size_t i = 0; i + 1 < m_points.size(); ++i) {
             const double dx = m_points[i + 1][0] - m_points[i][0];
             const double dy = m_points[i + 1][1] - m_points[i][1];
             const double len2 = dx * dx + dy * dy;
-            if (!(len2 > 0.0)) throw ValueError("polyline orientation: consecutive points must differ");
+            if (!(len2 > 0.0))
+                throw ValueError("polyline orientation: consecutive points must differ");
             m_dir.push_back(std::atan2(dy, dx));
             m_len2.push_back(len2);
         }
@@ -71,7 +73,8 @@ public:
                 const auto& a = m_points[s];
                 const auto& b = m_points[s + 1];
                 const double ex = b[0] - a[0], ey = b[1] - a[1];
-                const double t = std::clamp(((x[i] - a[0]) * ex + (y[i] - a[1]) * ey) / m_len2[s], 0.0, 1.0);
+                const double t =
+                    std::clamp(((x[i] - a[0]) * ex + (y[i] - a[1]) * ey) / m_len2[s], 0.0, 1.0);
                 const double px = a[0] + t * ex - x[i], py = a[1] + t * ey - y[i];
                 d2[s] = px * px + py * py;
                 if (d2[s] < d2[best]) best = s;
@@ -107,7 +110,8 @@ class SineOrientation final : public OrientationField {
 public:
     SineOrientation(double amp, double wl, double phase, double angle, double ox, double oy)
         : m_amp(amp), m_wl(wl), m_phase(phase), m_angle(angle), m_ox(ox), m_oy(oy) {
-        if (!(wl > 0.0) || !std::isfinite(wl)) throw ValueError("sine orientation: wavelength must be > 0");
+        if (!(wl > 0.0) || !std::isfinite(wl))
+            throw ValueError("sine orientation: wavelength must be > 0");
     }
     void angles(double, size_t n, const double* x, const double* y, float* theta) const override {
         const double c = std::cos(m_angle), s = std::sin(m_angle);
@@ -115,7 +119,8 @@ public:
         for (size_t i = 0; i < n; ++i) {
             const double u = (x[i] - m_ox) * c + (y[i] - m_oy) * s;
             // dw/du of w = A sin(k u + phase)
-            theta[i] = static_cast<float>(m_angle + std::atan(m_amp * k * std::cos(k * u + m_phase)));
+            theta[i] =
+                static_cast<float>(m_angle + std::atan(m_amp * k * std::cos(k * u + m_phase)));
         }
     }
 
@@ -129,8 +134,9 @@ public:
         const size_t n = size_t(m_g.width) * m_g.height;
         if (m_g.width < 1 || m_g.height < 1 || (m_g.channels != 1 && m_g.channels != 2) ||
             m_g.values.size() != n * m_g.channels || !(m_g.spacing > 0.0))
-            throw ValueError("orientation grid: expected width, height >= 1, 1 or 2 channels and "
-                             "width * height * channels values");
+            throw ValueError(
+                "orientation grid: expected width, height >= 1, 1 or 2 channels and "
+                "width * height * channels values");
         m_vx.resize(n), m_vy.resize(n);
         for (size_t i = 0; i < n; ++i) {
             if (m_g.channels == 1) {
@@ -147,7 +153,8 @@ public:
         for (size_t i = 0; i < n; ++i) {
             const double fx = std::clamp((x[i] - m_g.origin_x) / m_g.spacing - 0.5, 0.0, w - 1.0);
             const double fy = std::clamp((y[i] - m_g.origin_y) / m_g.spacing - 0.5, 0.0, h - 1.0);
-            const int i0 = std::min(static_cast<int>(fx), w - 1), j0 = std::min(static_cast<int>(fy), h - 1);
+            const int i0 = std::min(static_cast<int>(fx), w - 1),
+                      j0 = std::min(static_cast<int>(fy), h - 1);
             const int i1 = std::min(i0 + 1, w - 1), j1 = std::min(j0 + 1, h - 1);
             const double ax = fx - i0, ay = fy - j0;
             auto lerp = [&](const std::vector<double>& v) {
@@ -173,12 +180,13 @@ std::shared_ptr<OrientationField> make_constant_orientation(Keyframed angle) {
 std::shared_ptr<OrientationField> make_radial_orientation(Keyframed cx, Keyframed cy) {
     return std::make_shared<CentredOrientation>(std::move(cx), std::move(cy), 0.0);
 }
-std::shared_ptr<OrientationField> make_circular_orientation(Keyframed cx, Keyframed cy, bool clockwise) {
+std::shared_ptr<OrientationField> make_circular_orientation(Keyframed cx, Keyframed cy,
+                                                            bool clockwise) {
     return std::make_shared<CentredOrientation>(std::move(cx), std::move(cy),
                                                 clockwise ? -0.5 * kPi : 0.5 * kPi);
 }
-std::shared_ptr<OrientationField> make_polyline_orientation(std::vector<std::array<double, 2>> points,
-                                                            double smooth) {
+std::shared_ptr<OrientationField> make_polyline_orientation(
+    std::vector<std::array<double, 2>> points, double smooth) {
     return std::make_shared<PolylineOrientation>(std::move(points), smooth);
 }
 std::shared_ptr<OrientationField> make_sine_orientation(double amplitude, double wavelength,
