@@ -309,15 +309,13 @@ TEST_CASE("the renderer's envelope of a narrow Gaussian meets the 1e-6 bound", "
         CAPTURE(ratio, k.polynomial().max_error, k.envelope_table().size());
         CHECK(worst_envelope_error(k) < 1e-6);
     }
-    // A sigma so small that sigma^2 underflows gives e(0) = exp(-0 * inf) = NaN: a kernel of
-    // NaNs is accepted instead of refused (validate() only checks sigma > 0 and finite).
-    try {
-        const Kernel k(gaussian(16.0, 1e-200));
-        CAPTURE(k.envelope(0.0), k.integral());
-        CHECK(std::isfinite(k.envelope(0.0)));
-    } catch (const ValueError&) {
-        SUCCEED("refused with ValueError");
-    }
+    // A sigma so small that sigma^2 underflows would give e(0) = exp(-0 * inf) = NaN: it must
+    // be refused (radius / sigma is bounded), not turned into a kernel of NaNs.
+    CHECK_THROWS_WITH(Kernel(gaussian(16.0, 1e-200)), Catch::Contains("sigma") && Catch::Contains("radius / sigma"));
+    // The exponent uses (R / sigma)^2, so the largest accepted ratio still evaluates finitely.
+    const Kernel narrow(gaussian(16.0, 16.0 / 1000.0));
+    CHECK(std::isfinite(narrow.envelope(0.0)));
+    CHECK(narrow.envelope(0.0) == 1.0);
 }
 
 TEST_CASE("a grid kernel is zero beyond its radius", "[kernels]") {
