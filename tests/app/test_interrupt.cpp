@@ -32,8 +32,18 @@ TEST_CASE("SIGINT closes a video so the encoded frames stay playable", "[cli][vi
     argv.push_back(nullptr);
     pid_t pid = 0;
     REQUIRE(posix_spawn(&pid, bin.c_str(), nullptr, nullptr, argv.data(), environ) == 0);
-    // Let it encode for a while (the temporary file appears once encoding has started).
-    std::this_thread::sleep_for(std::chrono::milliseconds(2500));
+    // Wait until encoding has started (the temporary file exists and has grown), however slow
+    // the machine, then let it run a little longer.
+    auto encoding = [&] {
+        for (const auto& e : fs::directory_iterator(dir))
+            if (e.path().filename().string().find("partial") != std::string::npos &&
+                fs::file_size(e.path()) > 0)
+                return true;
+        return false;
+    };
+    for (int i = 0; i < 600 && !encoding(); ++i)
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    std::this_thread::sleep_for(std::chrono::milliseconds(1000));
     REQUIRE(::kill(pid, SIGINT) == 0);
     int status = 0;
     REQUIRE(::waitpid(pid, &status, 0) == pid);
