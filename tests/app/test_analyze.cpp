@@ -26,42 +26,17 @@
 #include "app/commands.h"
 #include "render/render.h"
 #include "scenes/scenes.h"
+#include "tests/support.h"
 #include "util/errors.h"
 
 namespace {
 
 namespace fs = std::filesystem;
+using namespace impulse::test;
 using Catch::Matchers::Contains;
 using impulse::analysis::Image;
 using impulse::app::AnalysisResult;
 using impulse::app::AnalyzeOptions;
-
-/// A fresh directory under the system temp dir, removed with its contents.
-class TempDir {
-public:
-    TempDir() {
-        static std::atomic<int> counter{0};
-        m_path = fs::temp_directory_path() / ("impulse-test-analyze-" + std::to_string(::getpid()) +
-                                              "-" + std::to_string(counter++));
-        fs::remove_all(m_path);
-        fs::create_directories(m_path);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(m_path, ec);
-    }
-    TempDir(const TempDir&) = delete;
-    TempDir& operator=(const TempDir&) = delete;
-    std::string operator/(const std::string& name) const { return (m_path / name).string(); }
-
-private:
-    fs::path m_path;
-};
-
-std::string read_file(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 
 /// Renders frames first..last of a scene (text plus overrides) into `pattern` (or one file).
 void render_scene(const std::string& text, const std::vector<std::string>& sets,

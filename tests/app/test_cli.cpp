@@ -21,80 +21,22 @@
 
 #include "render/render.h"
 #include "scenes/scenes.h"
+#include "tests/support.h"
 
 namespace {
 
 namespace fs = std::filesystem;
+using namespace impulse::test;
 using Catch::Matchers::Contains;
 using Catch::Matchers::StartsWith;
-
-/// A fresh directory under the system temp dir, removed with its contents.
-class TempDir {
-public:
-    TempDir() {
-        static std::atomic<int> counter{0};
-        m_path = fs::temp_directory_path() /
-                 ("impulse-test-cli-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
-        fs::remove_all(m_path);
-        fs::create_directories(m_path);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(m_path, ec);
-    }
-    std::string operator/(const std::string& name) const { return (m_path / name).string(); }
-    const fs::path& path() const { return m_path; }
-    std::vector<std::string> files() const {
-        std::vector<std::string> names;
-        for (const auto& e : fs::directory_iterator(m_path)) names.push_back(e.path().filename().string());
-        std::sort(names.begin(), names.end());
-        return names;
-    }
-
-private:
-    fs::path m_path;
-};
-
-std::string read_file(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-std::string quote(const std::string& s) {
-    std::string q = "'";
-    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
-}
-
-struct Result {
-    int status = -1;
-    std::string out, err;
-    /// stderr split into lines (without the trailing newline).
-    std::vector<std::string> err_lines() const {
-        std::vector<std::string> lines;
-        std::istringstream in(err);
-        for (std::string l; std::getline(in, l);) lines.push_back(l);
-        return lines;
-    }
-};
 
 /// Runs `impulse ARGS` with stdout and stderr captured to files in `dir` (never on a terminal,
 /// so no progress display).
 Result run(const TempDir& dir, const std::string& args) {
-    const std::string out = dir / ".stdout", err = dir / ".stderr";
-    const std::string cmd = quote(IMPULSE_BINARY) + " " + args + " > " + quote(out) + " 2> " + quote(err) +
-                            " < /dev/null";
-    const int raw = std::system(cmd.c_str());
-    Result r;
-    r.status = WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
-    r.out = read_file(out);
-    r.err = read_file(err);
-    fs::remove(out);
-    fs::remove(err);
-    return r;
+    return shell(dir, quote(IMPULSE_BINARY) + " " + args);
 }
 
-void write_text(const std::string& path, const std::string& text) { std::ofstream(path) << text; }
+void write_text(const std::string& path, const std::string& text) { write_file(path, text); }
 
 // Two layers, one animated with a flow: exercises births, integration and both kernels' paths.
 const char* kScene = R"(# CLI test scene

@@ -21,37 +21,15 @@
 #include <vector>
 
 #include "render/render.h"
+#include "tests/support.h"
 
 namespace render = impulse::render;
 
 namespace {
 
 namespace fs = std::filesystem;
+using namespace impulse::test;
 using Catch::Matchers::Contains;
-
-/// A fresh directory under the system temp dir, removed with its contents.
-class TempDir {
-public:
-    TempDir() {
-        static std::atomic<int> counter{0};
-        std::random_device rd;
-        m_path = fs::temp_directory_path() /
-                 ("impulse-test-video-cli-" + std::to_string(::getpid()) + "-" +
-                  std::to_string(counter++) + "-" + std::to_string(rd()));
-        fs::create_directories(m_path);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(m_path, ec);
-    }
-    TempDir(const TempDir&) = delete;
-    TempDir& operator=(const TempDir&) = delete;
-    std::string operator/(const std::string& name) const { return (m_path / name).string(); }
-    const fs::path& path() const { return m_path; }
-
-private:
-    fs::path m_path;
-};
 
 /// Names of the entries of a directory, sorted.
 std::vector<std::string> entries(const fs::path& dir) {
@@ -59,41 +37,6 @@ std::vector<std::string> entries(const fs::path& dir) {
     for (const auto& e : fs::directory_iterator(dir)) names.push_back(e.path().filename().string());
     std::sort(names.begin(), names.end());
     return names;
-}
-
-std::string read_file(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-void write_file(const std::string& path, const std::string& text) {
-    std::ofstream out(path, std::ios::binary);
-    out << text;
-}
-
-std::string quote(const std::string& s) {
-    std::string q = "'";
-    for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return q + "'";
-}
-
-struct Result {
-    int status = -1;
-    std::string out, err;
-};
-
-/// Runs a shell command line with stdout and stderr captured in files of `dir`.
-Result shell(const TempDir& dir, const std::string& command) {
-    const std::string out = dir / ".stdout", err = dir / ".stderr";
-    const int rc =
-        std::system((command + " >" + quote(out) + " 2>" + quote(err) + " </dev/null").c_str());
-    Result r;
-    r.status = WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
-    r.out = read_file(out);
-    r.err = read_file(err);
-    fs::remove(out);
-    fs::remove(err);
-    return r;
 }
 
 /// `impulse render <args>` (quiet).

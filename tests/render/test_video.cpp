@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "tests/support.h"
 #include "render/video.h"
 #include "util/errors.h"
 
@@ -36,40 +37,7 @@ constexpr int kWidth = 64;
 constexpr int kHeight = 48;
 constexpr double kNtsc = 30000.0 / 1001.0;
 
-/// A fresh directory under the system temp dir, removed with everything in it.
-class TempDir {
-public:
-    TempDir() {
-        static std::atomic<int> counter{0};
-        std::random_device rd;
-        m_path =
-            fs::temp_directory_path() / ("impulse-test-video-" + std::to_string(::getpid()) + "-" +
-                                         std::to_string(counter++) + "-" + std::to_string(rd()));
-        fs::create_directories(m_path);
-    }
-    ~TempDir() {
-        std::error_code ec;
-        fs::remove_all(m_path, ec);
-    }
-    TempDir(const TempDir&) = delete;
-    TempDir& operator=(const TempDir&) = delete;
-
-    std::string file(const std::string& name) const { return (m_path / name).string(); }
-    const fs::path& path() const { return m_path; }
-
-    /// Names of the entries in the directory, sorted (hidden ones included).
-    std::vector<std::string> entries() const {
-        std::vector<std::string> names;
-        for (const auto& e : fs::directory_iterator(m_path)) {
-            names.push_back(e.path().filename().string());
-        }
-        std::sort(names.begin(), names.end());
-        return names;
-    }
-
-private:
-    fs::path m_path;
-};
+using impulse::test::TempDir;
 
 /// Smooth colour gradient moving 3 px right and 2 px down per frame: R varies with x, G with y,
 /// B along the diagonal. Smooth so lossy codecs have no edges to ring on; distinct channels so a
