@@ -24,6 +24,7 @@
 #include <string_view>
 #include <vector>
 
+#include "bench/common.h"
 #include "kernels/kernels.h"
 #include "render/render.h"
 #include "sim/sim.h"
@@ -31,7 +32,7 @@
 namespace {
 
 using namespace impulse;
-using Clock = std::chrono::steady_clock;
+using namespace impulse::bench;
 
 constexpr int kWidth = 1920, kHeight = 1080;
 constexpr double kDensity = 16.0;   ///< expected impulses per kernel area
@@ -112,51 +113,6 @@ Options parse_args(int argc, char** argv) {
 
 // ---------------------------------------------------------------------------------------------
 // Timing and machine load
-
-/// Median, minimum and maximum of a set of timings (ms).
-struct Stats {
-    double med = 0, min = 0, max = 0;
-    Stats scaled(double f) const { return {med * f, min * f, max * f}; }
-};
-
-Stats summarise(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    const size_t n = v.size();
-    const double med = n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-    return {med, v.front(), v.back()};
-}
-
-double ms_since(Clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-/// Busy CPU seconds of the whole machine from /proc/stat (user nice system irq softirq steal;
-/// steal: the hypervisor gave the core to another guest), or -1 when unreadable.
-double machine_busy_s() {
-    std::ifstream in("/proc/stat");
-    std::string cpu;
-    double v[8] = {};
-    if (!(in >> cpu) || cpu != "cpu") return -1;
-    for (double& x : v)
-        if (!(in >> x)) return -1;
-    return (v[0] + v[1] + v[2] + v[5] + v[6] + v[7]) / static_cast<double>(sysconf(_SC_CLK_TCK));
-}
-
-/// CPU milliseconds used by the calling thread: unlike wall time, not inflated when other
-/// processes take the core away.
-double thread_cpu_ms() {
-    timespec t{};
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-    return 1e3 * double(t.tv_sec) + 1e-6 * double(t.tv_nsec);
-}
-
-/// CPU seconds used by this process (all threads).
-double own_cpu_s() {
-    rusage u{};
-    getrusage(RUSAGE_SELF, &u);
-    auto s = [](const timeval& t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
-    return s(u.ru_utime) + s(u.ru_stime);
-}
 
 /// CPU used by other processes over an interval (machine busy time minus our own): a
 /// benchmark on a shared machine says when its numbers are not to be trusted.
@@ -300,16 +256,6 @@ Row run_case(kernels::KernelType type, int radius_px, const Options& o, tbb::tas
 
 // ---------------------------------------------------------------------------------------------
 // Output
-
-/// "12.3 [12.1-12.9]": median [min-max] with about three significant digits.
-std::string cell(const Stats& s) {
-    auto f = [](double v) {
-        char b[32];
-        std::snprintf(b, sizeof b, v < 10 ? "%.2f" : v < 100 ? "%.1f" : "%.0f", v);
-        return std::string(b);
-    };
-    return f(s.med) + " [" + f(s.min) + "-" + f(s.max) + "]";
-}
 
 std::string kernel_name(kernels::KernelType t) { return std::string(kernels::to_string(t)); }
 

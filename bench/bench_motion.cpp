@@ -35,6 +35,7 @@
 #include <string_view>
 #include <vector>
 
+#include "bench/common.h"
 #include "kernels/kernels.h"
 #include "render/render.h"
 #include "scenes/scenes.h"
@@ -44,7 +45,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace impulse;
-using Clock = std::chrono::steady_clock;
+using namespace impulse::bench;
 
 constexpr const char* kScene = "clouds";
 constexpr int64_t kRandomFrame = 10000;       ///< the random-access frame of the issue
@@ -111,59 +112,6 @@ Options parse_args(int argc, char** argv) {
 
 // ---------------------------------------------------------------------------------------------
 // Small helpers
-
-/// Median, minimum and maximum of a set of samples.
-struct Stats {
-    double med = 0, min = 0, max = 0;
-    size_t n = 0;
-};
-
-Stats summarise(std::vector<double> v) {
-    if (v.empty()) return {};
-    std::sort(v.begin(), v.end());
-    const size_t n = v.size();
-    const double med = n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-    return {med, v.front(), v.back(), n};
-}
-
-double ms_since(Clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-/// "12.3 [12.1-12.9]": median [min-max] with about three significant digits.
-std::string cell(const Stats& s) {
-    auto f = [](double v) {
-        char b[32];
-        std::snprintf(b, sizeof b, v < 10 ? "%.2f" : v < 100 ? "%.1f" : "%.0f", v);
-        return std::string(b);
-    };
-    return f(s.med) + " [" + f(s.min) + "-" + f(s.max) + "]";
-}
-
-std::string loadavg() {
-    std::ifstream in("/proc/loadavg");
-    std::string a, b, c;
-    if (!(in >> a >> b >> c)) return "unavailable";
-    return a + " " + b + " " + c;
-}
-
-/// Busy CPU seconds of the whole machine (/proc/stat: all but idle and iowait), or -1.
-double machine_busy_s() {
-    std::ifstream in("/proc/stat");
-    std::string cpu;
-    double v[8] = {};
-    if (!(in >> cpu) || cpu != "cpu") return -1;
-    for (double& x : v)
-        if (!(in >> x)) return -1;
-    return (v[0] + v[1] + v[2] + v[5] + v[6] + v[7]) / static_cast<double>(sysconf(_SC_CLK_TCK));
-}
-
-double own_cpu_s() {
-    rusage u{};
-    getrusage(RUSAGE_SELF, &u);
-    auto s = [](const timeval& t) { return double(t.tv_sec) + 1e-6 * double(t.tv_usec); };
-    return s(u.ru_utime) + s(u.ru_stime);
-}
 
 /// Output of the report: text rows on stdout, or CSV rows on stdout with the text going to
 /// stderr (so stdout stays pure CSV).

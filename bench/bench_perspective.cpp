@@ -19,6 +19,7 @@
 #include <string_view>
 #include <vector>
 
+#include "bench/common.h"
 #include "kernels/kernels.h"
 #include "render/render.h"
 #include "sim/sim.h"
@@ -26,7 +27,7 @@
 namespace {
 
 using namespace impulse;
-using Clock = std::chrono::steady_clock;
+using namespace impulse::bench;
 
 constexpr int kWidth = 1920, kHeight = 1080;
 constexpr double kTargetRatio = 2.0;
@@ -71,10 +72,6 @@ Options parse_args(int argc, char** argv) {
     }
     if (o.quick && !reps_set) o.reps = 3;
     return o;
-}
-
-double ms_since(Clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
 struct Stat {
