@@ -2,19 +2,9 @@
 // The `impulse` command-line tool: parse, call the libraries, report. Library errors are typed
 // exceptions; here they become one line on stderr and a non-zero exit (style.md "Errors").
 
-#include <tbb/global_control.h>
-#include <unistd.h>
 
 #include <CLI/CLI.hpp>
-#include <atomic>
-#include <chrono>
-#include <csignal>
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
 #include <iostream>
-#include <regex>
-#include <sstream>
 
 #include "app/analyze.h"
 #include "app/commands.h"

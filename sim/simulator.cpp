@@ -207,7 +207,6 @@ void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& o
                     th[j] += hh * 0.5 * (s.k[0][3][j] + s.k[1][3][j]);  // d theta / dt = w / 2
                 }
             } else {  // classical RK4
-                const double* prevx = nullptr;
                 for (int st = 1; st < 4; ++st) {
                     const double frac_h = st == 3 ? 1.0 : 0.5;
                     for (size_t j = 0; j < active; ++j) {
@@ -215,7 +214,6 @@ void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& o
                         s.yt[j] = y[j] + frac_h * s.h[j] * s.k[st - 1][1][j];
                     }
                     eval(st, st == 3 ? t1 : tm, active, s.xt.data(), s.yt.data());
-                    (void)prevx;
                 }
                 for (size_t j = 0; j < active; ++j) {
                     const double h6 = s.h[j] / 6.0;
