@@ -128,6 +128,7 @@ CameraConfig read_camera(std::optional<Reader> r, int width, int height) {
     c.center_x = sim::Keyframed(width / 2.0);
     c.center_y = sim::Keyframed(height / 2.0);
     if (!r) return c;
+    r->refuse_keyframes("center");
     if (auto ct = r->node("center")) {
         if (ct->is_array()) {
             auto p = r->pair("center", "[x, y] in texture units");
@@ -850,7 +851,8 @@ void resolve_includes(toml::table& root, const std::string& name,
     std::vector<toml::table> included;
     for (const toml::node* f : files) {
         const std::string rel(f->value<std::string_view>().value_or(""));
-        const fs::path path = detail::resolve_path(f, rel, fs::path(name).parent_path());
+        const fs::path path =
+            detail::resolve_path(f, rel, fs::path(name).parent_path()).lexically_normal();
         const fs::path canonical = same_file_key(path);
         for (size_t i = 0; i < chain.size(); ++i)
             if (chain[i].first == canonical) {
@@ -860,7 +862,10 @@ void resolve_includes(toml::table& root, const std::string& name,
             }
         std::string error;
         const auto text = read_text(path.string(), error);
-        if (!text) r.fail(f, "include", "cannot open " + path.string() + ": " + error);
+        if (!text)
+            r.fail(f, "include",
+                   "cannot open: " + error +
+                       (fs::path(rel).is_absolute() ? "" : " (relative to this file's directory)"));
         texts += "\n--include " + path.string() + "\n" + *text;
         included.push_back(parse_text(*text, path.string()));
         chain.emplace_back(canonical, path.string());

@@ -283,13 +283,14 @@ sim::Keyframed Reader::keyframed(std::string_view key, double fallback,
                                  const std::function<bool(double)>& ok, const char* expected) {
     const toml::node* n = node(key);
     if (!n) return sim::Keyframed(fallback);
-    auto check = [&](double v) {
-        if (!std::isfinite(v)) fail(n, key, "expected a finite number");
-        if (ok && !ok(v)) fail(n, key, std::string("expected ") + expected);
+    // A bad value is reported at itself: the number, or the [t, v] key holding it.
+    auto check = [&](double v, const Reader& at, const toml::node* where, std::string_view k) {
+        if (!std::isfinite(v)) at.fail(where, k, "expected a finite number");
+        if (ok && !ok(v)) at.fail(where, k, std::string("expected ") + expected);
     };
     if (n->is_number()) {
         const double v = n->value<double>().value_or(0);
-        check(v);
+        check(v, *this, n, key);
         return sim::Keyframed(v);
     }
     const toml::table* t = n->as_table();
@@ -308,7 +309,7 @@ sim::Keyframed Reader::keyframed(std::string_view key, double fallback,
             r.fail(&e, "keys", "expected [time_s, value] pairs of numbers");
         const double t_s = (*p)[0].value<double>().value_or(0), v = (*p)[1].value<double>().value_or(0);
         if (!std::isfinite(t_s)) r.fail(&e, "keys", "expected finite key times");
-        check(v);
+        check(v, r, &e, "keys");
         if (!k.keys.empty() && !(t_s > k.keys.back().first)) {
             std::ostringstream s;
             s << "keyframes out of order: time " << t_s << " follows " << k.keys.back().first
