@@ -111,6 +111,7 @@ std::string structural_reason(std::string_view path) {
         {"camera.position", "a pair is fixed: keyframe position_x and position_y"},
         {"camera.filter", "the anti-aliasing pyramid and its fade are set up once per scene"},
         {"camera.cutoff", "the anti-aliasing pyramid and its fade are set up once per scene"},
+        {"camera.anisotropic", "the anti-aliasing pyramid and its fade are set up once per scene"},
         {"layer.seed", "the seed picks every impulse once, for the whole animation"},
         {"layer.period", "the domain is periodic with one period (its seeding cells wrap)"},
         {"layer.lifetime",

@@ -329,6 +329,32 @@ aspect = 3.0
     }
     CHECK(worst < 1e-4 * scale);
     CHECK_FALSE(same_bits(render_frame(a, 0), fb));  // and at t = 0 it is not turned
+
+    // Through the anti-aliasing pyramid (a perspective camera) the turn works the same way.
+    const std::string camera = "[camera]\ntype = \"perspective\"\nheight = 60.0\npitch = 50.0\n";
+    const S::Scene pk = S::load_scene_string(camera + base + "orientation = { keys = [[0.0, 0.0], [1.0, 1.2]] }\n", "p.toml");
+    const S::Scene pf = S::load_scene_string(camera + base + "orientation = 1.2\n", "p.toml");
+    S::Renderer c(pk), d(pf);
+    const render::Frame fc = render_frame(c, 1), fd = render_frame(d, 1);
+    worst = 0.0, scale = 0.0;
+    for (size_t p = 0; p < fc.data.size(); ++p) {
+        worst = std::max(worst, double(std::abs(fc.data[p] - fd.data[p])));
+        scale = std::max(scale, double(std::abs(fd.data[p])));
+    }
+    CHECK(scale > 0.0);
+    CHECK(worst < 1e-4 * scale);
+    CHECK_FALSE(same_bits(render_frame(c, 0), fd));
+
+    // A keyframed jitter spreads the impulses' own angles by jitter(t): none at t = 0.
+    const std::string field = "orientation = { type = \"constant\", angle = 0.3, jitter = ";
+    const std::string layer = "[output]\nsize = [96, 64]\nfps = 1\nframes = 2\n[[layer]]\nlifetime = 4.0\n";
+    const std::string kernel = "[layer.kernel]\ntype = \"gaussian\"\nradius = 16.0\nsigma = 5.0\naspect = 3.0\n";
+    S::Renderer jk(S::load_scene_string(layer + field + "{ keys = [[0.0, 0.0], [1.0, 0.6]] } }\n" + kernel, "j.toml"));
+    S::Renderer j0(S::load_scene_string(layer + field + "0.0 }\n" + kernel, "j.toml"));
+    S::Renderer j6(S::load_scene_string(layer + field + "0.6 }\n" + kernel, "j.toml"));
+    CHECK(same_bits(render_frame(jk, 0), render_frame(j0, 0)));
+    CHECK(same_bits(render_frame(jk, 1), render_frame(j6, 1)));
+    CHECK_FALSE(same_bits(render_frame(jk, 1), render_frame(j0, 1)));
 }
 
 TEST_CASE("keyframed orientation fields, flows and shading take their values at t",
