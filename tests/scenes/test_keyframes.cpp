@@ -144,6 +144,26 @@ sigma = { keys = [[0.0, 2.0], [2.0, 5.0]] }
     }
 }
 
+TEST_CASE("a keyframed radius keeps the seeding cells at the largest radius",
+          "[scenes][keyframes]") {
+    // A still layer: its intensity is that of the kernel at t = 0 (density 4 per area of radius
+    // 4), its cells are as large as the largest radius (16). At t = 1 the kernel has radius 16:
+    // the frame is the one of a constant radius-16 kernel with the same intensity (density 64
+    // per area of radius 16) and cells, bit for bit: no impulse is lost to a too-small cell or
+    // cull box.
+    const std::string head = "[output]\nsize = [96, 80]\nfps = 1\nframes = 2\n[[layer]]\n";
+    const S::Scene keyed = S::load_scene_string(
+        head + "density = 4.0\n[layer.kernel]\nradius = { keys = [[0.0, 4.0], [1.0, 16.0]] }\n",
+        "r.toml");
+    const S::Scene fixed =
+        S::load_scene_string(head + "density = 64.0\n[layer.kernel]\nradius = 16.0\n", "r.toml");
+    CHECK(keyed.layers[0].process.cell_size == 16.0);
+    CHECK(keyed.layers[0].process.intensity == Approx(fixed.layers[0].process.intensity).epsilon(1e-15));
+    S::Renderer a(keyed), b(fixed);
+    CHECK(same_bits(render_frame(a, 1), render_frame(b, 1)));
+    CHECK_FALSE(same_bits(render_frame(a, 0), render_frame(b, 0)));
+}
+
 TEST_CASE("a keyframed density acts through the births of the last lifetime (thinning)",
           "[scenes][keyframes][stats]") {
     // density ramps 4 -> 32 over [0, 4] s; hann lifetime 2 s. The live impulses at t were born
