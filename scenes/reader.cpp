@@ -149,12 +149,11 @@ std::filesystem::path resolve_path(const toml::node* n, const std::string& rel,
     return base / rel;
 }
 
-void Reader::refuse_keyframes(std::string_view key, const std::string& reason) {
+void Reader::refuse_keyframes(std::string_view key) {
     const toml::node* n = node(key);
     if (!is_keyframe_table(n)) return;
-    const std::string why =
-        !reason.empty() ? reason : !m_structural.empty() ? m_structural : structural_reason(key_path(key));
-    fail(n, key, "cannot vary in time: " + why);
+    fail(n, key,
+         "cannot vary in time: " + (!m_structural.empty() ? m_structural : structural_reason(key_path(key))));
 }
 
 Reader::Reader(const toml::table& table, std::string path, const Source& source,

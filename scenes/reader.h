@@ -70,8 +70,8 @@ public:
     /// structural_reason.
     void set_structural_reason(std::string reason) { m_structural = std::move(reason); }
     /// Fails at `key` with "cannot vary in time: <reason>" when its node is a keyframe table
-    /// ({ keys = ... }); structural_reason(path) unless `reason` is given.
-    void refuse_keyframes(std::string_view key, const std::string& reason = "");
+    /// ({ keys = ... }): this table's reason, else structural_reason of the key's path.
+    void refuse_keyframes(std::string_view key);
     /// Sub-table (inline or standard); nullopt when absent.
     std::optional<Reader> table(std::string_view key);
     /// Array of tables ([[layer]]); empty when absent.
