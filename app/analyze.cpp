@@ -789,7 +789,7 @@ TheoryComparison compare_with_theory(const scenes::Scene& scene, const std::stri
         // compound Poisson field: the relative covariance c below is shared by every bin.
         c4.push_back(ea4 * W4 / (ea2 * ea2 * W2 * W2 * lambda_px * N));
         const kernels::Kernel k(layer.kernel);
-        K4 += g2 * g2 * lambda_px * ea4 * W4 * std::pow(layer.gain, 4) *
+        K4 += g2 * g2 * lambda_px * ea4 * W4 * std::pow(layer.gain.value(0.0), 4) *
               std::pow(k.integral_sq() * T.zoom * T.zoom, 2);
         if (layer.flow)
             diff_known = false;
@@ -1055,7 +1055,14 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
             "frames are correlated over more than half of the sequence: the "
             "correlation time is a lower bound and the z values are approximate");
 
-    if (scene) {
+    bool keyframed = false;
+    if (scene)
+        for (const auto& l : scene->layers) keyframed = keyframed || l.keyframed();
+    if (keyframed)
+        R.notes.push_back(
+            "layer parameters of the scene are keyframed: the statistics vary in time, so there "
+            "is no comparison with the (stationary) theory");
+    if (scene && !keyframed) {
         R.theory = compare_with_theory(*scene, scene_path, R, tc, mapped, lo, hi, clipped);
         if (mapped && clipped > 0.001)
             R.notes.push_back("display input: " + format_number(clipped * 100.0, 3) +

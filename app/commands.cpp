@@ -82,8 +82,10 @@ void ensure_directory(const std::string& path) {
         throw IoError(path + ": output directory " + d + " is not writable");
 }
 
-/// True when the scene's shading gives colour (a ramp or relief), not plain grey.
-bool colour_shading(const render::Shading& s) { return !s.ramp.empty() || s.relief != 0.0; }
+/// True when the scene's shading gives colour (a ramp or relief at some time), not plain grey.
+bool colour_shading(const scenes::Scene& s) {
+    return !s.shading.ramp.empty() || s.shading_keys.relief.max() != 0.0;
+}
 
 }  // namespace
 
@@ -184,9 +186,10 @@ int run_render(const RenderOptions& opt) {
         cap = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                     opt.threads);
     auto emit = [&](const render::Frame& frame, long long f, const std::string& target) {
-        const double t = (std::llround(out.start_s * out.fps) + f) / out.fps;
+        const double t = sc.frame_time(f);
+        const render::Shading shading = sc.shading_at(t);
         if (video) {
-            render::shade(frame, mapping, sc.shading, rgb);
+            render::shade(frame, mapping, shading, rgb);
             writer.write_frame(rgb.data());
             return;
         }
@@ -195,8 +198,8 @@ int run_render(const RenderOptions& opt) {
         m.emplace_back("time", std::to_string(t));
         // EXR keeps the raw field; display formats get the shading (grey by default).
         const bool exr = fs::path(target).extension() == ".exr";
-        if (!exr && colour_shading(sc.shading)) {
-            render::shade(frame, mapping, sc.shading, rgb);
+        if (!exr && colour_shading(sc)) {
+            render::shade(frame, mapping, shading, rgb);
             render::write_rgb_image(target, out.width, out.height, rgb, m, out.bits == 16);
         } else {
             render::write_image(target, frame, mapping, m, out.bits == 16);
@@ -267,14 +270,18 @@ int run_info(const InfoOptions& opt) {
     std::printf("scene      %s (hash %s)\n", path.c_str(), scene.hash.c_str());
     std::printf("output     %dx%d, %lld frames at %g fps\n", scene.output.width, scene.output.height,
                 static_cast<long long>(scene.output.frames), scene.output.fps);
-    std::printf("mean       %.6g\nvariance   %.6g (Campbell's theorem)\n", t.mean, t.variance);
+    bool keyframed = false;
+    for (const auto& l : scene.layers) keyframed = keyframed || l.keyframed();
+    std::printf("mean       %.6g\nvariance   %.6g (Campbell's theorem%s)\n", t.mean, t.variance,
+                keyframed ? ", at t = 0: layers are keyframed" : "");
     for (size_t i = 0; i < scene.layers.size(); ++i) {
         const auto& l = scene.layers[i];
         const auto lt = scenes::layer_theory(l);
-        std::printf("layer[%zu]   %s r=%g density=%g lambda=%.4g/unit^2 variance=%.6g%s\n", i,
+        std::printf("layer[%zu]   %s r=%g density=%g lambda=%.4g/unit^2 variance=%.6g%s%s\n", i,
                     std::string(kernels::to_string(l.kernel.type)).c_str(), l.kernel.radius,
-                    l.density, l.process.intensity, lt.variance,
-                    l.process.lifetime_s > 0 ? " (animated)" : " (still)");
+                    l.density.value(0.0), l.process.intensity, lt.variance,
+                    l.process.lifetime_s > 0 ? " (animated)" : " (still)",
+                    l.keyframed() ? " (keyframed)" : "");
     }
     std::printf("impulses   ~%.3g per frame, ~%.0f MiB\n", r.estimated_impulses(), r.estimated_memory_mib());
     return 0;

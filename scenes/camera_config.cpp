@@ -65,19 +65,6 @@ std::string num(double v) {
     return s.str();
 }
 
-/// Times at which keyframed camera values should be checked: every key and a sampling between.
-std::vector<double> check_times(const std::vector<const sim::Keyframed*>& ks) {
-    std::set<double> t = {0.0};
-    double lo = 0.0, hi = 0.0;
-    for (const auto* k : ks)
-        for (const auto& key : k->keys) {
-            t.insert(key.first);
-            lo = std::min(lo, key.first), hi = std::max(hi, key.first);
-        }
-    for (int i = 0; i <= 64 && hi > lo; ++i) t.insert(lo + (hi - lo) * i / 64.0);
-    return {t.begin(), t.end()};
-}
-
 }  // namespace
 
 void read_camera_view(Reader& r, CameraConfig& c, int width, int height) {
@@ -119,7 +106,7 @@ void read_camera_view(Reader& r, CameraConfig& c, int width, int height) {
         const std::array<std::string_view, 2> planes = {"ground", "sky"};
         c.plane = r.choice("plane", planes, 0) == 1 ? render::Plane::Sky : render::Plane::Ground;
         // The camera must see some of the plane at every time.
-        for (double t : check_times({&c.pitch, &c.fov, &c.altitude})) {
+        for (double t : key_check_times({&c.pitch, &c.fov, &c.altitude})) {
             try {
                 render::PerspectiveView v(c.perspective(width, height, t));
             } catch (const ValueError&) {
@@ -214,18 +201,18 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
                     f.fail(pn, "points", kPoints);
                 pts.push_back(v);
             }
-            const double smooth = f.number(
+            const sim::Keyframed smooth = f.keyframed(
                 "smooth", 0.0, [](double v) { return v >= 0.0; },
                 "a distance >= 0 in texture units (0: nearest segment)");
             field = sim::make_polyline_orientation(std::move(pts), smooth);
             break;
         }
         case 4: {  // sine
-            const double amp = f.number("amplitude", 16.0);
-            const double wl =
-                f.number("wavelength", 128.0, kPositive, "a wavelength > 0 (texture units)");
-            const double phase = f.number("phase", 0.0);
-            const double angle = f.number("angle", 0.0);
+            const sim::Keyframed amp = f.keyframed("amplitude", 16.0);
+            const sim::Keyframed wl =
+                f.keyframed("wavelength", 128.0, kPositive, "a wavelength > 0 (texture units)");
+            const sim::Keyframed phase = f.keyframed("phase", 0.0);
+            const sim::Keyframed angle = f.keyframed("angle", 0.0);
             double ox = 0.0, oy = 0.0;
             if (auto o = f.pair("origin", "[x, y] in texture units")) ox = (*o)[0], oy = (*o)[1];
             field = sim::make_sine_orientation(amp, wl, phase, angle, ox, oy);
@@ -238,7 +225,7 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
                 f.fail(pn, "path",
                        "expected the path of an orientation image (1 channel: angle in "
                        "radians; 2 channels: direction x, y)");
-            const fs::path path = fs::path(rel).is_absolute() ? fs::path(rel) : base / rel;
+            const fs::path path = resolve_path(pn, rel, base);
             auto in = OIIO::ImageInput::open(path.string());
             if (!in) {
                 std::string e = OIIO::geterror();
@@ -277,7 +264,7 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
     }
     p.orientation = sim::OrientationMode::Field;
     p.orientation_field = std::move(field);
-    p.orientation_jitter = f.number(
+    p.orientation_jitter = f.keyframed(
         "jitter", 0.0, [](double v) { return v >= 0.0; },
         "an angle >= 0 in radians (uniform random offset per impulse)");
     f.finish();

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iomanip>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 #include "scenes/camera_detail.h"
@@ -25,6 +26,7 @@ namespace {
 namespace fs = std::filesystem;
 using detail::Reader;
 using detail::Source;
+using detail::key_check_times;
 
 const auto kPositive = [](double v) { return v > 0.0; };
 const auto kNonNegative = [](double v) { return v >= 0.0; };
@@ -126,6 +128,7 @@ CameraConfig read_camera(std::optional<Reader> r, int width, int height) {
     c.center_x = sim::Keyframed(width / 2.0);
     c.center_y = sim::Keyframed(height / 2.0);
     if (!r) return c;
+    r->refuse_keyframes("center");
     if (auto ct = r->node("center")) {
         if (ct->is_array()) {
             auto p = r->pair("center", "[x, y] in texture units");
@@ -184,15 +187,15 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
                 auto rate = f.keyframed("rate", 0.1);
                 sim::Keyframed cx, cy;
                 center(cx, cy);
-                const double angle = f.number("angle", 0.0);
-                sum->push(sim::make_shear_flow(rate, cx.value(0), cy.value(0), angle));
+                auto angle = f.keyframed("angle", 0.0);
+                sum->push(sim::make_shear_flow(rate, cx, cy, angle));
                 break;
             }
             case 2: {  // vortex
                 sim::Keyframed cx, cy;
                 center(cx, cy);
                 auto gamma = f.keyframed("circulation", 2000.0);
-                const double core = f.number("core", 40.0, kPositive, "a radius > 0");
+                auto core = f.keyframed("core", 40.0, kPositive, "a radius > 0");
                 const auto model = static_cast<sim::VortexModel>(f.choice("model", sim::kVortexModelNames, 0));
                 sum->push(sim::make_vortex_flow(model, cx, cy, gamma, core));
                 break;
@@ -201,7 +204,11 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
                 sim::Keyframed cx, cy;
                 center(cx, cy);
                 auto rate = f.keyframed("rate", 0.1);
-                const double radius = f.number("radius", 0.0, kNonNegative, "a radius >= 0 (0: everywhere)");
+                auto radius = f.keyframed("radius", 0.0, kNonNegative, "a radius >= 0 (0: everywhere)");
+                if (!radius.is_constant() && !(radius.min() > 0))
+                    f.fail(f.node("radius"), "radius",
+                           "expected a radius > 0 at every key (radius 0, a divergence everywhere, "
+                           "is another field, not a limit of this one)");
                 sum->push(sim::make_source_flow(cx, cy, rate, radius));
                 break;
             }
@@ -216,7 +223,7 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
                 const toml::node* pn = f.node("path");
                 const std::string rel = f.string("path", "");
                 if (rel.empty()) f.fail(pn, "path", "expected the path of a 2-channel velocity image");
-                const fs::path p = fs::path(rel).is_absolute() ? fs::path(rel) : base / rel;
+                const fs::path p = detail::resolve_path(pn, rel, base);
                 auto in = OIIO::ImageInput::open(p.string());
                 if (!in) f.fail(pn, "path", "cannot read: " + OIIO::geterror());
                 const auto& spec = in->spec();
@@ -256,7 +263,7 @@ const std::array<std::string_view, 6> kSceneKernelTypes = {
 /// A designed kernel: `spectrum`, `autocorrelation` or `exemplar` (kernels/spectral.h). Library
 /// errors (ValueError, IoError) are reported at the key whose value caused them.
 kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Reader& layer,
-                                           const fs::path& base) {
+                                           const fs::path& base, std::vector<KernelKey>& keys) {
     namespace K = kernels;
     const std::string tname(type);
     auto detail_of = [](const std::exception& e, const std::string& quoted) {
@@ -270,15 +277,24 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
             i += 1;
         return m.substr(i);
     };
-    auto path_of = [&](const std::string& rel) {
-        return fs::path(rel).is_absolute() ? fs::path(rel) : base / rel;
+    auto path_of = [&](const toml::node* n, const std::string& rel) {
+        return detail::resolve_path(n, rel, base);
     };
+    r.set_structural_reason(
+        "a designed kernel is computed once, when the scene loads (up to a second per design); "
+        "orientation and aspect can vary");
     const auto window = static_cast<K::DesignWindow>(r.choice("window", K::kDesignWindowNames, 1));
     const toml::node* radius_node = r.node("radius");
     const double radius = r.number("radius", 0.0, kPositive, "a radius > 0 (texture units)");
-    const double orientation = r.number("orientation", 0.0);
-    const double aspect = r.number(
+    const sim::Keyframed orientation = r.keyframed("orientation", 0.0);
+    const sim::Keyframed aspect = r.keyframed(
         "aspect", 1.0, [](double v) { return v >= 1.0; }, "a ratio >= 1");
+    // The design is normalised at the largest density over time (docs/scenes.md "Keyframes").
+    auto layer_density = [&] {
+        return layer
+            .keyframed("density", 16.0, kPositive, "a density > 0 (impulses per kernel area)")
+            .max();
+    };
     for (const char* g : {"sigma", "frequency", "bandwidth", "phase"})
         if (r.has(g)) r.warn(g, "ignored for kernel type " + tname);
 
@@ -297,13 +313,12 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
         o.window = window;
         // Normalised at this layer's density and amplitude distribution (read here as well as
         // in read_scene: same values, same messages).
-        o.density =
-            layer.number("density", 16.0, kPositive, "a density > 0 (impulses per kernel area)");
+        o.density = layer_density();
         o.amplitude_second_moment = sim::amplitude_second_moment(
             static_cast<sim::Amplitude>(layer.choice("amplitude", sim::kAmplitudeNames, 0)));
         render::Frame image;
         try {
-            image = render::read_image(path_of(rel).string());
+            image = render::read_image(path_of(pn, rel).string());
         } catch (const Error& e) {
             r.fail(pn, "path", e.what());
         }
@@ -457,7 +472,7 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
                 else if (source == "expression")
                     sp = K::expression_spectrum(r.string("expression", ""));
                 else
-                    sp = K::table_spectrum(path_of(r.string("table", "")).string());
+                    sp = K::table_spectrum(path_of(sn, r.string("table", "")).string());
                 d = K::kernel_from_spectrum(sp, o);
             }
         } catch (const Error& e) {
@@ -473,8 +488,7 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
         // Scale so the layer's spectrum is S itself: lambda E[a^2] |H|^2 = S with this layer's
         // lambda = density / (pi R^2) (the aspect squeeze changes lambda and int h^2 by inverse
         // factors, so the variance stays int S d^2k = R(0)).
-        const double density =
-            layer.number("density", 16.0, kPositive, "a density > 0 (impulses per kernel area)");
+        const double density = layer_density();
         const auto amp =
             static_cast<sim::Amplitude>(layer.choice("amplitude", sim::kAmplitudeNames, 0));
         const double ea2 = sim::amplitude_second_moment(amp),
@@ -509,32 +523,89 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
         }
         k = d.params;
     }
-    k.orientation = orientation;
-    k.aspect = aspect;
+    k.orientation = orientation.value(0.0);
+    k.aspect = aspect.value(0.0);
+    if (!orientation.is_constant()) keys.push_back({&K::KernelParams::orientation, orientation});
+    if (!aspect.is_constant()) keys.push_back({&K::KernelParams::aspect, aspect});
     r.finish();
     return k;
 }
 
-kernels::KernelParams read_kernel(std::optional<Reader> r, Reader& layer, const fs::path& base) {
-    kernels::KernelParams k;
+/// The [layer.kernel] table; keyframed fields go to `keys` (their values at t = 0 into the
+/// result). `pyramid`: the camera anti-aliases through a kernel pyramid, built once per layer,
+/// so only the orientation (a rotation of every impulse) may vary in time.
+kernels::KernelParams read_kernel(std::optional<Reader> r, Reader& layer, const fs::path& base,
+                                  std::vector<KernelKey>& keys, bool pyramid) {
+    namespace K = kernels;
+    K::KernelParams k;
     if (!r) return k;
     const size_t type = r->choice("type", kSceneKernelTypes, 0);
-    if (type >= kernels::kKernelTypeNames.size())
-        return read_designed_kernel(*r, kSceneKernelTypes[type], layer, base);
-    k.type = static_cast<kernels::KernelType>(type);
-    k.radius = r->number("radius", k.radius, kPositive, "a radius > 0 (texture units)");
-    k.sigma = r->number("sigma", k.sigma, kPositive, "a standard deviation > 0");
-    k.frequency = r->number("frequency", k.frequency, kNonNegative, "a frequency >= 0 (cycles per unit)");
-    k.bandwidth = r->number("bandwidth", k.bandwidth, kNonNegative, "a bandwidth >= 0 (0: from radius)");
-    k.phase = r->number("phase", k.phase);
-    k.orientation = r->number("orientation", k.orientation);
-    k.aspect = r->number("aspect", k.aspect, [](double v) { return v >= 1.0; }, "a ratio >= 1");
-    if (k.type != kernels::KernelType::Gaussian && r->has("sigma"))
-        r->warn("sigma", "ignored for kernel type " + std::string(kernels::to_string(k.type)));
-    if (k.type != kernels::KernelType::Gabor)
-        for (const char* g : {"frequency", "bandwidth", "phase"})
-            if (r->has(g)) r->warn(g, "ignored for kernel type " + std::string(kernels::to_string(k.type)));
-    r->finish();
+    auto field = [&](const char* key, double K::KernelParams::*member, double fallback,
+                     const std::function<bool(double)>& ok, const char* expected) {
+        const sim::Keyframed v = r->keyframed(key, fallback, ok, expected);
+        k.*member = v.value(0.0);
+        if (!v.is_constant()) keys.push_back({member, v});
+    };
+    if (type >= K::kKernelTypeNames.size()) {
+        k = read_designed_kernel(*r, kSceneKernelTypes[type], layer, base, keys);
+    } else {
+        k.type = static_cast<K::KernelType>(type);
+        field("radius", &K::KernelParams::radius, k.radius, kPositive,
+              "a radius > 0 (texture units)");
+        field("sigma", &K::KernelParams::sigma, k.sigma, kPositive, "a standard deviation > 0");
+        field("frequency", &K::KernelParams::frequency, k.frequency, kNonNegative,
+              "a frequency >= 0 (cycles per unit)");
+        field("bandwidth", &K::KernelParams::bandwidth, k.bandwidth, kNonNegative,
+              "a bandwidth >= 0 (0: from radius)");
+        field("phase", &K::KernelParams::phase, k.phase, {}, "");
+        field("orientation", &K::KernelParams::orientation, k.orientation, {}, "");
+        field("aspect", &K::KernelParams::aspect, k.aspect, [](double v) { return v >= 1.0; },
+              "a ratio >= 1");
+        if (k.type != K::KernelType::Gaussian && r->has("sigma"))
+            r->warn("sigma", "ignored for kernel type " + std::string(K::to_string(k.type)));
+        if (k.type != K::KernelType::Gabor)
+            for (const char* g : {"frequency", "bandwidth", "phase"})
+                if (r->has(g))
+                    r->warn(g, "ignored for kernel type " + std::string(K::to_string(k.type)));
+        r->finish();
+    }
+    auto name_of = [](double K::KernelParams::*member) -> const char* {
+        using P = K::KernelParams;
+        const std::pair<double P::*, const char*> names[] = {
+            {&P::radius, "radius"}, {&P::sigma, "sigma"},       {&P::frequency, "frequency"},
+            {&P::bandwidth, "bandwidth"}, {&P::phase, "phase"}, {&P::orientation, "orientation"},
+            {&P::aspect, "aspect"}};
+        for (const auto& [m, n] : names)
+            if (m == member) return n;
+        return "kernel";
+    };
+    for (const auto& key : keys)
+        if (pyramid && key.field != &K::KernelParams::orientation)
+            r->fail(r->node(name_of(key.field)), name_of(key.field),
+                    "cannot vary in time with anti-aliasing (a perspective camera, or "
+                    "camera.antialias): the kernel pyramid is built once per layer (0.2 to 0.3 s); "
+                    "keyframe orientation, or set camera.antialias = \"off\" on an orthographic "
+                    "camera");
+    // Combinations the per-key checks cannot see (radius / sigma, cycles across the radius) must
+    // hold at every time.
+    if (!keys.empty()) {
+        std::vector<const sim::Keyframed*> ks;
+        for (const auto& key : keys) ks.push_back(&key.value);
+        LayerConfig probe;
+        probe.kernel = k;
+        probe.kernel_keys = keys;
+        for (double t : key_check_times(ks)) {
+            try {
+                K::validate(probe.kernel_at(t));
+            } catch (const ValueError& e) {
+                // The message starts with the field it blames ("sigma = 0.01: ...").
+                const std::string what = e.what();
+                const std::string blamed = what.substr(0, what.find(' '));
+                const char* at = r->has(blamed) ? blamed.c_str() : name_of(keys.front().field);
+                r->fail(r->node(at), at, "at t = " + num(t) + " s: " + what);
+            }
+        }
+    }
     return k;
 }
 
@@ -544,7 +615,11 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
     const uint64_t global_seed = static_cast<uint64_t>(top.integer("seed", 0, 0, INT64_MAX));
     s.seed = global_seed;
 
+    if (top.has("include"))
+        top.fail(top.node("include"), "include",
+                 "includes are resolved before --set applies: write include in the scene file");
     if (auto o = top.table("output")) {
+        o->refuse_keyframes("size");
         if (const toml::node* n = o->node("size")) {
             const toml::array* a = n->as_array();
             if (!a || a->size() != 2 || !(*a)[0].is_integer() || !(*a)[1].is_integer())
@@ -573,7 +648,7 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
         o->finish();
     }
     s.camera = read_camera(top.table("camera"), s.output.width, s.output.height);
-    s.shading = detail::read_shading(top.table("shading"), base);
+    s.shading = detail::read_shading(top.table("shading"), base, s.shading_keys);
     if (auto l = top.table("limits")) {
         s.limits.max_impulses = l->number("max_impulses", s.limits.max_impulses, kPositive, "a count > 0");
         s.limits.max_memory_mib = l->number("max_memory_mib", s.limits.max_memory_mib, kPositive, "MiB > 0");
@@ -585,15 +660,16 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
     for (size_t i = 0; i < layers.size(); ++i) {
         Reader& r = layers[i];
         LayerConfig L;
-        L.kernel = read_kernel(r.table("kernel"), r, base);
+        const bool pyramid = s.camera.type == CameraConfig::Type::Perspective || s.camera.antialiased();
+        L.kernel = read_kernel(r.table("kernel"), r, base, L.kernel_keys, pyramid);
         if (!r.has("kernel")) r.node("kernel");
         sim::ProcessConfig& p = L.process;
         p.layer = static_cast<uint32_t>(i);
         p.seed = mix_seed(global_seed, static_cast<uint64_t>(r.integer("seed", 1, 0, INT64_MAX)));
-        L.density = r.number("density", 16.0, kPositive, "a density > 0 (impulses per kernel area)");
+        L.density = r.keyframed("density", 16.0, kPositive, "a density > 0 (impulses per kernel area)");
         p.amplitude = static_cast<sim::Amplitude>(r.choice("amplitude", sim::kAmplitudeNames, 0));
-        L.mean = r.number("mean", 0.0);
-        L.gain = r.number("gain", 1.0);
+        L.mean = r.keyframed("mean", 0.0);
+        L.gain = r.keyframed("gain", 1.0);
         p.period = r.pair("period", "[width, height] > 0 of the periodic domain", kPositive);
         p.lifetime_s = r.number("lifetime", 0.0, kNonNegative, "a lifetime >= 0 in seconds (0: still)");
         p.envelope = static_cast<sim::Envelope>(r.choice("envelope", sim::kEnvelopeNames, 0));
@@ -613,6 +689,10 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
         p.jacobian = r.boolean("jacobian", true);
         detail::read_orientation(r, p, base);  // a mode name or a field table
         p.max_travel = r.number("max_travel", 4096.0, kPositive, "a distance > 0 in texture units");
+        if (p.lifetime_s <= 0 && !L.density.is_constant())
+            r.fail(r.node("density"), "density",
+                   "cannot vary in time in a still layer (lifetime = 0): its impulses are never "
+                   "born or die, so their number cannot change without popping; set lifetime > 0");
         try {
             prepare_layer(L);
         } catch (const ValueError& e) {  // combinations the per-key checks cannot see
@@ -620,7 +700,7 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
         }
         L.flow = read_flows(r, p, base);
         detail::read_marginal(r, L, base);
-        if (L.density < 1.0)
+        if (L.density.min() < 1.0)
             r.warn("density", "below 1 impulse per kernel area the noise is lumpy, see Lewis 1989 §4.1");
         r.finish();
         s.layers.push_back(std::move(L));
@@ -632,11 +712,171 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
 }  // namespace
 
 void prepare_layer(LayerConfig& layer) {
-    // Seeding cells as large as the kernel: a pixel's support meets at most 3 x 3 cells
-    // (Lewis 1989 §4.1), which the naive reference relies on.
-    layer.process.cell_size = layer.kernel.radius;
-    layer.process.intensity = layer.density / kernels::Kernel(layer.kernel).support_area();
+    namespace K = kernels;
+    sim::ProcessConfig& p = layer.process;
+    // Seeding cells as large as the kernel at its largest: a pixel's support meets at most
+    // 3 x 3 cells (Lewis 1989 §4.1), which the naive reference relies on.
+    p.cell_size = layer.max_radius();
+    p.density_scale = nullptr;
+    const double area0 = K::Kernel(layer.kernel).support_area();
+    // The kernel area pi R^2 / aspect varies when radius or aspect is keyframed.
+    const sim::Keyframed* radius = nullptr;
+    const sim::Keyframed* aspect = nullptr;
+    for (const auto& k : layer.kernel_keys) {
+        if (k.field == &K::KernelParams::radius) radius = &k.value;
+        if (k.field == &K::KernelParams::aspect) aspect = &k.value;
+    }
+    // A still layer's impulses never change: its intensity is set by the kernel at t = 0.
+    if (p.lifetime_s <= 0 || (layer.density.is_constant() && !radius && !aspect)) {
+        p.intensity = layer.density.value(0.0) / area0;
+        return;
+    }
+    // lambda(t) = density(t) / area(t): births at the largest rate, thinned by
+    // lambda(t_b) / lambda_max (sim::ProcessConfig::density_scale). The smallest radius and the
+    // largest aspect bound the smallest area.
+    K::KernelParams smallest = layer.kernel;
+    if (radius) smallest.radius = radius->min();
+    if (aspect) smallest.aspect = aspect->max();
+    p.intensity = layer.density.max() / K::Kernel(smallest).support_area();
+    const double r0 = layer.kernel.radius, a0 = layer.kernel.aspect;
+    const sim::Keyframed R = radius ? *radius : sim::Keyframed(r0);
+    const sim::Keyframed A = aspect ? *aspect : sim::Keyframed(a0);
+    p.density_scale = [density = layer.density, R, A, lambda_max = p.intensity](double t) {
+        const double r = R.value(t);
+        const double area = std::numbers::pi * r * r / A.value(t);  // Kernel::support_area
+        return density.value(t) / area / lambda_max;
+    };
 }
+
+kernels::KernelParams LayerConfig::kernel_at(double t) const {
+    kernels::KernelParams k = kernel;
+    for (const auto& key : kernel_keys) k.*key.field = key.value.value(t);
+    return k;
+}
+
+double LayerConfig::max_radius() const {
+    for (const auto& key : kernel_keys)
+        if (key.field == &kernels::KernelParams::radius) return key.value.max();
+    return kernel.radius;
+}
+
+kernels::MarginalParams LayerConfig::marginal_at(double t) const {
+    kernels::MarginalParams m = marginal->target().params();
+    for (const auto& key : marginal_keys) m.*key.field = key.value.value(t);
+    return m;
+}
+
+bool LayerConfig::keyframed() const {
+    return !density.is_constant() || !mean.is_constant() || !gain.is_constant() ||
+           !kernel_keys.empty() || !marginal_keys.empty();
+}
+
+double LayerConfig::layer_time(double t) const {
+    const double P = process.loop_s;
+    return P > 0 ? t - std::floor(t / P) * P : t;
+}
+
+namespace {
+
+/// The text of a file, or nullopt with the system's reason in `error`.
+std::optional<std::string> read_text(const std::string& path, std::string& error) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) {
+        error = std::strerror(errno);
+        return std::nullopt;
+    }
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+/// A path made absolute and normal, for comparing files (no exception for odd names).
+fs::path same_file_key(const fs::path& p) {
+    std::error_code ec;
+    const fs::path c = fs::weakly_canonical(p, ec);
+    return ec ? p.lexically_normal() : c;
+}
+
+/// Parses scene text; `name` names the file in messages and in every node's source.
+toml::table parse_text(std::string_view text, const std::string& name) {
+    try {
+        return toml::parse(text, name);
+    } catch (const toml::parse_error& e) {
+        std::ostringstream s;
+        s << name << ':' << e.source().begin.line << ':' << e.source().begin.column << ": "
+          << e.description();
+        throw SceneError(s.str());
+    }
+}
+
+/// Puts `base` under `top`: keys of `top` win; a table written as a [section] in both merges
+/// key by key; anything else (a value, an inline { ... } table such as a keyframe table, an
+/// array, an array of tables such as [[layer]]) is replaced whole. Nodes are moved, so they
+/// keep their file and position for messages.
+void merge_under(toml::table& top, toml::table& base) {
+    for (auto&& [key, node] : base) {
+        toml::node* mine = top.get(key.str());
+        if (!mine) {
+            top.insert(key, std::move(node));
+            continue;
+        }
+        toml::table* a = mine->as_table();
+        toml::table* b = node.as_table();
+        if (a && b && !a->is_inline() && !b->is_inline()) merge_under(*a, *b);
+    }
+}
+
+/// Replaces the top-level `include` of `root` (the file `name`) by the included files' tables,
+/// recursively: an included file's tables are the base and the including file's keys override
+/// them; of a list of includes, later ones override earlier ones. `chain` holds the files being
+/// included (to refuse cycles); `texts` collects the included files' texts (for the hash).
+void resolve_includes(toml::table& root, const std::string& name,
+                      std::vector<std::pair<fs::path, std::string>>& chain, std::string& texts) {
+    const toml::node* n = root.get("include");
+    if (!n) return;
+    Source src;
+    src.file = name;
+    Reader r(root, "", src);
+    std::vector<const toml::node*> files;
+    if (n->is_string()) {
+        files.push_back(n);
+    } else if (const toml::array* a = n->as_array(); a && !a->empty()) {
+        for (const auto& e : *a) {
+            if (!e.is_string()) r.fail(&e, "include", "expected a file name (a string)");
+            files.push_back(&e);
+        }
+    } else {
+        r.fail(n, "include", "expected a file name or a list of file names");
+    }
+    std::vector<toml::table> included;
+    for (const toml::node* f : files) {
+        const std::string rel(f->value<std::string_view>().value_or(""));
+        const fs::path path =
+            detail::resolve_path(f, rel, fs::path(name).parent_path()).lexically_normal();
+        const fs::path canonical = same_file_key(path);
+        for (size_t i = 0; i < chain.size(); ++i)
+            if (chain[i].first == canonical) {
+                std::string cycle;
+                for (size_t j = i; j < chain.size(); ++j) cycle += chain[j].second + " -> ";
+                r.fail(f, "include", "include cycle: " + cycle + path.string());
+            }
+        std::string error;
+        const auto text = read_text(path.string(), error);
+        if (!text)
+            r.fail(f, "include",
+                   "cannot open: " + error +
+                       (fs::path(rel).is_absolute() ? "" : " (relative to this file's directory)"));
+        texts += "\n--include " + path.string() + "\n" + *text;
+        included.push_back(parse_text(*text, path.string()));
+        chain.emplace_back(canonical, path.string());
+        resolve_includes(included.back(), path.string(), chain, texts);
+        chain.pop_back();
+    }
+    root.erase("include");
+    for (size_t i = included.size(); i-- > 0;) merge_under(root, included[i]);
+}
+
+}  // namespace
 
 Scene load_scene_string(std::string_view text, const std::string& name,
                         const std::vector<std::string>& overrides) {
@@ -644,16 +884,10 @@ Scene load_scene_string(std::string_view text, const std::string& name,
     src.file = name;
     std::vector<std::string> warnings;
     src.warnings = &warnings;
-    toml::table root;
-    try {
-        root = toml::parse(text, name);
-    } catch (const toml::parse_error& e) {
-        std::ostringstream s;
-        s << name << ':' << e.source().begin.line << ':' << e.source().begin.column << ": "
-          << e.description();
-        throw SceneError(s.str());
-    }
+    toml::table root = parse_text(text, name);
     std::string all(text);
+    std::vector<std::pair<fs::path, std::string>> chain = {{same_file_key(name), name}};
+    resolve_includes(root, name, chain, all);
     for (const auto& o : overrides) {
         apply_override(root, o, src);
         all += "\n--set " + o;
@@ -667,11 +901,10 @@ Scene load_scene_string(std::string_view text, const std::string& name,
 }
 
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw IoError(path + ": cannot open scene file: " + std::strerror(errno));
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return load_scene_string(ss.str(), path, overrides);
+    std::string error;
+    const auto text = read_text(path, error);
+    if (!text) throw IoError(path + ": cannot open scene file: " + error);
+    return load_scene_string(*text, path, overrides);
 }
 
 }  // namespace impulse::scenes

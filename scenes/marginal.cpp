@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <sstream>
 
 #include "render/render.h"
@@ -33,34 +34,47 @@ void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base)
     kernels::MarginalParams P;
     P.type = static_cast<kernels::MarginalType>(m->choice("type", kernels::kMarginalTypeNames, 0));
     const std::string type_str(kernels::to_string(P.type));
+    // Read first: they decide whether the target may vary in time.
+    const bool precorrect = m->boolean("precorrect", false);
+    L.marginal_cdf = static_cast<kernels::SourceCdf>(m->choice("cdf", kernels::kSourceCdfNames, 0));
+    const std::string fixed_target =
+        precorrect ? "the kernel is pre-corrected once for the target (precorrect = true)"
+        : L.marginal_cdf == kernels::SourceCdf::Empirical
+            ? "the transfer is built once from the calibration render (cdf = \"empirical\")"
+            : "";
+    // A target parameter: keyframed (the Renderer rebuilds the transfer when it changes).
+    using MP = kernels::MarginalParams;
+    auto param = [&](const char* key, double MP::*member, double fallback,
+                     const std::function<bool(double)>& ok, const char* expected) {
+        const sim::Keyframed v = m->keyframed(key, fallback, ok, expected);
+        if (!v.is_constant() && !fixed_target.empty())
+            m->fail(m->node(key), key, "cannot vary in time: " + fixed_target);
+        P.*member = v.value(0.0);
+        if (!v.is_constant()) L.marginal_keys.push_back({member, v});
+    };
     switch (P.type) {
         case kernels::MarginalType::Uniform:
-            P.a = m->number("a", 0.0);
-            P.b = m->number("b", 1.0);
-            if (!(P.b > P.a)) {
-                std::ostringstream s;
-                s << "expected b > a = " << P.a;
-                m->fail(m->node(m->has("b") ? "b" : "a"), m->has("b") ? "b" : "a", s.str());
-            }
+            param("a", &MP::a, 0.0, {}, "");
+            param("b", &MP::b, 1.0, {}, "");
             break;
         case kernels::MarginalType::Exponential:
-            P.rate = m->number("rate", 1.0, kPositive, "a rate > 0 (the mean is 1 / rate)");
+            param("rate", &MP::rate, 1.0, kPositive, "a rate > 0 (the mean is 1 / rate)");
             break;
         case kernels::MarginalType::Laplace:
-            P.mu = m->number("mu", 0.0);
-            P.scale = m->number("scale", 1.0, kPositive, "a scale b > 0 in exp(-|y - mu| / b)");
+            param("mu", &MP::mu, 0.0, {}, "");
+            param("scale", &MP::scale, 1.0, kPositive, "a scale b > 0 in exp(-|y - mu| / b)");
             break;
         case kernels::MarginalType::Lognormal:
-            P.mu = m->number("mu", 0.0);
-            P.sigma = m->number(
-                "sigma", 1.0, [](double v) { return v > 0.0 && v <= 8.0; },
+            param("mu", &MP::mu, 0.0, {}, "");
+            param(
+                "sigma", &MP::sigma, 1.0, [](double v) { return v > 0.0 && v <= 8.0; },
                 "a standard deviation of log y in (0, 8]");
             break;
         case kernels::MarginalType::StudentT:
-            P.mu = m->number("mu", 0.0);
-            P.scale = m->number("scale", 1.0, kPositive, "a scale > 0");
-            P.nu = m->number(
-                "nu", 4.0, [](double v) { return v > 2.0; },
+            param("mu", &MP::mu, 0.0, {}, "");
+            param("scale", &MP::scale, 1.0, kPositive, "a scale > 0");
+            param(
+                "nu", &MP::nu, 4.0, [](double v) { return v > 2.0; },
                 "degrees of freedom > 2 (a finite variance)");
             break;
         case kernels::MarginalType::Empirical: {
@@ -82,9 +96,7 @@ void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base)
                 }
             } else {
                 const std::string rel = m->string("image", "");
-                const std::filesystem::path p = std::filesystem::path(rel).is_absolute()
-                                                    ? std::filesystem::path(rel)
-                                                    : base / rel;
+                const std::filesystem::path p = resolve_path(in, rel, base);
                 try {
                     const render::Frame img = render::read_image(p.string());
                     samples->assign(img.data.begin(), img.data.end());
@@ -108,13 +120,46 @@ void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base)
             if (std::find(own.begin(), own.end(), key) == own.end() && m->has(key))
                 m->warn(key, "ignored for marginal type " + type_str);
         }
-    const bool precorrect = m->boolean("precorrect", false);
-    L.marginal_cdf = static_cast<kernels::SourceCdf>(m->choice("cdf", kernels::kSourceCdfNames, 0));
+    if (P.type == kernels::MarginalType::Uniform) {
+        // b > a at every time.
+        std::vector<const sim::Keyframed*> ks;
+        for (const auto& k : L.marginal_keys) ks.push_back(&k.value);
+        for (double t : key_check_times(ks)) {
+            double a = P.a, b = P.b;
+            for (const auto& k : L.marginal_keys) (k.field == &MP::a ? a : b) = k.value.value(t);
+            if (!(b > a)) {
+                std::ostringstream s;
+                s << "expected b > a = " << a;
+                if (!L.marginal_keys.empty()) s << " (at t = " << t << " s)";
+                m->fail(m->node(m->has("b") ? "b" : "a"), m->has("b") ? "b" : "a", s.str());
+            }
+        }
+    }
     m->finish();
-    if (L.mean != 0.0)
+    // Keys the shaping overrides, or that a transfer built once cannot follow.
+    if (!L.mean.is_constant())
+        r.fail(r.node("mean"), "mean",
+               "cannot vary in time on a layer with a marginal: the target distribution sets its "
+               "mean");
+    if (!L.gain.is_constant())
+        r.fail(r.node("gain"), "gain",
+               "cannot vary in time on a layer with a marginal: the target distribution sets the "
+               "scale (only the sign of gain matters)");
+    if (L.marginal_cdf == kernels::SourceCdf::Empirical && !L.density.is_constant())
+        r.fail(r.node("density"), "density",
+               "cannot vary in time with marginal cdf = \"empirical\": F_x is measured once, on "
+               "a render at frame 0");
+    if ((L.marginal_cdf == kernels::SourceCdf::Empirical || precorrect) && !L.kernel_keys.empty())
+        r.fail(r.node("kernel"), "kernel",
+               std::string("cannot vary in time with ") +
+                   (precorrect ? "marginal precorrect = true: the kernel is replaced once by the "
+                                 "corrected one"
+                               : "marginal cdf = \"empirical\": F_x is measured once, on a render "
+                                 "at frame 0"));
+    if (L.mean.value(0.0) != 0.0)
         r.warn("mean",
                "no effect on a layer with a marginal: the target distribution sets its mean");
-    if (std::abs(L.gain) != 1.0)
+    if (std::abs(L.gain.value(0.0)) != 1.0)
         r.warn("gain",
                "only its sign matters on a layer with a marginal: the target distribution "
                "sets the scale");
@@ -148,6 +193,7 @@ void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base)
 
 std::shared_ptr<const kernels::MarginalTransform> calibrate_marginal(const LayerConfig& layer,
                                                                      const sim::Timing& timing) {
+    // Empirical F_x refuses keyframed density, gain, mean and kernel: the constants hold.
     const double R = layer.kernel.radius;
     const double side = std::min(256.0 * R, std::sqrt(2e6 / layer.process.intensity));
     render::View view;
@@ -156,13 +202,14 @@ std::shared_ptr<const kernels::MarginalTransform> calibrate_marginal(const Layer
     sim::LayerSimulator sim(layer.process, layer.flow, timing, R);
     sim::Impulses imp;
     sim.impulses_at(0, view.box(), imp);
-    if (layer.gain != 1.0)
-        for (auto& w : imp.weight) w = static_cast<float>(w * layer.gain);
+    const double gain = layer.gain.value(0.0), mean = layer.mean.value(0.0);
+    if (gain != 1.0)
+        for (auto& w : imp.weight) w = static_cast<float>(w * gain);
     render::Frame f;
     f.resize(view.width, view.height);
     render::accumulate(kernels::Kernel(layer.kernel), imp, view, f);
-    if (layer.mean != 0.0)
-        for (auto& v : f.data) v = static_cast<float>(v + layer.mean);
+    if (mean != 0.0)
+        for (auto& v : f.data) v = static_cast<float>(v + mean);
     return std::make_shared<const kernels::MarginalTransform>(layer.marginal->target().params(),
                                                               f.data);
 }

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdint>
 #include <cmath>
+#include <map>
 #include <sstream>
 
 #include "util/errors.h"
@@ -65,6 +66,96 @@ std::string type_name(const toml::node& n) {
     }
 }
 
+namespace {
+
+/// The file a node or key was written in: its own (an included file), else the scene's.
+std::string file_of(const toml::source_region& src, const Source& source) {
+    return src.path && !src.path->empty() ? *src.path : source.file;
+}
+
+/// A table of the form { keys = ..., ease = ... } (a keyframe table).
+bool is_keyframe_table(const toml::node* n) {
+    const toml::table* t = n ? n->as_table() : nullptr;
+    return t && t->contains("keys");
+}
+
+/// "layer[0].flow[1].scale" -> "layer.flow.scale"
+std::string without_indices(std::string_view path) {
+    std::string out;
+    bool in_index = false;
+    for (char c : path) {
+        if (c == '[') in_index = true;
+        if (!in_index) out += c;
+        if (c == ']') in_index = false;
+    }
+    return out;
+}
+
+}  // namespace
+
+std::string structural_reason(std::string_view path) {
+    // Keys that cannot vary in time, and why (docs/scenes.md "Keyframes"). Keys not listed are
+    // refused with the generic reason at the end.
+    static const std::map<std::string, std::string, std::less<>> reasons = {
+        {"seed", "the seed picks every impulse once, for the whole animation"},
+        {"output.size", "the frame size is the same in every frame of an output"},
+        {"output.frames", "it is the length of the output"},
+        {"output.fps", "it sets the time of every frame"},
+        {"output.start", "it sets the time of every frame"},
+        {"output.crf", "the video is encoded at one quality"},
+        {"output.bits", "the files of an output have one format"},
+        {"output.range", "the display mapping is the same in every frame"},
+        {"limits.max_impulses", "a limit is checked once, when the scene loads"},
+        {"limits.max_memory_mib", "a limit is checked once, when the scene loads"},
+        {"camera.center", "a pair is fixed: keyframe center_x and center_y"},
+        {"camera.position", "a pair is fixed: keyframe position_x and position_y"},
+        {"camera.filter", "the anti-aliasing pyramid and its fade are set up once per scene"},
+        {"camera.cutoff", "the anti-aliasing pyramid and its fade are set up once per scene"},
+        {"camera.anisotropic", "the anti-aliasing pyramid and its fade are set up once per scene"},
+        {"layer.seed", "the seed picks every impulse once, for the whole animation"},
+        {"layer.period", "the domain is periodic with one period (its seeding cells wrap)"},
+        {"layer.lifetime",
+         "every impulse lives this long; the births' time cells and envelope are built on it"},
+        {"layer.loop", "the births repeat with one period"},
+        {"layer.substeps",
+         "the flow is integrated on one global time grid, so frames do not depend on the "
+         "order they are rendered in"},
+        {"layer.max_travel", "a limit is checked once, when the scene loads"},
+        {"layer.flow.center", "a pair is fixed: keyframe center_x and center_y"},
+        {"layer.flow.velocity", "a pair is fixed: keyframe vx and vy"},
+        {"layer.flow.scale", "the curl noise's potential lattice is built on it"},
+        {"layer.flow.seed", "the seed picks the flow's impulses once, for the whole animation"},
+        {"layer.flow.spacing", "the image is placed once: its pixels are the field's samples"},
+        {"layer.flow.origin", "the image is placed once: its pixels are the field's samples"},
+        {"layer.orientation.center", "a pair is fixed: keyframe center_x and center_y"},
+        {"layer.orientation.spacing",
+         "the image is placed once: its pixels are the field's samples"},
+        {"layer.orientation.origin",
+         "the field is placed once (to move sine waves along, keyframe phase)"},
+        {"shading.light", "a pair is fixed: keyframe light_azimuth and light_elevation"},
+        {"shading.ramp.stops", "the ramp is built once from the image"},
+    };
+    const auto it = reasons.find(without_indices(path));
+    if (it != reasons.end()) return it->second;
+    return "it is structural (docs/scenes.md lists the keys that can vary)";
+}
+
+std::filesystem::path resolve_path(const toml::node* n, const std::string& rel,
+                                   const std::filesystem::path& base) {
+    namespace fs = std::filesystem;
+    if (fs::path(rel).is_absolute()) return rel;
+    if (n && n->source().path && !n->source().path->empty())
+        return fs::path(*n->source().path).parent_path() / rel;
+    return base / rel;
+}
+
+void Reader::refuse_keyframes(std::string_view key) {
+    const toml::node* n = node(key);
+    if (!is_keyframe_table(n)) return;
+    fail(n, key,
+         "cannot vary in time: " + (!m_structural.empty() ? m_structural : structural_reason(key_path(key))));
+}
+
 Reader::Reader(const toml::table& table, std::string path, const Source& source,
                const toml::node* self)
     : m_table(table), m_path(std::move(path)), m_source(source), m_self(self ? self : &table) {}
@@ -95,7 +186,7 @@ std::string Reader::location(const toml::node* n, std::string_view key) const {
     const toml::node* at = n ? n : m_self;
     const auto& src = at->source();
     std::ostringstream s;
-    s << m_source.file;
+    s << file_of(src, m_source);
     if (src.begin.line) s << ':' << src.begin.line << ':' << src.begin.column;
     return s.str();
 }
@@ -117,6 +208,7 @@ void Reader::warn(std::string_view key, const std::string& what) const {
 }
 
 double Reader::number(std::string_view key, double fallback) {
+    refuse_keyframes(key);
     const toml::node* n = node(key);
     if (!n) return fallback;
     if (!n->is_number()) fail(n, key, "expected a number, found " + type_name(*n));
@@ -133,6 +225,7 @@ double Reader::number(std::string_view key, double fallback, const std::function
 }
 
 int64_t Reader::integer(std::string_view key, int64_t fallback, int64_t lo, int64_t hi) {
+    refuse_keyframes(key);
     const toml::node* n = node(key);
     if (!n) return fallback;
     if (!n->is_integer()) fail(n, key, "expected an integer, found " + type_name(*n));
@@ -145,6 +238,7 @@ int64_t Reader::integer(std::string_view key, int64_t fallback, int64_t lo, int6
 }
 
 bool Reader::boolean(std::string_view key, bool fallback) {
+    refuse_keyframes(key);
     const toml::node* n = node(key);
     if (!n) return fallback;
     if (!n->is_boolean()) fail(n, key, "expected true or false, found " + type_name(*n));
@@ -173,6 +267,7 @@ size_t Reader::choice_impl(std::string_view key, const std::vector<std::string_v
 
 std::optional<std::array<double, 2>> Reader::pair(std::string_view key, const char* expected,
                                                   const std::function<bool(double)>& ok) {
+    refuse_keyframes(key);
     const toml::node* n = node(key);
     if (!n) return std::nullopt;
     const toml::array* a = n->as_array();
@@ -188,18 +283,19 @@ sim::Keyframed Reader::keyframed(std::string_view key, double fallback,
                                  const std::function<bool(double)>& ok, const char* expected) {
     const toml::node* n = node(key);
     if (!n) return sim::Keyframed(fallback);
-    auto check = [&](double v) {
-        if (!std::isfinite(v) || (ok && !ok(v)))
-            fail(n, key, std::string("expected ") + (ok ? expected : "finite values"));
+    // A bad value is reported at itself: the number, or the [t, v] key holding it.
+    auto check = [&](double v, const Reader& at, const toml::node* where, std::string_view k) {
+        if (!std::isfinite(v)) at.fail(where, k, "expected a finite number");
+        if (ok && !ok(v)) at.fail(where, k, std::string("expected ") + expected);
     };
     if (n->is_number()) {
         const double v = n->value<double>().value_or(0);
-        check(v);
+        check(v, *this, n, key);
         return sim::Keyframed(v);
     }
     const toml::table* t = n->as_table();
     if (!t)
-        fail(n, key, "expected a number or { keys = [[t, v], ...], ease = \"linear\" }, found " +
+        fail(n, key, "expected a number or keyframes { keys = [[t, v], ...] }, found " +
                          type_name(*n));
     Reader r(*t, key_path(key), m_source, n);
     sim::Keyframed k;
@@ -213,7 +309,7 @@ sim::Keyframed Reader::keyframed(std::string_view key, double fallback,
             r.fail(&e, "keys", "expected [time_s, value] pairs of numbers");
         const double t_s = (*p)[0].value<double>().value_or(0), v = (*p)[1].value<double>().value_or(0);
         if (!std::isfinite(t_s)) r.fail(&e, "keys", "expected finite key times");
-        check(v);
+        check(v, r, &e, "keys");
         if (!k.keys.empty() && !(t_s > k.keys.back().first)) {
             std::ostringstream s;
             s << "keyframes out of order: time " << t_s << " follows " << k.keys.back().first
@@ -252,6 +348,18 @@ std::vector<Reader> Reader::tables(std::string_view key) {
     return out;
 }
 
+std::vector<double> key_check_times(const std::vector<const sim::Keyframed*>& ks) {
+    std::set<double> t = {0.0};
+    double lo = 0.0, hi = 0.0;
+    for (const auto* k : ks)
+        for (const auto& key : k->keys) {
+            t.insert(key.first);
+            lo = std::min(lo, key.first), hi = std::max(hi, key.first);
+        }
+    for (int i = 0; i <= 64 && hi > lo; ++i) t.insert(lo + (hi - lo) * i / 64.0);
+    return {t.begin(), t.end()};
+}
+
 void Reader::finish() const {
     std::vector<std::string> known(m_known.begin(), m_known.end());
     for (auto&& [k, v] : m_table) {
@@ -262,7 +370,7 @@ void Reader::finish() const {
         if (it != m_source.overrides.end())
             s << "--set " << it->second;
         else {
-            s << m_source.file;
+            s << file_of(src, m_source);
             if (src.begin.line) s << ':' << src.begin.line << ':' << src.begin.column;
         }
         s << ": unknown key \"" << k.str() << "\"" << (m_path.empty() ? "" : " in " + m_path);

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "render/shading.h"
+#include "scenes/scenes.h"
 #include "sim/sim.h"
 
 namespace impulse::scenes::detail {
@@ -43,6 +44,8 @@ public:
     bool has(std::string_view key);
     const toml::node* node(std::string_view key);
 
+    /// A number that cannot vary in time: a keyframe table given for it is refused with the
+    /// reason (structural_reason), as for integer, pair and boolean.
     double number(std::string_view key, double fallback);
     /// Number constrained by `ok`; `expected` completes "expected ..." in the message.
     double number(std::string_view key, double fallback, const std::function<bool(double)>& ok,
@@ -62,6 +65,13 @@ public:
     /// A number, or { keys = [[t, v], ...], ease = "linear" } with increasing times.
     sim::Keyframed keyframed(std::string_view key, double fallback,
                              const std::function<bool(double)>& ok = {}, const char* expected = "");
+    /// Reason given when a keyframe table is written for a structural key of this table (for
+    /// tables whose numbers are all structural, e.g. a designed kernel); overrides the list in
+    /// structural_reason.
+    void set_structural_reason(std::string reason) { m_structural = std::move(reason); }
+    /// Fails at `key` with "cannot vary in time: <reason>" when its node is a keyframe table
+    /// ({ keys = ... }): this table's reason, else structural_reason of the key's path.
+    void refuse_keyframes(std::string_view key);
     /// Sub-table (inline or standard); nullopt when absent.
     std::optional<Reader> table(std::string_view key);
     /// Array of tables ([[layer]]); empty when absent.
@@ -77,6 +87,7 @@ public:
 private:
     std::string location(const toml::node* n, std::string_view key) const;
 
+    std::string m_structural;
     const toml::table& m_table;
     std::string m_path;
     const Source& m_source;
@@ -84,8 +95,25 @@ private:
     std::set<std::string, std::less<>> m_known;
 };
 
-/// The [shading] table (scenes/shading_config.cpp); `base` resolves relative paths.
-render::Shading read_shading(std::optional<Reader> r, const std::filesystem::path& base);
+/// The [shading] table (scenes/shading_config.cpp); `base` resolves relative paths. Keyframed
+/// numbers go to `keys` (their values at t = 0 into the result).
+render::Shading read_shading(std::optional<Reader> r, const std::filesystem::path& base,
+                             ShadingKeys& keys);
+
+/// Times at which combinations of keyframed values are checked: t = 0, every key, and 65
+/// times evenly over the keys' span (each value is monotone between its keys, but a
+/// combination of two need not be).
+std::vector<double> key_check_times(const std::vector<const sim::Keyframed*>& keyframed);
+
+/// Why the key at `path` (a key path with the array indices removed: "layer.lifetime") cannot
+/// vary in time; completes "cannot vary in time: ...".
+std::string structural_reason(std::string_view path);
+
+/// A path value `rel` of node `n`: absolute as it is, else relative to the directory of the file
+/// the node was written in (an included file's own directory), or to `base` for values without
+/// a file (--set overrides).
+std::filesystem::path resolve_path(const toml::node* n, const std::string& rel,
+                                   const std::filesystem::path& base);
 
 /// Text of a node's value as written (for messages).
 std::string value_text(const toml::node& n);

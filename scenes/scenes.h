@@ -70,17 +70,35 @@ struct Limits {
     double max_memory_mib = 8192; ///< estimated peak memory of one frame
 };
 
-/// One [[layer]].
+/// A keyframed field of a layer's kernel: kernel.*field = value(t) (docs/scenes.md "Keyframes").
+struct KernelKey {
+    double kernels::KernelParams::*field = nullptr;
+    sim::Keyframed value;
+};
+
+/// A keyframed parameter of a layer's target marginal: params.*field = value(t).
+struct MarginalKey {
+    double kernels::MarginalParams::*field = nullptr;
+    sim::Keyframed value;
+};
+
+/// One [[layer]]. Its keyframed parameters are evaluated at the layer time (layer_time).
 struct LayerConfig {
-    kernels::KernelParams kernel;
-    sim::ProcessConfig process;  ///< intensity derived from density / kernel area
-    double density = 16.0;       ///< expected live impulses per kernel area
-    double mean = 0.0;           ///< constant added to the layer
-    double gain = 1.0;           ///< amplitude scale
+    kernels::KernelParams kernel;  ///< the kernel; keyframed fields hold their value at t = 0
+    std::vector<KernelKey> kernel_keys;  ///< keyframed kernel fields; empty: a fixed kernel
+    /// intensity: the largest live intensity over time, density / kernel area (births are
+    /// thinned down from it by process.density_scale when density or kernel area vary).
+    sim::ProcessConfig process;
+    sim::Keyframed density = 16.0;  ///< expected live impulses per kernel area, > 0
+    sim::Keyframed mean = 0.0;      ///< constant added to the layer
+    sim::Keyframed gain = 1.0;      ///< amplitude scale
     std::shared_ptr<sim::Flow> flow;  ///< null: no motion
     /// Distribution shaping g = F_y^-1(F_x(.)) of the layer's values (Lewis 1986 §4); null:
-    /// none. Built with the Gaussian F_x of the unshaped layer's closed-form mean and variance.
+    /// none. Built with the Gaussian F_x of the unshaped layer's closed-form mean and variance
+    /// (at t = 0; the Renderer rebuilds it per frame when marginal_keys or the unshaped
+    /// layer's moments vary in time).
     std::shared_ptr<const kernels::MarginalTransform> marginal;
+    std::vector<MarginalKey> marginal_keys;  ///< keyframed parameters of the target
     /// F_x of the marginal: Gaussian, or empirical (the Renderer measures it on a calibration
     /// render of the layer at frame 0).
     kernels::SourceCdf marginal_cdf = kernels::SourceCdf::Gaussian;
@@ -88,6 +106,23 @@ struct LayerConfig {
     /// layer has the original kernel's spectrum): what it achieved. process.intensity and
     /// cell_size still refer to the original kernel.
     std::shared_ptr<const kernels::PrecorrectionReport> precorrection;
+
+    /// The kernel at layer time t_s: `kernel` with the keyframed fields evaluated.
+    kernels::KernelParams kernel_at(double t_s) const;
+    /// The largest support radius over time (seeding cells and culling use it).
+    double max_radius() const;
+    /// The marginal's target parameters at layer time t_s (marginal must be set).
+    kernels::MarginalParams marginal_at(double t_s) const;
+    /// Whether density, mean, gain, the kernel or the marginal vary in time.
+    bool keyframed() const;
+    /// The time at which the layer's keys are evaluated for frame time t_s: t_s, wrapped into
+    /// [0, loop) in a looped layer (as its flow's time is).
+    double layer_time(double t_s) const;
+};
+
+/// [shading] numbers that may vary in time; the values at t = 0 are in Scene::shading.
+struct ShadingKeys {
+    sim::Keyframed relief = 0.0, light_azimuth = 135.0, light_elevation = 35.0, ambient = 0.25;
 };
 
 struct Scene {
@@ -97,14 +132,25 @@ struct Scene {
     CameraConfig camera;
     Limits limits;
     std::vector<LayerConfig> layers;
-    render::Shading shading;  ///< [shading]: how the field becomes display colour
-    std::string hash;  ///< FNV-1a of the scene text and overrides, hex
+    render::Shading shading;  ///< [shading]: how the field becomes display colour (at t = 0)
+    ShadingKeys shading_keys;  ///< its keyframed numbers (shading_at evaluates them)
+    std::string hash;  ///< FNV-1a of the scene text, included files and overrides, hex
     std::vector<std::string> warnings;  ///< accepted but suspicious values, one line each
+
+    /// Time of frame `frame` (0-based) in seconds: (start_s fps + frame) / fps.
+    double frame_time(int64_t frame) const;
+    /// Layer `layer`'s time at frame `frame`: the frame time, wrapped into [0, loop) in whole
+    /// frames for a looped layer (so frame loop fps repeats frame 0 bit for bit).
+    double layer_time(size_t layer, int64_t frame) const;
+    /// The shading at frame time t_s (keyframed numbers evaluated).
+    render::Shading shading_at(double t_s) const;
 };
 
-/// Derive a layer's process.intensity (density / kernel area) and process.cell_size from its
-/// density and kernel. The loader does it; call it after building or changing a layer in code.
-/// Throws ValueError for an invalid kernel.
+/// Derive a layer's process.intensity (density / kernel area, the largest over time),
+/// process.density_scale (the thinning when density or the kernel area vary in time) and
+/// process.cell_size (the largest kernel radius) from its density and kernel. The loader does
+/// it; call it after building or changing a layer in code. Throws ValueError for an invalid
+/// kernel.
 void prepare_layer(LayerConfig& layer);
 
 /// Load a scene file, applying `--set key=value` overrides (dotted paths, array elements by
@@ -120,9 +166,13 @@ struct Theory {
     double mean = 0.0;
     double variance = 0.0;
 };
-Theory layer_theory(const LayerConfig& layer);
-/// Sum over layers (independent layers add).
-Theory scene_theory(const Scene& scene);
+/// At frame time t_s: mean(t) and gain(t)^2 E[a^2] int h_t^2 (lambda / T) int_0^T s(t - a)
+/// w(a)^2 da, s the birth thinning (process.density_scale; 1 when the rate is constant), so
+/// a keyframed density acts through the births of the last lifetime. A shaped layer has its
+/// target's moments at t.
+Theory layer_theory(const LayerConfig& layer, double t_s = 0.0);
+/// Sum over layers at frame time t_s (independent layers add).
+Theory scene_theory(const Scene& scene, double t_s = 0.0);
 
 /// Renders frames of a scene. Frame f is a pure function of (scene, f): rendering frames in
 /// order reuses particle state, rendering any frame alone integrates from birth, with the
@@ -140,10 +190,15 @@ public:
     /// Estimated live impulses per frame over all layers, and peak memory in MiB.
     double estimated_impulses() const;
     double estimated_memory_mib() const;
-    /// Value mapping for display: output.range, or mean +- 3 standard deviations.
+    /// Value mapping for display: output.range, or mean +- 3 standard deviations; with
+    /// keyframed layers the widest such range over the output's frames (scene_theory at the
+    /// first and last frame, every key time inside, one lifetime after each, and 64 times
+    /// between), so the mapping is the same in every frame.
     render::ValueMapping mapping() const;
 
 private:
+    /// A shaped layer whose target or unshaped moments vary: the transfer at layer time t_s.
+    void update_marginal(size_t layer, double t_s);
     struct State;
     std::unique_ptr<State> m_state;
 };

@@ -83,8 +83,10 @@ double normal_quantile(double p) {
 
 }  // namespace
 
-render::Shading read_shading(std::optional<Reader> r, const std::filesystem::path& base) {
+render::Shading read_shading(std::optional<Reader> r, const std::filesystem::path& base,
+                             ShadingKeys& keys) {
     render::Shading s;
+    keys = ShadingKeys{};
     if (!r) return s;
     if (const toml::node* n = r->node("ramp"); n && n->is_table()) {
         // The colour mapping of a colour exemplar (Lewis 1986 §3 resynthesis in colour): the
@@ -97,7 +99,7 @@ render::Shading read_shading(std::optional<Reader> r, const std::filesystem::pat
         const int stops = static_cast<int>(t.integer("stops", 16, 2, 256));
         if (rel.empty()) t.fail(pn, "exemplar", "expected the path of a colour image to take the colours from");
         t.finish();
-        const std::filesystem::path path = std::filesystem::path(rel).is_absolute() ? std::filesystem::path(rel) : base / rel;
+        const std::filesystem::path path = resolve_path(pn, rel, base);
         std::vector<float> px;
         int channels = 0;
         std::string error;
@@ -147,14 +149,25 @@ render::Shading read_shading(std::optional<Reader> r, const std::filesystem::pat
             r->fail(n, "ramp", "expected a ramp name, a list of stops or { exemplar = \"path\" }, found " + type_name(*n));
         }
     }
-    s.relief = r->number("relief", 0.0, [](double v) { return v >= 0.0; }, "a relief >= 0 (0: flat)");
+    const auto elevation_ok = [](double v) { return v > 0.0 && v <= 90.0; };
+    keys.relief = r->keyframed("relief", 0.0, [](double v) { return v >= 0.0; }, "a relief >= 0 (0: flat)");
     if (auto l = r->pair("light", "[azimuth, elevation] in degrees, elevation in (0, 90]")) {
-        if (!((*l)[1] > 0.0 && (*l)[1] <= 90.0))
+        if (!elevation_ok((*l)[1]))
             r->fail(r->node("light"), "light", "expected [azimuth, elevation] in degrees, elevation in (0, 90]");
-        s.light_azimuth_deg = (*l)[0];
-        s.light_elevation_deg = (*l)[1];
+        for (const char* k : {"light_azimuth", "light_elevation"})
+            if (r->has(k))
+                r->fail(r->node(k), k, "give light = [azimuth, elevation] or light_azimuth and light_elevation, not both");
+        keys.light_azimuth = (*l)[0];
+        keys.light_elevation = (*l)[1];
     }
-    s.ambient = r->number("ambient", s.ambient, [](double v) { return v >= 0.0 && v <= 1.0; }, "a fraction in [0, 1]");
+    if (r->has("light_azimuth")) keys.light_azimuth = r->keyframed("light_azimuth", 135.0);
+    if (r->has("light_elevation"))
+        keys.light_elevation = r->keyframed("light_elevation", 35.0, elevation_ok, "an elevation in (0, 90] degrees");
+    keys.ambient = r->keyframed("ambient", s.ambient, [](double v) { return v >= 0.0 && v <= 1.0; }, "a fraction in [0, 1]");
+    s.relief = keys.relief.value(0.0);
+    s.light_azimuth_deg = keys.light_azimuth.value(0.0);
+    s.light_elevation_deg = keys.light_elevation.value(0.0);
+    s.ambient = keys.ambient.value(0.0);
     for (const char* key : {"top", "bottom"}) {
         if (const toml::node* n = r->node(key)) {
             float c[4];

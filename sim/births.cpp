@@ -50,13 +50,21 @@ void generate_cell(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t 
         count += poisson_inverse(L.mean_per_cell / std::max(parts, 1), u[0]);
     }
 
+    // Uniforms of impulse k: r0 = (x, y, birth time, amplitude), r1 = (normal amplitude's
+    // angle, theta0, density thinning, unused).
+    const bool thinned = c.density_scale && L.time_cell_s > 0;
     for (int k = 0; k < count; ++k) {
         const auto r0 = rng.uniforms(kx, ky, kt, 2u * k);
         const auto r1 = rng.uniforms(kx, ky, kt, 2u * k + 1u);
-        out.x.push_back((static_cast<double>(cx) + r0[0]) * L.cell_x);
-        out.y.push_back((static_cast<double>(cy) + r0[1]) * L.cell_y);
         BirthTime b;
         if (L.time_cell_s > 0) b = {(static_cast<double>(kt) + r0[2]) * L.time_cell_s, loop_index};
+        // A time-varying birth rate by thinning (Lewis & Shedler 1979): a birth at t_b of the
+        // maximum-rate process is kept with probability density_scale(t_b), decided by a
+        // uniform of its own identity, so any region and frame order keeps the same births.
+        // The loop-reduced time makes a looped process thin alike in every period.
+        if (thinned && r1[2] > c.density_scale(b.phase_s)) continue;
+        out.x.push_back((static_cast<double>(cx) + r0[0]) * L.cell_x);
+        out.y.push_back((static_cast<double>(cy) + r0[1]) * L.cell_y);
         out.birth_s.push_back(b.phase_s + static_cast<double>(b.loop_index) * c.loop_s);
         if (births) births->push_back(b);
         float a = 0.0f;

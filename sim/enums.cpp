@@ -87,6 +87,18 @@ double Keyframed::max_abs() const {
     return m;  // linear, smoothstep and step interpolation never overshoot the keys
 }
 
+double Keyframed::min() const {
+    double m = keys.empty() ? 0.0 : keys.front().second;
+    for (const auto& k : keys) m = std::min(m, k.second);
+    return m;
+}
+
+double Keyframed::max() const {
+    double m = keys.empty() ? 0.0 : keys.front().second;
+    for (const auto& k : keys) m = std::max(m, k.second);
+    return m;
+}
+
 void Impulses::clear() {
     x.clear();
     y.clear();

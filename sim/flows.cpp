@@ -32,14 +32,7 @@ public:
     }
     double max_speed(const Box&) const override { return std::hypot(m_vx.max_abs(), m_vy.max_abs()); }
     std::array<double, 4> velocity_bounds(const Box&) const override {
-        auto range = [](const Keyframed& k) {  // interpolation never leaves the keys' range
-            double lo = k.keys.front().second, hi = lo;
-            for (const auto& key : k.keys) lo = std::min(lo, key.second), hi = std::max(hi, key.second);
-            return std::pair{lo, hi};
-        };
-        const auto [x0, x1] = range(m_vx);
-        const auto [y0, y1] = range(m_vy);
-        return {x0, x1, y0, y1};
+        return {m_vx.min(), m_vx.max(), m_vy.min(), m_vy.max()};
     }
 
 private:
@@ -48,37 +41,44 @@ private:
 
 class ShearFlow final : public Flow {
 public:
-    ShearFlow(Keyframed rate, double cx, double cy, double angle)
-        : m_rate(std::move(rate)), m_cx(cx), m_cy(cy), m_dx(std::cos(angle)), m_dy(std::sin(angle)) {}
+    ShearFlow(Keyframed rate, Keyframed cx, Keyframed cy, Keyframed angle)
+        : m_rate(std::move(rate)), m_cx(std::move(cx)), m_cy(std::move(cy)),
+          m_angle(std::move(angle)) {}
     void add(double t, size_t n, const double* x, const double* y, double* vx, double* vy, double*,
              double* curl) const override {
-        const double k = m_rate.value(t);
+        const double k = m_rate.value(t), cx = m_cx.value(t), cy = m_cy.value(t);
+        const double a = m_angle.value(t), dx = std::cos(a), dy = std::sin(a);
         for (size_t i = 0; i < n; ++i) {
             // s = (p - c) . n_perp with n_perp = (-dy, dx)
-            const double s = -(x[i] - m_cx) * m_dy + (y[i] - m_cy) * m_dx;
-            vx[i] += k * s * m_dx;
-            vy[i] += k * s * m_dy;
+            const double s = -(x[i] - cx) * dy + (y[i] - cy) * dx;
+            vx[i] += k * s * dx;
+            vy[i] += k * s * dy;
             curl[i] -= k;
         }
     }
     double max_speed(const Box& r) const override {
-        return m_rate.max_abs() * max_corner_distance(r, m_cx, m_cy);
+        // |s| is at most the distance to the centre whatever the angle; the distance to the
+        // farthest corner is convex in the centre, so its maximum over the centre's range is at
+        // a corner of that range.
+        double d = 0.0;
+        for (double cx : {m_cx.min(), m_cx.max()})
+            for (double cy : {m_cy.min(), m_cy.max()}) d = std::max(d, max_corner_distance(r, cx, cy));
+        return m_rate.max_abs() * d;
     }
 
 private:
-    Keyframed m_rate;
-    double m_cx, m_cy, m_dx, m_dy;
+    Keyframed m_rate, m_cx, m_cy, m_angle;
 };
 
 class VortexFlow final : public Flow {
 public:
-    VortexFlow(VortexModel model, Keyframed cx, Keyframed cy, Keyframed gamma, double core)
+    VortexFlow(VortexModel model, Keyframed cx, Keyframed cy, Keyframed gamma, Keyframed core)
         : m_model(model), m_cx(std::move(cx)), m_cy(std::move(cy)), m_gamma(std::move(gamma)),
-          m_core(core) {}
+          m_core(std::move(core)) {}
     void add(double t, size_t n, const double* x, const double* y, double* vx, double* vy, double*,
              double* curl) const override {
         const double cx = m_cx.value(t), cy = m_cy.value(t), g = m_gamma.value(t);
-        const double rc2 = m_core * m_core;
+        const double rc = m_core.value(t), rc2 = rc * rc;
         const double w0 = g / (kPi * rc2);  // vorticity at the centre
         for (size_t i = 0; i < n; ++i) {
             const double dx = x[i] - cx, dy = y[i] - cy;
@@ -102,24 +102,24 @@ public:
     }
     double max_speed(const Box&) const override {
         // Peak of v_theta: Lamb–Oseen 0.6382 G/(2 pi rc) at r = 1.1209 rc; Rankine G/(2 pi rc).
-        const double peak = m_gamma.max_abs() / (2.0 * kPi * m_core);
+        const double peak = m_gamma.max_abs() / (2.0 * kPi * m_core.min());
         return m_model == VortexModel::LambOseen ? 0.6382 * peak : peak;
     }
 
 private:
     VortexModel m_model;
-    Keyframed m_cx, m_cy, m_gamma;
-    double m_core;
+    Keyframed m_cx, m_cy, m_gamma, m_core;
 };
 
 class SourceFlow final : public Flow {
 public:
-    SourceFlow(Keyframed cx, Keyframed cy, Keyframed rate, double radius)
+    SourceFlow(Keyframed cx, Keyframed cy, Keyframed rate, Keyframed radius)
         : m_cx(std::move(cx)), m_cy(std::move(cy)), m_rate(std::move(rate)), m_radius(radius) {}
     void add(double t, size_t n, const double* x, const double* y, double* vx, double* vy,
              double* div, double*) const override {
         const double cx = m_cx.value(t), cy = m_cy.value(t), k = m_rate.value(t);
-        if (m_radius <= 0) {
+        const double radius = m_radius.value(t);
+        if (radius <= 0) {
             for (size_t i = 0; i < n; ++i) {
                 vx[i] += k * (x[i] - cx);
                 vy[i] += k * (y[i] - cy);
@@ -127,7 +127,7 @@ public:
             }
             return;
         }
-        const double inv_r2 = 1.0 / (m_radius * m_radius);
+        const double inv_r2 = 1.0 / (radius * radius);
         for (size_t i = 0; i < n; ++i) {
             const double dx = x[i] - cx, dy = y[i] - cy;
             const double q = (dx * dx + dy * dy) * inv_r2;
@@ -139,7 +139,8 @@ public:
     }
     double max_speed(const Box& r) const override {
         const double k = m_rate.max_abs();
-        if (m_radius > 0) return k * m_radius * std::sqrt(0.5) * std::exp(-0.5);
+        // |v| = rate r exp(-r^2 / radius^2) peaks at r = radius / sqrt(2), growing with radius.
+        if (m_radius.max() > 0) return k * m_radius.max() * std::sqrt(0.5) * std::exp(-0.5);
         double d = 0.0;
         for (const auto& kx : m_cx.keys)
             for (const auto& ky : m_cy.keys) d = std::max(d, max_corner_distance(r, kx.second, ky.second));
@@ -147,8 +148,7 @@ public:
     }
 
 private:
-    Keyframed m_cx, m_cy, m_rate;
-    double m_radius;
+    Keyframed m_cx, m_cy, m_rate, m_radius;
 };
 
 /// Curl of a sparse-convolution potential psi = sum a_i phi(|x - x_i|^2 / s^2),
@@ -396,16 +396,20 @@ void FlowSum::prepare(const Box& region) {
 std::unique_ptr<Flow> make_uniform_flow(Keyframed vx, Keyframed vy) {
     return std::make_unique<UniformFlow>(std::move(vx), std::move(vy));
 }
-std::unique_ptr<Flow> make_shear_flow(Keyframed rate, double cx, double cy, double angle) {
-    return std::make_unique<ShearFlow>(std::move(rate), cx, cy, angle);
+std::unique_ptr<Flow> make_shear_flow(Keyframed rate, Keyframed cx, Keyframed cy,
+                                      Keyframed angle) {
+    return std::make_unique<ShearFlow>(std::move(rate), std::move(cx), std::move(cy),
+                                       std::move(angle));
 }
 std::unique_ptr<Flow> make_vortex_flow(VortexModel model, Keyframed cx, Keyframed cy,
-                                       Keyframed circulation, double core_radius) {
+                                       Keyframed circulation, Keyframed core_radius) {
     return std::make_unique<VortexFlow>(model, std::move(cx), std::move(cy),
-                                        std::move(circulation), core_radius);
+                                        std::move(circulation), std::move(core_radius));
 }
-std::unique_ptr<Flow> make_source_flow(Keyframed cx, Keyframed cy, Keyframed rate, double radius) {
-    return std::make_unique<SourceFlow>(std::move(cx), std::move(cy), std::move(rate), radius);
+std::unique_ptr<Flow> make_source_flow(Keyframed cx, Keyframed cy, Keyframed rate,
+                                       Keyframed radius) {
+    return std::make_unique<SourceFlow>(std::move(cx), std::move(cy), std::move(rate),
+                                        std::move(radius));
 }
 std::unique_ptr<Flow> make_curl_noise_flow(uint64_t seed, double scale, Keyframed speed,
                                            std::optional<std::array<double, 2>> period) {

@@ -48,8 +48,8 @@ private:
 
 class PolylineOrientation final : public OrientationField {
 public:
-    PolylineOrientation(std::vector<std::array<double, 2>> p, double smooth)
-        : m_points(std::move(p)), m_smooth(smooth) {
+    PolylineOrientation(std::vector<std::array<double, 2>> p, Keyframed smooth)
+        : m_points(std::move(p)), m_smooth(std::move(smooth)) {
         if (m_points.size() < 2)
             throw ValueError("polyline orientation: expected at least 2 points");
         for (size_t i = 0; i + 1 < m_points.size(); ++i) {
@@ -61,10 +61,12 @@ public:
             m_dir.push_back(std::atan2(dy, dx));
             m_len2.push_back(len2);
         }
-        if (!(m_smooth >= 0.0)) throw ValueError("polyline orientation: smooth must be >= 0");
+        if (!(m_smooth.min() >= 0.0))
+            throw ValueError("polyline orientation: smooth must be >= 0");
     }
-    void angles(double, size_t n, const double* x, const double* y, float* theta) const override {
+    void angles(double t, size_t n, const double* x, const double* y, float* theta) const override {
         const size_t ns = m_dir.size();
+        const double smooth = m_smooth.value(t);
         std::vector<double> d2(ns);
         for (size_t i = 0; i < n; ++i) {
             size_t best = 0;
@@ -79,14 +81,14 @@ public:
                 d2[s] = px * px + py * py;
                 if (d2[s] < d2[best]) best = s;
             }
-            if (m_smooth <= 0.0) {
+            if (smooth <= 0.0) {
                 theta[i] = static_cast<float>(m_dir[best]);
                 continue;
             }
             // Average as doubled-angle vectors (an orientation and its opposite agree), keeping
             // the nearest segment's sense.
             double c = 0.0, s2 = 0.0;
-            const double inv = 1.0 / (2.0 * m_smooth * m_smooth);
+            const double inv = 1.0 / (2.0 * smooth * smooth);
             for (size_t s = 0; s < ns; ++s) {
                 const double w = std::exp(-(d2[s] - d2[best]) * inv);
                 c += w * std::cos(2.0 * m_dir[s]);
@@ -103,29 +105,32 @@ public:
 private:
     std::vector<std::array<double, 2>> m_points;
     std::vector<double> m_dir, m_len2;
-    double m_smooth;
+    Keyframed m_smooth;
 };
 
 class SineOrientation final : public OrientationField {
 public:
-    SineOrientation(double amp, double wl, double phase, double angle, double ox, double oy)
-        : m_amp(amp), m_wl(wl), m_phase(phase), m_angle(angle), m_ox(ox), m_oy(oy) {
-        if (!(wl > 0.0) || !std::isfinite(wl))
+    SineOrientation(Keyframed amp, Keyframed wl, Keyframed phase, Keyframed angle, double ox,
+                    double oy)
+        : m_amp(std::move(amp)), m_wl(std::move(wl)), m_phase(std::move(phase)),
+          m_angle(std::move(angle)), m_ox(ox), m_oy(oy) {
+        if (!(m_wl.min() > 0.0) || !std::isfinite(m_wl.max()))
             throw ValueError("sine orientation: wavelength must be > 0");
     }
-    void angles(double, size_t n, const double* x, const double* y, float* theta) const override {
-        const double c = std::cos(m_angle), s = std::sin(m_angle);
-        const double k = 2.0 * kPi / m_wl;
+    void angles(double t, size_t n, const double* x, const double* y, float* theta) const override {
+        const double angle = m_angle.value(t), amp = m_amp.value(t), phase = m_phase.value(t);
+        const double c = std::cos(angle), s = std::sin(angle);
+        const double k = 2.0 * kPi / m_wl.value(t);
         for (size_t i = 0; i < n; ++i) {
             const double u = (x[i] - m_ox) * c + (y[i] - m_oy) * s;
             // dw/du of w = A sin(k u + phase)
-            theta[i] =
-                static_cast<float>(m_angle + std::atan(m_amp * k * std::cos(k * u + m_phase)));
+            theta[i] = static_cast<float>(angle + std::atan(amp * k * std::cos(k * u + phase)));
         }
     }
 
 private:
-    double m_amp, m_wl, m_phase, m_angle, m_ox, m_oy;
+    Keyframed m_amp, m_wl, m_phase, m_angle;
+    double m_ox, m_oy;
 };
 
 class GridOrientation final : public OrientationField {
@@ -186,13 +191,14 @@ std::shared_ptr<OrientationField> make_circular_orientation(Keyframed cx, Keyfra
                                                 clockwise ? -0.5 * kPi : 0.5 * kPi);
 }
 std::shared_ptr<OrientationField> make_polyline_orientation(
-    std::vector<std::array<double, 2>> points, double smooth) {
-    return std::make_shared<PolylineOrientation>(std::move(points), smooth);
+    std::vector<std::array<double, 2>> points, Keyframed smooth) {
+    return std::make_shared<PolylineOrientation>(std::move(points), std::move(smooth));
 }
-std::shared_ptr<OrientationField> make_sine_orientation(double amplitude, double wavelength,
-                                                        double phase, double angle, double ox,
-                                                        double oy) {
-    return std::make_shared<SineOrientation>(amplitude, wavelength, phase, angle, ox, oy);
+std::shared_ptr<OrientationField> make_sine_orientation(Keyframed amplitude, Keyframed wavelength,
+                                                        Keyframed phase, Keyframed angle,
+                                                        double ox, double oy) {
+    return std::make_shared<SineOrientation>(std::move(amplitude), std::move(wavelength),
+                                             std::move(phase), std::move(angle), ox, oy);
 }
 std::shared_ptr<OrientationField> make_grid_orientation(OrientationGrid grid) {
     return std::make_shared<GridOrientation>(std::move(grid));

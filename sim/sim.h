@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string_view>
@@ -55,6 +56,10 @@ struct Keyframed {
     Keyframed(double constant) : keys{{0.0, constant}} {}  // NOLINT: implicit by design
     double value(double t_s) const;
     double max_abs() const;  ///< max |value| over all time
+    /// Smallest and largest value over all time: the extreme keys (linear, smoothstep and step
+    /// interpolation never leave the range of the two keys around t).
+    double min() const;
+    double max() const;
     bool is_constant() const { return keys.size() <= 1; }
 };
 
@@ -112,17 +117,21 @@ private:
 /// Uniform wind (vx, vy).
 std::unique_ptr<Flow> make_uniform_flow(Keyframed vx, Keyframed vy);
 /// Shear: velocity `rate * (p - c) . n_perp` along direction `angle`, where n_perp is the unit
-/// normal to that direction; curl = -rate.
-std::unique_ptr<Flow> make_shear_flow(Keyframed rate, double cx, double cy, double angle_rad);
+/// normal to that direction; curl = -rate. Every parameter may vary in time.
+std::unique_ptr<Flow> make_shear_flow(Keyframed rate, Keyframed cx, Keyframed cy,
+                                      Keyframed angle_rad);
 enum class VortexModel { LambOseen, Rankine };
 inline constexpr std::array<std::string_view, 2> kVortexModelNames = {"lamb-oseen", "rankine"};
 std::optional<VortexModel> vortex_model_from_string(std::string_view name);
-/// Vortex of circulation `circulation` (units^2/s, positive counter-clockwise) and core radius.
+/// Vortex of circulation `circulation` (units^2/s, positive counter-clockwise) and core radius
+/// (> 0 at every key).
 std::unique_ptr<Flow> make_vortex_flow(VortexModel model, Keyframed cx, Keyframed cy,
-                                       Keyframed circulation, double core_radius);
+                                       Keyframed circulation, Keyframed core_radius);
 /// Source (rate > 0) or sink (rate < 0): v = rate (x - c) g(r), g = exp(-r^2 / radius^2)
 /// (radius = 0: g = 1, a uniform divergence 2 rate). div v = rate g (2 - 2 r^2 / radius^2).
-std::unique_ptr<Flow> make_source_flow(Keyframed cx, Keyframed cy, Keyframed rate, double radius);
+/// A keyframed radius must be > 0 at every key (0 is a different field, not a limit of it).
+std::unique_ptr<Flow> make_source_flow(Keyframed cx, Keyframed cy, Keyframed rate,
+                                       Keyframed radius);
 /// Divergence-free curl noise: v = (d psi/dy, -d psi/dx) of a sparse-convolution potential psi
 /// with compact kernel (1 - r^2/s^2)^3 of radius `scale`; consistent (counter-based per cell)
 /// and periodic when `period` is given (a multiple of the cell size is chosen). `speed` is the
@@ -162,16 +171,17 @@ std::shared_ptr<OrientationField> make_circular_orientation(Keyframed cx, Keyfra
 /// Tangent of a polyline (>= 2 points, consecutive points distinct): the direction of the
 /// nearest segment; with `smooth` > 0 (texture units) the segment directions are averaged as
 /// doubled-angle vectors with weights exp(-(d_i^2 - d_min^2) / (2 smooth^2)), d_i the distance
-/// to segment i, so the field turns smoothly at the vertices.
+/// to segment i, so the field turns smoothly at the vertices. `smooth` may vary in time.
 std::shared_ptr<OrientationField> make_polyline_orientation(std::vector<std::array<double, 2>> points,
-                                                            double smooth);
+                                                            Keyframed smooth);
 /// Tangent of a family of sine curves. In coordinates (u, w) along direction `angle_rad`
 /// through `origin` (u = (p - origin) . (cos angle, sin angle)), the curve is
 /// w = amplitude sin(2 pi u / wavelength + phase) and every point takes the tangent of the copy
 /// through it (shifted across): theta = angle + atan(2 pi amplitude / wavelength
-/// cos(2 pi u / wavelength + phase)). wavelength > 0.
-std::shared_ptr<OrientationField> make_sine_orientation(double amplitude, double wavelength,
-                                                        double phase, double angle_rad,
+/// cos(2 pi u / wavelength + phase)). wavelength > 0 at every key; amplitude, wavelength, phase
+/// and angle may vary in time.
+std::shared_ptr<OrientationField> make_sine_orientation(Keyframed amplitude, Keyframed wavelength,
+                                                        Keyframed phase, Keyframed angle_rad,
                                                         double origin_x, double origin_y);
 /// A sampled field: channels = 1, an angle in radians; channels = 2, a direction (x, y).
 /// Interpolated bilinearly as unit vectors (angles) or as vectors (directions), clamped at the
@@ -218,8 +228,17 @@ struct ProcessConfig {
     /// OrientationMode::Field: theta(x, t) at each particle's position at the frame time.
     std::shared_ptr<const OrientationField> orientation_field;
     /// OrientationMode::Field: plus a random angle per particle, uniform in [-jitter, jitter)
-    /// radians, drawn at birth (from the particle's identity).
-    double orientation_jitter = 0.0;
+    /// radians: the uniform is drawn at birth (from the particle's identity), the spread
+    /// jitter(t) is evaluated at the frame time (loop-wrapped like the flow).
+    Keyframed orientation_jitter = 0.0;
+    /// A time-varying birth rate by thinning (Lewis-Shedler): births are generated at the
+    /// maximum rate `intensity` and one born at time t_b (loop-reduced in a looped process) is
+    /// kept iff a uniform of its own identity is below density_scale(t_b), a value in [0, 1].
+    /// The live intensity at t is then (intensity / T) int_0^T density_scale(t - a) da, and the
+    /// variance carries density_scale(t - a) w(a)^2 under the integral (Campbell's theorem).
+    /// Empty: a constant rate (no thinning; the impulses of a constant-rate process).
+    /// Must be a pure function of t; only for processes with lifetime_s > 0.
+    std::function<double(double)> density_scale;
 };
 
 /// Frame timing: frame f is at time (start_frame + f) / fps seconds.

@@ -347,11 +347,12 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
         // the flow, so a looped layer repeats), plus the per-particle jitter drawn at birth.
         c.orientation_field->angles(S.time_of_step(target), out.size(), out.x.data(),
                                     out.y.data(), out.theta.data());
-        if (c.orientation_jitter != 0.0) {
+        const double jitter = c.orientation_jitter.value(S.time_of_step(target));
+        if (jitter != 0.0) {
             constexpr double kInvPi = 1.0 / 3.14159265358979323846;
             for (size_t j = 0; j < out.size(); ++j)
-                out.theta[j] = static_cast<float>(
-                    out.theta[j] + c.orientation_jitter * (P.th0[emitted[j]] * kInvPi - 1.0));
+                out.theta[j] =
+                    static_cast<float>(out.theta[j] + jitter * (P.th0[emitted[j]] * kInvPi - 1.0));
         }
     }
 

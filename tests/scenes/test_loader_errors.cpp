@@ -124,9 +124,11 @@ TEST_CASE("unknown keys are reported with the nearest valid name", "[scenes][err
 
 TEST_CASE("wrong value types name key, value and the expected type", "[scenes][errors]") {
     CHECK(error_of(with_line(9, "radius = \"big\"")) ==
-          "errors.toml:9:10: layer[0].kernel.radius = \"big\": expected a number, found string");
+          "errors.toml:9:10: layer[0].kernel.radius = \"big\": expected a number or keyframes "
+          "{ keys = [[t, v], ...] }, found string");
     CHECK_THAT(error_of(with_line(6, "density = true")),
-               StartsWith("errors.toml:6:11: layer[0].density = true: expected a number, found boolean"));
+               StartsWith("errors.toml:6:11: layer[0].density = true: expected a number or keyframes "
+                          "{ keys = [[t, v], ...] }, found boolean"));
     CHECK_THAT(error_of(with_line(2, "size = [64, 48]\nframes = 2.5")),
                Contains("errors.toml:3:10: output.frames = 2.5: expected an integer, found float"));
     CHECK_THAT(error_of(with_line(5, "seed = \"one\"")),

@@ -304,7 +304,7 @@ TEST_CASE("orientation scene keys: modes and fields and one-line errors",
     const auto s = load_scene_string(
         scene("{ type = \"sine\", amplitude = 8.0, wavelength = 64.0, jitter = 0.1 }"), "o.toml");
     CHECK(s.layers[0].process.orientation == sim::OrientationMode::Field);
-    CHECK(s.layers[0].process.orientation_jitter == 0.1);
+    CHECK(s.layers[0].process.orientation_jitter.value(0.0) == 0.1);
     REQUIRE(s.layers[0].process.orientation_field);
     CHECK(load_scene_string(
               scene("{ type = \"polyline\", points = [[0.0, 0.0], [10.0, 5.0]], smooth = 4.0 }"),
