@@ -612,6 +612,7 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
         p.substeps = static_cast<int>(r.integer("substeps", 2, 1, 64));
         p.jacobian = r.boolean("jacobian", true);
         detail::read_orientation(r, p, base);  // a mode name or a field table
+        detail::read_region(r, p, base);       // births confined to a shape or a mask
         p.max_travel = r.number("max_travel", 4096.0, kPositive, "a distance > 0 in texture units");
         try {
             prepare_layer(L);

@@ -87,6 +87,10 @@ private:
 /// The [shading] table (scenes/shading_config.cpp); `base` resolves relative paths.
 render::Shading read_shading(std::optional<Reader> r, const std::filesystem::path& base);
 
+/// layer.region: the birth region of a layer (scenes/region_config.cpp); `base` resolves a mask
+/// image's path.
+void read_region(Reader& layer, sim::ProcessConfig& process, const std::filesystem::path& base);
+
 /// Text of a node's value as written (for messages).
 std::string value_text(const toml::node& n);
 /// TOML type name of a node ("string", "integer", ...).
