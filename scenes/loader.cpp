@@ -573,7 +573,11 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
         o->finish();
     }
     s.camera = read_camera(top.table("camera"), s.output.width, s.output.height);
-    s.shading = detail::read_shading(top.table("shading"), base);
+    auto shading = top.table("shading");
+    if (shading)  // read first so read_shading knows the key
+        s.transform = detail::read_transform(shading->table("transform"), s.camera,
+                                             s.output.width, s.output.height, global_seed);
+    s.shading = detail::read_shading(shading, base);
     if (auto l = top.table("limits")) {
         s.limits.max_impulses = l->number("max_impulses", s.limits.max_impulses, kPositive, "a count > 0");
         s.limits.max_memory_mib = l->number("max_memory_mib", s.limits.max_memory_mib, kPositive, "MiB > 0");

@@ -16,7 +16,8 @@
 #include <string_view>
 #include <vector>
 
-#include "render/shading.h"
+#include "render/render.h"
+#include "scenes/scenes.h"
 #include "sim/sim.h"
 
 namespace impulse::scenes::detail {
@@ -86,6 +87,11 @@ private:
 
 /// The [shading] table (scenes/shading_config.cpp); `base` resolves relative paths.
 render::Shading read_shading(std::optional<Reader> r, const std::filesystem::path& base);
+
+/// [shading.transform] (scenes/transform_config.cpp): marble or wood; refused for perspective
+/// cameras. `width`, `height`: the output size (wood's default centre).
+render::FieldTransform read_transform(std::optional<Reader> r, const CameraConfig& camera,
+                                      int width, int height, uint64_t scene_seed);
 
 /// layer.region: the birth region of a layer (scenes/region_config.cpp); `base` resolves a mask
 /// image's path.

@@ -98,6 +98,9 @@ struct Scene {
     Limits limits;
     std::vector<LayerConfig> layers;
     render::Shading shading;  ///< [shading]: how the field becomes display colour
+    /// [shading.transform]: marble or wood, applied to the summed field by Renderer::render
+    /// (type None: the field as it is).
+    render::FieldTransform transform;
     std::string hash;  ///< FNV-1a of the scene text and overrides, hex
     std::vector<std::string> warnings;  ///< accepted but suspicious values, one line each
 };
@@ -133,14 +136,16 @@ public:
     ~Renderer();
     Renderer(Renderer&&) noexcept;
     const Scene& scene() const;
-    /// The float field of frame `frame` (0-based) into `out` (resized).
+    /// The float field of frame `frame` (0-based) into `out` (resized): the sum of the layers,
+    /// through the scene's transform when it has one.
     void render(int64_t frame, render::Frame& out, const render::EvalOptions& options = {});
     /// Live impulses of layer `layer` at frame `frame` (for analysis and tests).
     const sim::Impulses& impulses(size_t layer) const;
     /// Estimated live impulses per frame over all layers, and peak memory in MiB.
     double estimated_impulses() const;
     double estimated_memory_mib() const;
-    /// Value mapping for display: output.range, or mean +- 3 standard deviations.
+    /// Value mapping for display: output.range, else the transform's range, else mean +- 3
+    /// standard deviations.
     render::ValueMapping mapping() const;
 
 private:
