@@ -123,6 +123,9 @@ void read_region(Reader& layer, sim::ProcessConfig& process, const fs::path& bas
     if (type == kImage) {
         // A grey mask: luminance of RGB, the first channel otherwise (render::read_image);
         // integer formats in [0, 1], float ones must lie there.
+        if (r.has("feather"))
+            r.fail(r.node("feather"), "feather",
+                   "applies to shapes: an image mask's grey levels are its soft edge");
         const toml::node* pn = r.node("path");
         const std::string rel = r.string("path", "");
         if (rel.empty()) r.fail(pn, "path", "expected the path of a grey mask image");
