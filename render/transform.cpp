@@ -45,11 +45,18 @@ ValueMapping transform_range(const FieldTransform& t) {
     return {0.0, 0.0};
 }
 
-double wood_profile(double s, double a) {
-    // 1 - s^a (1 - s) / m, m = max over [0, 1] of s^a (1 - s), at s = a / (a + 1).
-    const double m = std::pow(a / (a + 1.0), a) / (a + 1.0);
-    return 1.0 - std::pow(s, a) * (1.0 - s) / m;
+namespace {
+
+/// 1 / m, m = max over [0, 1] of s^a (1 - s), reached at s = a / (a + 1).
+double wood_inverse_peak(double a) { return (a + 1.0) / std::pow(a / (a + 1.0), a); }
+
+double wood_xtab(double s, double a, double inv_peak) {
+    return 1.0 - std::pow(s, a) * (1.0 - s) * inv_peak;
 }
+
+}  // namespace
+
+double wood_profile(double s, double a) { return wood_xtab(s, a, wood_inverse_peak(a)); }
 
 void apply_transform(const FieldTransform& t, const View& view, double mean, double sd,
                      Frame& field) {
@@ -77,6 +84,7 @@ void apply_transform(const FieldTransform& t, const View& view, double mean, dou
     const double r_max = std::sqrt(std::max(dx0 * dx0, dx1 * dx1) + std::max(dy0 * dy0, dy1 * dy1));
     const std::vector<double> radii = t.growth > 0 ? ring_radii(t, r_max) : std::vector<double>{};
     const double inv_width = 1.0 / t.ring_width;
+    const double inv_peak = wood_inverse_peak(t.sharpness);
     tbb::parallel_for(0, h, [&](int j) {
         float* row = field.data.data() + size_t(j) * w;
         const double y = view.y0 + (j + 0.5) * view.scale - t.center_y;
@@ -93,7 +101,7 @@ void apply_transform(const FieldTransform& t, const View& view, double mean, dou
                 rings = static_cast<double>(k) + (r - radii[k]) / (radii[k + 1] - radii[k]);
             }
             const double d = rings + t.turbulence * (row[i] - mean) * inv_sd;
-            row[i] = static_cast<float>(wood_profile(d - std::floor(d), t.sharpness));
+            row[i] = static_cast<float>(wood_xtab(d - std::floor(d), t.sharpness, inv_peak));
         }
     });
 }
