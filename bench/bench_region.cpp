@@ -29,17 +29,6 @@ namespace {
 using namespace impulse;
 using namespace impulse::bench;
 
-/// The region's p without its support: the simulator generates every cell.
-class NoCull final : public sim::BirthRegion {
-public:
-    explicit NoCull(std::shared_ptr<const sim::BirthRegion> r) : m_r(std::move(r)) {}
-    double acceptance(double x, double y) const override { return m_r->acceptance(x, y); }
-    std::optional<sim::Box> support() const override { return std::nullopt; }
-
-private:
-    std::shared_ptr<const sim::BirthRegion> m_r;
-};
-
 struct Row {
     Row(std::string n, std::function<size_t()> f) : name(std::move(n)), run(std::move(f)) {}
     std::string name;
@@ -77,7 +66,7 @@ int main(int argc, char** argv) {
         sim::make_shape_region(sim::make_circle_shape(2048, 2048, 256), 32.0, false);
     sim::ProcessConfig culled = c, unculled = c;
     culled.region = region;
-    unculled.region = std::make_shared<NoCull>(region);
+    unculled.region = sim::without_support(region);
     auto births = [&](const sim::ProcessConfig& cfg) {
         return [cfg, &view]() {
             sim::LayerSimulator s(cfg, nullptr, {}, 16.0);

@@ -285,6 +285,16 @@ private:
     std::optional<Box> m_support;
 };
 
+class Unsupported final : public BirthRegion {
+public:
+    explicit Unsupported(std::shared_ptr<const BirthRegion> r) : m_region(std::move(r)) {}
+    double acceptance(double x, double y) const override { return m_region->acceptance(x, y); }
+    std::optional<Box> support() const override { return std::nullopt; }
+
+private:
+    std::shared_ptr<const BirthRegion> m_region;
+};
+
 bool finite(std::initializer_list<double> v) {
     return std::all_of(v.begin(), v.end(), [](double x) { return std::isfinite(x); });
 }
@@ -377,6 +387,11 @@ std::shared_ptr<const BirthRegion> make_mask_region(MaskGrid grid, bool invert) 
         }
     }
     return std::make_shared<MaskRegion>(std::move(grid), invert);
+}
+
+std::shared_ptr<const BirthRegion> without_support(std::shared_ptr<const BirthRegion> region) {
+    if (!region) invalid("region: null");
+    return std::make_shared<Unsupported>(std::move(region));
 }
 
 }  // namespace impulse::sim

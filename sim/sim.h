@@ -256,6 +256,10 @@ struct MaskGrid {
 };
 /// Throws ValueError for a malformed grid or values outside [0, 1].
 std::shared_ptr<const BirthRegion> make_mask_region(MaskGrid grid, bool invert);
+/// The same acceptance as `region` without a support: the simulator then generates every
+/// seeding cell and thins each birth — the reference path for the culling (same impulses, bit
+/// for bit; tests and benchmarks compare the two).
+std::shared_ptr<const BirthRegion> without_support(std::shared_ptr<const BirthRegion> region);
 
 // ---------------------------------------------------------------------------------------------
 // The point process of one layer

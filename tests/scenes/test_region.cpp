@@ -298,28 +298,32 @@ TEST_CASE("region keys: shapes load, bad values give one line", "[scenes][region
         CHECK_NOTHROW(load_scene_string(base + ok, "region.toml"));
         CHECK(load_scene_string(base + ok, "region.toml").layers[0].process.region);
     }
-    CHECK(error_of(base + "type = \"circle\"\ncenter = [0.0, 0.0]\nradius = -5.0\n") ==
-          "region.toml:5:10: layer[0].region.radius = -5: expected a radius > 0 (texture units)");
-    CHECK(error_of(base + "type = \"circle\"\nradius = 5.0\n") ==
-          "region.toml:2:1: layer[0].region.center: missing: expected [x, y] in texture units");
-    CHECK(error_of(base + "type = \"square\"\n") ==
-          "region.toml:3:8: layer[0].region.type = \"square\": expected one of circle, ellipse, box, "
-          "capsule, polygon, union, intersection, subtract, image");
-    CHECK(error_of(base + "type = \"polygon\"\npoints = [[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]\n") ==
-          "region.toml:4:10: layer[0].region.points = [[0, 0], [1, 1], [2, 2]]: expected at least 3 "
-          "[x, y] points, not all on one line");
-    CHECK(error_of(base + "type = \"circle\"\ncenter = [0.0, 0.0]\nradius = 5.0\nfeather = -1.0\n") ==
-          "region.toml:6:11: layer[0].region.feather = -1: expected a soft-edge width >= 0 "
-          "(texture units; 0: a hard edge)");
-    CHECK(error_of(base + "type = \"box\"\ncenter = [0.0, 0.0]\nsize = [4.0, 2.0]\ncorner = 1.5\n") ==
-          "region.toml:6:10: layer[0].region.corner = 1.5: expected a corner radius in [0, half the "
-          "smaller side]");
-    CHECK(error_of(base + "type = \"image\"\npath = \"no_such_mask.png\"\n") ==
-          "region.toml:4:8: layer[0].region.path = \"no_such_mask.png\": cannot read: no such file");
-    CHECK(error_of(base + "type = \"image\"\npath = \"m.png\"\nfeather = 2.0\n") ==
-          "region.toml:5:11: layer[0].region.feather = 2: applies to shapes: an image mask's grey "
-          "levels are its soft edge");
-    CHECK(error_of(base + "type = \"union\"\n") ==
-          "region.toml:2:1: layer[0].region.shapes: missing: expected a list of shapes "
-          "([[...shapes]] tables)");
+    // (region keys after the two lines of `base`, the error it must give)
+    const std::pair<const char*, const char*> cases[] = {
+        {"type = \"circle\"\ncenter = [0.0, 0.0]\nradius = -5.0\n",
+         "region.toml:5:10: layer[0].region.radius = -5: expected a radius > 0 (texture units)"},
+        {"type = \"circle\"\nradius = 5.0\n",
+         "region.toml:2:1: layer[0].region.center: missing: expected [x, y] in texture units"},
+        {"type = \"square\"\n",
+         "region.toml:3:8: layer[0].region.type = \"square\": expected one of circle, ellipse, box, "
+         "capsule, polygon, union, intersection, subtract, image"},
+        {"type = \"polygon\"\npoints = [[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]\n",
+         "region.toml:4:10: layer[0].region.points = [[0, 0], [1, 1], [2, 2]]: expected at least 3 "
+         "[x, y] points, not all on one line"},
+        {"type = \"circle\"\ncenter = [0.0, 0.0]\nradius = 5.0\nfeather = -1.0\n",
+         "region.toml:6:11: layer[0].region.feather = -1: expected a soft-edge width >= 0 "
+         "(texture units; 0: a hard edge)"},
+        {"type = \"box\"\ncenter = [0.0, 0.0]\nsize = [4.0, 2.0]\ncorner = 1.5\n",
+         "region.toml:6:10: layer[0].region.corner = 1.5: expected a corner radius in [0, half the "
+         "smaller side]"},
+        {"type = \"image\"\npath = \"no_such_mask.png\"\n",
+         "region.toml:4:8: layer[0].region.path = \"no_such_mask.png\": cannot read: no such file"},
+        {"type = \"image\"\npath = \"m.png\"\nfeather = 2.0\n",
+         "region.toml:5:11: layer[0].region.feather = 2: applies to shapes: an image mask's grey "
+         "levels are its soft edge"},
+        {"type = \"union\"\n",
+         "region.toml:2:1: layer[0].region.shapes: missing: expected a list of shapes "
+         "([[...shapes]] tables)"},
+    };
+    for (const auto& [keys, expected] : cases) CHECK(error_of(base + keys) == expected);
 }

@@ -31,18 +31,6 @@ double smoothstep_region(double d, double feather) {
     return 1.0 - t * t * (3.0 - 2.0 * t);
 }
 
-/// A region that accepts as `inner` does but claims no support: the simulator then generates
-/// every cell (no culling).
-class NoCull final : public sim::BirthRegion {
-public:
-    explicit NoCull(std::shared_ptr<const sim::BirthRegion> r) : m_r(std::move(r)) {}
-    double acceptance(double x, double y) const override { return m_r->acceptance(x, y); }
-    std::optional<sim::Box> support() const override { return std::nullopt; }
-
-private:
-    std::shared_ptr<const sim::BirthRegion> m_r;
-};
-
 sim::ProcessConfig dense_still(double intensity) {
     sim::ProcessConfig c;
     c.seed = 77;
@@ -329,7 +317,7 @@ TEST_CASE("region culling: skipping cells outside the support changes no bit",
                               sim::make_capsule_shape(-100, 80, 90, 120, 20)});
     c.region = sim::make_shape_region(shape, 24, false);
     sim::ProcessConfig all = c;
-    all.region = std::make_shared<NoCull>(c.region);
+    all.region = sim::without_support(c.region);
     auto flow = std::shared_ptr<sim::Flow>(sim::make_uniform_flow(sim::Keyframed{40.0}, sim::Keyframed{-10.0}));
     const sim::Box view{-300, -200, 300, 200};
     sim::LayerSimulator culled(c, flow, {}, 16.0), full(all, flow, {}, 16.0);
