@@ -744,6 +744,17 @@ TheoryComparison compare_with_theory(const scenes::Scene& scene, const std::stri
         R.notes.push_back(
             "camera zoom is animated: no theoretical spectrum or autocovariance; the "
             "sampling errors of mean and variance use the zoom at t = 0");
+    // The closed forms are those of the stationary sum of layers: a transform or a birth region
+    // makes the texture something else, and the comparison below says so by disagreeing.
+    if (scene.transform.type != render::FieldTransform::Type::None)
+        R.notes.push_back(
+            "the scene has a [shading.transform] (marble or wood): the theory describes the "
+            "field before the transform, not this texture");
+    for (size_t i = 0; i < scene.layers.size(); ++i)
+        if (scene.layers[i].process.region)
+            R.notes.push_back("layer[" + std::to_string(i) +
+                              "] has a birth region: the theory holds only where the region "
+                              "accepts every birth within a kernel radius");
     if (scene.output.width != R.width || scene.output.height != R.height)
         R.notes.push_back("scene output.size " + std::to_string(scene.output.width) + "x" +
                           std::to_string(scene.output.height) + " differs from the input " +

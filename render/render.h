@@ -104,3 +104,4 @@ bool is_readable_image_path(const std::string& path);
 }  // namespace impulse::render
 
 #include "render/perspective.h"  // cameras with anti-aliasing (kernel pyramid)
+#include "render/transform.h"    // marble and wood field transforms

@@ -648,7 +648,11 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
         o->finish();
     }
     s.camera = read_camera(top.table("camera"), s.output.width, s.output.height);
-    s.shading = detail::read_shading(top.table("shading"), base, s.shading_keys);
+    auto shading = top.table("shading");
+    if (shading)  // read first so read_shading knows the key
+        s.transform = detail::read_transform(shading->table("transform"), s.camera,
+                                             s.output.width, s.output.height, global_seed);
+    s.shading = detail::read_shading(shading, base, s.shading_keys);
     if (auto l = top.table("limits")) {
         s.limits.max_impulses = l->number("max_impulses", s.limits.max_impulses, kPositive, "a count > 0");
         s.limits.max_memory_mib = l->number("max_memory_mib", s.limits.max_memory_mib, kPositive, "MiB > 0");
@@ -688,6 +692,7 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
         p.substeps = static_cast<int>(r.integer("substeps", 2, 1, 64));
         p.jacobian = r.boolean("jacobian", true);
         detail::read_orientation(r, p, base);  // a mode name or a field table
+        detail::read_region(r, p, base);       // births confined to a shape or a mask
         p.max_travel = r.number("max_travel", 4096.0, kPositive, "a distance > 0 in texture units");
         if (p.lifetime_s <= 0 && !L.density.is_constant())
             r.fail(r.node("density"), "density",

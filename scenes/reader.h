@@ -16,7 +16,7 @@
 #include <string_view>
 #include <vector>
 
-#include "render/shading.h"
+#include "render/render.h"
 #include "scenes/scenes.h"
 #include "sim/sim.h"
 
@@ -114,6 +114,15 @@ std::string structural_reason(std::string_view path);
 /// a file (--set overrides).
 std::filesystem::path resolve_path(const toml::node* n, const std::string& rel,
                                    const std::filesystem::path& base);
+
+/// [shading.transform] (scenes/transform_config.cpp): marble or wood; refused for perspective
+/// cameras. `width`, `height`: the output size (wood's default centre).
+render::FieldTransform read_transform(std::optional<Reader> r, const CameraConfig& camera,
+                                      int width, int height, uint64_t scene_seed);
+
+/// layer.region: the birth region of a layer (scenes/region_config.cpp); `base` resolves a mask
+/// image's path.
+void read_region(Reader& layer, sim::ProcessConfig& process, const std::filesystem::path& base);
 
 /// Text of a node's value as written (for messages).
 std::string value_text(const toml::node& n);

@@ -201,6 +201,8 @@ double Renderer::estimated_memory_mib() const {
 render::ValueMapping Renderer::mapping() const {
     const Scene& s = m_state->scene;
     if (s.output.range) return {(*s.output.range)[0], (*s.output.range)[1]};
+    if (s.transform.type != render::FieldTransform::Type::None)
+        return render::transform_range(s.transform);  // the transformed values' known range
     bool keyed = false;
     for (const auto& l : s.layers) keyed = keyed || l.keyframed();
     if (!keyed) {
@@ -283,6 +285,11 @@ void Renderer::render(int64_t frame, render::Frame& out, const render::EvalOptio
     }
     if (mean != 0.0)
         for (auto& v : out.data) v = static_cast<float>(v + mean);
+    if (S.scene.transform.type != render::FieldTransform::Type::None) {
+        // Marble and wood (Lewis 1989 §5.1) of the field in standard deviations.
+        const Theory th = scene_theory(S.scene);
+        render::apply_transform(S.scene.transform, view, th.mean, std::sqrt(th.variance), out);
+    }
 }
 
 void Renderer::update_marginal(size_t i, double tl) {

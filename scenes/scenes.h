@@ -134,6 +134,9 @@ struct Scene {
     std::vector<LayerConfig> layers;
     render::Shading shading;  ///< [shading]: how the field becomes display colour (at t = 0)
     ShadingKeys shading_keys;  ///< its keyframed numbers (shading_at evaluates them)
+    /// [shading.transform]: marble or wood, applied to the summed field by Renderer::render
+    /// (type None: the field as it is).
+    render::FieldTransform transform;
     std::string hash;  ///< FNV-1a of the scene text, included files and overrides, hex
     std::vector<std::string> warnings;  ///< accepted but suspicious values, one line each
 
@@ -183,17 +186,18 @@ public:
     ~Renderer();
     Renderer(Renderer&&) noexcept;
     const Scene& scene() const;
-    /// The float field of frame `frame` (0-based) into `out` (resized).
+    /// The float field of frame `frame` (0-based) into `out` (resized): the sum of the layers,
+    /// through the scene's transform when it has one.
     void render(int64_t frame, render::Frame& out, const render::EvalOptions& options = {});
     /// Live impulses of layer `layer` at frame `frame` (for analysis and tests).
     const sim::Impulses& impulses(size_t layer) const;
     /// Estimated live impulses per frame over all layers, and peak memory in MiB.
     double estimated_impulses() const;
     double estimated_memory_mib() const;
-    /// Value mapping for display: output.range, or mean +- 3 standard deviations; with
-    /// keyframed layers the widest such range over the output's frames (scene_theory at the
-    /// first and last frame, every key time inside, one lifetime after each, and 64 times
-    /// between), so the mapping is the same in every frame.
+    /// Value mapping for display: output.range, else the transform's range, else mean +- 3
+    /// standard deviations; with keyframed layers the widest such range over the output's
+    /// frames (scene_theory at the first and last frame, every key time inside, one lifetime
+    /// after each, and 64 times between), so the mapping is the same in every frame.
     render::ValueMapping mapping() const;
 
 private:

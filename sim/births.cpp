@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Cell-seeded Poisson births (Lewis 1986 §3.1 "numbered cells", here in space and time).
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -40,6 +41,9 @@ void generate_cell(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t 
     const int64_t kt = L.loop_cells ? floor_mod(ct, L.loop_cells) : ct;
     const int64_t loop_index = L.loop_cells ? floor_div(ct, L.loop_cells) : 0;
     const CounterRng rng(c.seed, c.layer);
+    // Birth-region thinning draws from a stream of its own, so adding a region changes no other
+    // draw: a region that accepts everything gives the same impulses, bit for bit.
+    const CounterRng region_rng(c.seed, c.layer ^ kRegionStream);
 
     // Large means are split into independent Poisson parts (the sum of Poissons is Poisson)
     // so the inversion stays accurate (exp(-mean) does not underflow).
@@ -55,6 +59,13 @@ void generate_cell(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t 
     const bool thinned = c.density_scale && L.time_cell_s > 0;
     for (int k = 0; k < count; ++k) {
         const auto r0 = rng.uniforms(kx, ky, kt, 2u * k);
+        const double x = (static_cast<double>(cx) + r0[0]) * L.cell_x;
+        const double y = (static_cast<double>(cy) + r0[1]) * L.cell_y;
+        // Birth region (Lewis 1986 §3.1, points "restricted to an area of the plane"): keep the
+        // birth iff its own uniform u in (0, 1] is <= p(x, y) at the birth position. Thinning a
+        // Poisson process by p gives a Poisson process of intensity lambda p (p = 1 keeps all).
+        if (c.region && region_rng.uniforms(kx, ky, kt, k)[0] > c.region->acceptance(x, y))
+            continue;
         const auto r1 = rng.uniforms(kx, ky, kt, 2u * k + 1u);
         BirthTime b;
         if (L.time_cell_s > 0) b = {(static_cast<double>(kt) + r0[2]) * L.time_cell_s, loop_index};
@@ -63,8 +74,8 @@ void generate_cell(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t 
         // uniform of its own identity, so any region and frame order keeps the same births.
         // The loop-reduced time makes a looped process thin alike in every period.
         if (thinned && r1[2] > c.density_scale(b.phase_s)) continue;
-        out.x.push_back((static_cast<double>(cx) + r0[0]) * L.cell_x);
-        out.y.push_back((static_cast<double>(cy) + r0[1]) * L.cell_y);
+        out.x.push_back(x);
+        out.y.push_back(y);
         out.birth_s.push_back(b.phase_s + static_cast<double>(b.loop_index) * c.loop_s);
         if (births) births->push_back(b);
         float a = 0.0f;
@@ -91,7 +102,13 @@ void cell_impulses(const ProcessConfig& config, int64_t cx, int64_t cy, int64_t 
 double expected_impulses(const ProcessConfig& config, const Box& region) {
     // Live impulses in the region, plus the not-yet-dead part of the time cells kept around
     // them (the simulator holds about (T + 3 dt_cell) / T of the live count).
-    double n = config.intensity * region.area();
+    double area = region.area();
+    if (config.region) {  // births only where the region's support meets `region`
+        if (const auto s = config.region->support())
+            area = std::max(0.0, std::min(region.x1, s->x1) - std::max(region.x0, s->x0)) *
+                   std::max(0.0, std::min(region.y1, s->y1) - std::max(region.y0, s->y0));
+    }
+    double n = config.intensity * area;
     if (config.lifetime_s > 0) n *= 1.75;
     return n;
 }

@@ -36,6 +36,9 @@ private:
     r123::Philox4x32::key_type m_key;
 };
 
+/// Stream tag (xored into the layer) of the birth-region thinning uniforms ("REGN").
+inline constexpr uint32_t kRegionStream = 0x5245474Eu;
+
 /// Poisson(mean) by inversion of one uniform u in (0, 1] (deterministic, no rejection loop).
 int poisson_inverse(double mean, double u);
 

@@ -262,6 +262,19 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
         ct1 = static_cast<int64_t>(std::floor(t_frame / L.time_cell_s)) + 1;
     }
 
+    // Birth-region culling: a seeding cell outside the region's support would have every birth
+    // thinned away (p = 0 there), so it is not generated at all. The test has a margin of a
+    // millionth of a cell for rounding in the positions; empty (inverted) supports meet nothing.
+    const std::optional<Box> support = c.region ? c.region->support() : std::nullopt;
+    auto outside_region = [&](int64_t cx, int64_t cy) {
+        if (!support) return false;
+        const double m = 1e-6 * std::max(L.cell_x, L.cell_y);
+        const double x0 = static_cast<double>(cx) * L.cell_x - m, x1 = (cx + 1.0) * L.cell_x + m;
+        const double y0 = static_cast<double>(cy) * L.cell_y - m, y1 = (cy + 1.0) * L.cell_y + m;
+        return std::max(x0, support->x0) > std::min(x1, support->x1) ||
+               std::max(y0, support->y0) > std::min(y1, support->y1);
+    };
+
     Particles& P = S.next;
     P.clear();
     S.next_blocks.clear();
@@ -270,6 +283,7 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
             for (int64_t cx = cx0; cx <= cx1; ++cx) {
                 const BlockKey key{ct, cy, cx};
                 const size_t start = P.size();
+                if (outside_region(cx, cy)) continue;  // no births: no block
                 while (reuse && cursor < S.blocks.size() && S.blocks[cursor].key < key) ++cursor;
                 if (reuse && cursor < S.blocks.size() && S.blocks[cursor].key == key) {
                     const Block& b = S.blocks[cursor];
