@@ -199,8 +199,8 @@ void CompositionReader::resolve(Scene& scene) {
                 if (scene.camera.type == CameraConfig::Type::Perspective) {
                     Reader& r = *m_layers[ref.layer];
                     r.fail(r.node("warp"), "warp",
-                           "a domain warp needs an orthographic camera (camera.type = "
-                           "\"perspective\"): the warp resamples the layer in the image plane");
+                           "a domain warp needs an orthographic camera, not camera.type = "
+                           "\"perspective\" (the warp resamples the layer's image)");
                 }
                 if (!(layer_theory(source).variance > 0.0))
                     ref.reader.fail(ref.node, ref.key,
@@ -239,8 +239,8 @@ void CompositionReader::resolve(Scene& scene) {
                 psi.kernel = [kernel](double dx, double dy, double theta) {
                     return kernel->evaluate(dx, dy, theta);
                 };
-                psi.autocorrelation = [kernel, random](double tx, double ty) {
-                    return sampled_autocorrelation(*kernel, random, tx, ty);
+                psi.semivariogram = [kernel, random](double tx, double ty) {
+                    return sampled_semivariogram(*kernel, random, tx, ty);
                 };
                 PendingFlow& pf = *m_flows[ref.flow];
                 try {
@@ -307,30 +307,29 @@ void CompositionReader::resolve(Scene& scene) {
                                          "rendered");
 }
 
-double sampled_autocorrelation(const kernels::Kernel& kernel, bool random_orientation, double tx,
-                               double ty) {
+double sampled_semivariogram(const kernels::Kernel& kernel, bool random_orientation, double tx,
+                             double ty) {
     const double R = kernel.radius();
-    constexpr int kN = 96;
-    const double step = 2.0 * R / kN;
-    // h at the midpoints of the grid over [-R, R]^2, and the sum of h(x) h(x + tau) over them.
-    std::vector<double> xs, ys, hs;
-    for (int j = 0; j < kN; ++j)
-        for (int i = 0; i < kN; ++i) {
-            const double x = -R + (i + 0.5) * step, y = -R + (j + 0.5) * step;
-            const double h = kernel.evaluate(x, y);
-            if (h != 0.0) xs.push_back(x), ys.push_back(y), hs.push_back(h);
-        }
     auto at = [&](double ax, double ay) {
+        // (h(x) - h(x + a))^2 is zero outside the union of the two supports.
+        const double reach = R + std::hypot(ax, ay);
+        constexpr int kN = 96;
+        const double step = 2.0 * reach / kN;
         double sum = 0.0;
-        for (size_t k = 0; k < hs.size(); ++k) sum += hs[k] * kernel.evaluate(xs[k] + ax, ys[k] + ay);
-        return sum * step * step;
+        for (int j = 0; j < kN; ++j)
+            for (int i = 0; i < kN; ++i) {
+                const double x = -reach + (i + 0.5) * step, y = -reach + (j + 0.5) * step;
+                const double d = kernel.evaluate(x, y) - kernel.evaluate(x + ax, y + ay);
+                sum += d * d;
+            }
+        return 0.5 * sum * step * step;
     };
     const auto& p = kernel.params();
     const bool isotropic = !kernel.is_grid() && p.aspect == 1.0 && !kernel.has_carrier();
     if (isotropic) return at(std::hypot(tx, ty), 0.0);
     if (!random_orientation) return at(tx, ty);
-    // A kernel rotated by theta has C_theta(tau) = C_0(R_-theta tau); C_0 is even, so the
-    // average over theta in [0, 2 pi) is the average over [0, pi).
+    // A kernel rotated by theta has gamma_theta(tau) = gamma_0(R_-theta tau); gamma_0 is even,
+    // so the average over theta in [0, 2 pi) is the average over [0, pi).
     constexpr int kAngles = 36;
     double sum = 0.0;
     for (int m = 0; m < kAngles; ++m) {

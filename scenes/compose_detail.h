@@ -42,12 +42,15 @@ private:
     std::vector<std::optional<Reader>> m_layers;  ///< each layer's reader, for messages
 };
 
-/// The autocorrelation int h(x) h(x + tau) d^2x of a kernel at (tx, ty), by the midpoint rule on
-/// a 96 x 96 grid over its support (relative error about 1e-3 for the cosine kernel; the exact
-/// Kernel::autocorrelation takes 100 times as long), averaged over 36 rotations of the kernel
-/// when `random_orientation` and the kernel is not isotropic.
-double sampled_autocorrelation(const kernels::Kernel& kernel, bool random_orientation, double tx,
-                               double ty);
+/// The semivariogram (1/2) int (h(x) - h(x + tau))^2 d^2x = C(0) - C(tau) of a kernel at
+/// tau = (tx, ty), C its autocorrelation, by the midpoint rule on a 96 x 96 grid over the
+/// support grown by |tau|: within 1e-6 of itself for the cosine kernel and 2e-4 for a truncated
+/// Gaussian (measured against Kernel::autocorrelation, which takes 100 times as long). Averaged
+/// over 36 rotations of the kernel when `random_orientation` and the kernel is not isotropic.
+/// Computed as a difference's own integral it keeps its relative accuracy at small lags, where
+/// C(0) - C is a small part of C(0).
+double sampled_semivariogram(const kernels::Kernel& kernel, bool random_orientation, double tx,
+                             double ty);
 
 // ---------------------------------------------------------------------------------------------
 // Rendering

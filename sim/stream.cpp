@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // A still layer's field as a stream function: the flow along its level lines. The same lattice
 // and Catmull-Rom interpolation as curl noise (sim/lattice.h), with the layer's own kernel in
-// place of the (1 - q)^3 bump and the normalisation computed from its autocorrelation.
+// place of the (1 - q)^3 bump and the normalisation computed from its semivariogram.
 
 #include <cmath>
 #include <sstream>
@@ -77,8 +77,8 @@ void validate(const StreamFunction& psi) {
         s << "stream function: expected 0 < radius <= cell_size";
     else if (!(psi.gain != 0) || !std::isfinite(psi.gain))
         s << "stream function: expected a finite gain != 0";
-    else if (!psi.kernel || !psi.autocorrelation)
-        s << "stream function: kernel and autocorrelation are required";
+    else if (!psi.kernel || !psi.semivariogram)
+        s << "stream function: kernel and semivariogram are required";
     if (!s.str().empty()) throw ValueError(s.str());
 }
 
@@ -90,7 +90,9 @@ double stream_gradient_variance(const StreamFunction& psi) {
     // (1/hx) sum_ab d_a(tx) w_b(ty) psi_ab and, psi being stationary with covariance
     // K(tau) = lambda E[a^2] C(tau) (Campbell), its mean square over a lattice cell is
     // (1/hx^2) sum_pq D(p) W(q) K(p hx, q hy), D(p) = sum_{a - a' = p} int_0^1 d_a d_a' dt and
-    // W(q) likewise from w. The weights are cubics: 4-point Gauss-Legendre is exact.
+    // W(q) likewise from w. The weights are cubics: 4-point Gauss-Legendre is exact. D sums to
+    // zero (the d_a do, the w_a summing to 1), so C may be replaced by -(C(0) - C): the
+    // semivariogram, whose quadrature keeps its accuracy where C(0) - C is small.
     const double gx[4] = {-0.8611363115940526, -0.3399810435848563, 0.3399810435848563,
                           0.8611363115940526};
     const double gw[4] = {0.3478548451374538, 0.6521451548625461, 0.6521451548625461,
@@ -112,10 +114,9 @@ double stream_gradient_variance(const StreamFunction& psi) {
     for (int q = -3; q <= 3; ++q)
         for (int p = -3; p <= 3; ++p) {
             const double weight = D[p + 3] * W[q + 3] / (hx * hx) + W[p + 3] * D[q + 3] / (hy * hy);
-            // C(tau) = C(-tau): evaluate each pair once.
-            if (p < 0 || (p == 0 && q < 0)) continue;
-            const double twice = (p == 0 && q == 0) ? 1.0 : 2.0;
-            sum += twice * weight * psi.autocorrelation(p * hx, q * hy);
+            // gamma(tau) = gamma(-tau), gamma(0) = 0: each pair of lags once.
+            if (p < 0 || (p == 0 && q <= 0)) continue;
+            sum -= 2.0 * weight * psi.semivariogram(p * hx, q * hy);
         }
     return scale * sum;
 }
