@@ -152,6 +152,21 @@ private:
     double m_radius;
 };
 
+/// Adds a cell's terms a_i phi(|X - x_i|^2 / s^2) at node (X, Y).
+struct CurlContribution {
+    double inv_s2 = 1.0;
+    void operator()(double X, double Y, const CellImpulses& c, double& psi) const {
+        for (size_t k = 0; k < c.x.size(); ++k) {
+            const double ddx = X - c.x[k], ddy = Y - c.y[k];
+            const double q = (ddx * ddx + ddy * ddy) * inv_s2;
+            if (q < 1.0) {
+                const double u = 1.0 - q;
+                psi += c.amplitude[k] * u * u * u;
+            }
+        }
+    }
+};
+
 /// Curl of a sparse-convolution potential psi = sum a_i phi(|x - x_i|^2 / s^2),
 /// phi(q) = (1 - q)^3: v = (d psi/dy, -d psi/dx), curl v = -lap psi.
 ///
@@ -160,37 +175,18 @@ private:
 /// stays exactly divergence-free (div curl = 0) while an evaluation costs 16 node reads instead
 /// of a sum over ~36 impulses. Node values are cached for the region the simulator prepares;
 /// outside it they are computed on the fly (the same numbers).
-class CurlNoiseFlow final : public Flow {
+class CurlNoiseFlow final : public detail::LatticeStreamFlow<CurlContribution> {
 public:
     static constexpr double kPerCell = 4.0;  // impulses per s x s cell: 4 pi per kernel area
     static constexpr int kNodesPerCell = 8;
     CurlNoiseFlow(uint64_t seed, double scale, Keyframed speed,
                   std::optional<std::array<double, 2>> period)
-        : m_speed(std::move(speed)), m_lattice(potential_process(seed, scale, period), kNodesPerCell) {
+        : LatticeStreamFlow(potential_process(seed, scale, period), kNodesPerCell, std::move(speed)) {
         // E|grad psi|^2 = lambda E[a^2] int |grad phi|^2 = lambda * 1.2 pi (independent of s),
         // so unit RMS speed needs amplitudes scaled by 1/sqrt(1.2 pi lambda).
         m_norm = 1.0 / std::sqrt(1.2 * kPi * m_lattice.config().intensity);
         const detail::Layout& L = m_lattice.layout();
-        m_inv_s2 = 1.0 / (L.cell_x * L.cell_y);
-    }
-
-    void prepare(const Box& region) override { m_lattice.prepare(region, contribution()); }
-
-    void add(double t, size_t n, const double* x, const double* y, double* vx, double* vy, double*,
-             double* curl) const override {
-        const double amp = m_speed.value(t) * m_norm;
-        for (size_t p = 0; p < n; ++p) {
-            const detail::PotentialSample s = m_lattice.sample(x[p], y[p], contribution());
-            vx[p] += amp * s.py;
-            vy[p] -= amp * s.px;
-            curl[p] -= amp * s.lap;
-        }
-    }
-
-    double max_speed(const Box&) const override {
-        // A statistical bound: |v| exceeds 4x its RMS with probability about 3e-4 per point
-        // for a Gaussian field; the sparse potential has slightly heavier tails.
-        return 4.0 * m_speed.max_abs();
+        m_contribution.inv_s2 = 1.0 / (L.cell_x * L.cell_y);
     }
 
 private:
@@ -205,25 +201,6 @@ private:
         c.amplitude = Amplitude::Normal;
         return c;
     }
-    /// Adds a cell's terms a_i phi(|X - x_i|^2 / s^2) at node (X, Y).
-    struct Contribution {
-        double inv_s2;
-        void operator()(double X, double Y, const CellImpulses& c, double& psi) const {
-            for (size_t k = 0; k < c.x.size(); ++k) {
-                const double ddx = X - c.x[k], ddy = Y - c.y[k];
-                const double q = (ddx * ddx + ddy * ddy) * inv_s2;
-                if (q < 1.0) {
-                    const double u = 1.0 - q;
-                    psi += c.amplitude[k] * u * u * u;
-                }
-            }
-        }
-    };
-    Contribution contribution() const { return {m_inv_s2}; }
-
-    Keyframed m_speed;
-    detail::PotentialLattice m_lattice;
-    double m_norm = 1.0, m_inv_s2 = 1.0;
 };
 
 class GridFlow final : public Flow {

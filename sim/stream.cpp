@@ -16,58 +16,28 @@ constexpr int kNodesPerCell = 8;
 
 /// Adds a cell's terms a_k h(X - x_k; theta_k) at node (X, Y).
 struct KernelContribution {
-    const StreamFunction* psi;
-    double r2;
-    bool random;
+    std::function<double(double, double, double)> kernel;
+    double r2 = 0.0;
+    bool random = false;
     void operator()(double X, double Y, const CellImpulses& c, double& value) const {
         for (size_t k = 0; k < c.x.size(); ++k) {
             const double dx = X - c.x[k], dy = Y - c.y[k];
             if (dx * dx + dy * dy >= r2) continue;
             const double theta = random ? static_cast<double>(c.theta0[k]) : 0.0;
-            value += c.amplitude[k] * psi->kernel(dx, dy, theta);
+            value += c.amplitude[k] * kernel(dx, dy, theta);
         }
     }
 };
 
-class StreamFunctionFlow final : public Flow {
+class StreamFunctionFlow final : public detail::LatticeStreamFlow<KernelContribution> {
 public:
-    StreamFunctionFlow(StreamFunction psi, Keyframed speed)
-        : m_psi(std::move(psi)), m_speed(std::move(speed)), m_lattice(m_psi.process, kNodesPerCell) {
+    StreamFunctionFlow(const StreamFunction& psi, Keyframed speed)
+        : LatticeStreamFlow(psi.process, kNodesPerCell, std::move(speed)) {
+        m_contribution = {psi.kernel, psi.radius * psi.radius,
+                          psi.process.orientation == OrientationMode::Random};
         // Unit RMS speed: divide by sqrt(E|grad psi|^2) (gain cancels but for its sign).
-        const double g2 = stream_gradient_variance(m_psi);
-        m_norm = (m_psi.gain < 0 ? -1.0 : 1.0) / std::sqrt(g2);
+        m_norm = (psi.gain < 0 ? -1.0 : 1.0) / std::sqrt(stream_gradient_variance(psi));
     }
-
-    void prepare(const Box& region) override { m_lattice.prepare(region, contribution()); }
-
-    void add(double t, size_t n, const double* x, const double* y, double* vx, double* vy, double*,
-             double* curl) const override {
-        const double amp = m_speed.value(t) * m_norm;
-        for (size_t p = 0; p < n; ++p) {
-            const detail::PotentialSample s = m_lattice.sample(x[p], y[p], contribution());
-            vx[p] += amp * s.py;
-            vy[p] -= amp * s.px;
-            curl[p] -= amp * s.lap;
-        }
-    }
-
-    double max_speed(const Box&) const override {
-        // A statistical bound, as for curl noise: for a Gaussian field |v|^2 / E|v|^2 is
-        // exponential for an isotropic kernel, so |v| exceeds 4x its RMS with probability
-        // exp(-16) ~ 1e-7 per point (more for strongly anisotropic kernels of fixed orientation).
-        return 4.0 * m_speed.max_abs();
-    }
-
-private:
-    KernelContribution contribution() const {
-        return {&m_psi, m_psi.radius * m_psi.radius,
-                m_psi.process.orientation == OrientationMode::Random};
-    }
-
-    StreamFunction m_psi;
-    Keyframed m_speed;
-    detail::PotentialLattice m_lattice;
-    double m_norm = 1.0;
 };
 
 void validate(const StreamFunction& psi) {
@@ -123,7 +93,7 @@ double stream_gradient_variance(const StreamFunction& psi) {
 
 std::unique_ptr<Flow> make_stream_flow(StreamFunction psi, Keyframed speed) {
     validate(psi);
-    return std::make_unique<StreamFunctionFlow>(std::move(psi), std::move(speed));
+    return std::make_unique<StreamFunctionFlow>(psi, std::move(speed));
 }
 
 }  // namespace impulse::sim

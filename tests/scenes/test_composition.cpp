@@ -24,6 +24,7 @@
 #include "render/render.h"
 #include "scenes/compose_detail.h"
 #include "scenes/scenes.h"
+#include "tests/scene_render.h"
 #include "util/errors.h"
 
 namespace {
@@ -34,16 +35,10 @@ using render::Frame;
 constexpr double kPi = std::numbers::pi;
 
 Frame render_text(const std::string& text, int64_t frame = 0) {
-    scenes::Renderer r(scenes::load_scene_string(text, "compose.toml"));
-    Frame f;
-    r.render(frame, f);
-    return f;
+    return test::render_scene_text(text, frame, "compose.toml");
 }
 
-bool same_bits(const Frame& a, const Frame& b) {
-    return a.width == b.width && a.height == b.height &&
-           std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)) == 0;
-}
+using test::same_bits;
 
 struct Moments {
     double mean = 0, variance = 0;

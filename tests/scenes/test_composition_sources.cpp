@@ -18,6 +18,7 @@
 #include "render/render.h"
 #include "scenes/compose_detail.h"
 #include "scenes/scenes.h"
+#include "tests/scene_render.h"
 #include "sim/catmull_rom.h"
 #include "tests/structure_tensor.h"
 
@@ -28,10 +29,7 @@ using render::Frame;
 constexpr double kPi = std::numbers::pi;
 
 Frame render_text(const std::string& text, int64_t frame = 0) {
-    scenes::Renderer r(scenes::load_scene_string(text, "sources.toml"));
-    Frame f;
-    r.render(frame, f);
-    return f;
+    return test::render_scene_text(text, frame, "sources.toml");
 }
 
 /// A still cosine layer of radius `radius` as a stream function.
@@ -74,10 +72,7 @@ struct Stream {
 struct Velocity {
     double vx = 0, vy = 0, div = 0, curl = 0;
 };
-bool same_bits(const Frame& a, const Frame& b) {
-    return a.data.size() == b.data.size() &&
-           std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)) == 0;
-}
+using test::same_bits;
 
 Velocity velocity(const sim::Flow& f, double x, double y) {
     Velocity v;
