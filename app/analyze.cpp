@@ -964,6 +964,14 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
     } else if (!opt.sets.empty()) {
         throw ValueError("--set " + opt.sets.front() + ": needs --scene");
     }
+    // The closed forms below (spectra, correlation in time, fourth cumulants) are those of a sum
+    // of layers; a scene that composes them otherwise is measured without them.
+    const bool theory = scene && scenes::is_sum_of_layers(*scene);
+    if (scene && !theory)
+        R.notes.push_back(
+            "the scene composes its layers (blend, opacity, visible or warp, docs/scenes.md "
+            "\"Composition\"): the theory here covers sums of layers, so no comparison with it; "
+            "the display range still maps the values back");
 
     // One-point statistics of all pixels of all frames.
     {
@@ -1024,7 +1032,7 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
     // none are assumed independent.
     const size_t quarter = n / 4;
     TimeCorrelation tc;
-    if (scene && n > 1) {
+    if (theory && n > 1) {
         tc = scene_time_correlation(*scene, n, quarter);
     } else if (n >= size_t(kMinFramesForTime)) {
         std::vector<double> means(n), vars(n);
@@ -1073,7 +1081,7 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
         R.notes.push_back(
             "layer parameters of the scene are keyframed: the statistics vary in time, so there "
             "is no comparison with the (stationary) theory");
-    if (scene && !keyframed) {
+    if (theory && !keyframed) {
         R.theory = compare_with_theory(*scene, scene_path, R, tc, mapped, lo, hi, clipped);
         if (mapped && clipped > 0.001)
             R.notes.push_back("display input: " + format_number(clipped * 100.0, 3) +

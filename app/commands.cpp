@@ -261,6 +261,28 @@ int run_scenes() {
     return 0;
 }
 
+namespace {
+
+/// A layer's composition for `impulse info`: what differs from a plainly added layer.
+std::string composition_text(const scenes::LayerConfig& l) {
+    const scenes::Composition& c = l.compose;
+    std::ostringstream s;
+    if (!c.name.empty()) s << " name=\"" << c.name << "\"";
+    if (!c.visible) s << " hidden";
+    if (c.blend != scenes::Blend::Add) s << " blend=" << scenes::kBlendNames[size_t(c.blend)];
+    if (!c.opacity.is_constant())
+        s << " opacity=keyframed";
+    else if (c.opacity.value(0.0) != 1.0)
+        s << " opacity=" << c.opacity.value(0.0);
+    if (c.warp)
+        s << " warp=layer[" << c.warp->source[0] << "],layer[" << c.warp->source[1] << "]";
+    if (c.orientation) s << " orientation=layer[" << c.orientation->source << "]";
+    for (size_t j : c.flow_sources) s << " flow=layer[" << j << "]";
+    return s.str();
+}
+
+}  // namespace
+
 int run_info(const InfoOptions& opt) {
     const std::string path = scenes::resolve_scene(opt.scene);
     scenes::Scene scene = scenes::load_scene(path, overrides_for(opt.sets, opt.size, -1));
@@ -272,7 +294,10 @@ int run_info(const InfoOptions& opt) {
                 static_cast<long long>(scene.output.frames), scene.output.fps);
     bool keyframed = false;
     for (const auto& l : scene.layers) keyframed = keyframed || l.keyframed();
-    std::printf("mean       %.6g\nvariance   %.6g (Campbell's theorem%s)\n", t.mean, t.variance,
+    std::printf("mean       %.6g\nvariance   %.6g (%s%s)\n", t.mean, t.variance,
+                scenes::is_sum_of_layers(scene)
+                    ? "Campbell's theorem"
+                    : "Campbell's theorem, layers composed: docs/scenes.md \"Composition\"",
                 keyframed ? ", at t = 0: layers are keyframed" : "");
     for (size_t i = 0; i < scene.layers.size(); ++i) {
         const auto& l = scene.layers[i];
@@ -281,7 +306,7 @@ int run_info(const InfoOptions& opt) {
                     std::string(kernels::to_string(l.kernel.type)).c_str(), l.kernel.radius,
                     l.density.value(0.0), l.process.intensity, lt.variance,
                     l.process.lifetime_s > 0 ? " (animated)" : " (still)",
-                    l.keyframed() ? " (keyframed)" : "");
+                    l.keyframed() ? " (keyframed)" : "", composition_text(l).c_str());
     }
     std::printf("impulses   ~%.3g per frame, ~%.0f MiB\n", r.estimated_impulses(), r.estimated_memory_mib());
     return 0;

@@ -133,7 +133,8 @@ void read_camera_view(Reader& r, CameraConfig& c, int width, int height) {
     c.anisotropic = r.boolean("anisotropic", true);
 }
 
-void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base) {
+void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base,
+                      const std::function<void(Reader&)>& layer_source) {
     const toml::node* n = layer.node("orientation");
     p.orientation = sim::OrientationMode::Fixed;
     if (!n) return;
@@ -147,13 +148,13 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
         "center = [x, y] }";
     if (!n->is_table()) layer.fail(n, "orientation", std::string("expected ") + kExpected);
     Reader f = *layer.table("orientation");
-    const std::array<std::string_view, 10> types = {"constant", "radial",   "circular", "polyline",
-                                                    "sine",     "image",    "fixed",    "random",
-                                                    "flow",     "vorticity"};
+    const std::array<std::string_view, 11> types = {"constant", "radial", "circular", "polyline",
+                                                    "sine",     "image",  "fixed",    "random",
+                                                    "flow",     "vorticity", "layer"};
     if (!f.has("type"))
         f.fail(nullptr, "type",
                "missing: expected one of constant, radial, circular, polyline, sine, image, fixed, "
-               "random, flow, vorticity");
+               "random, flow, vorticity, layer");
     const size_t type = f.choice("type", types, 0);
     auto center = [&](sim::Keyframed& x, sim::Keyframed& y) {
         if (f.node("center")) {
@@ -256,6 +257,9 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
             field = sim::make_grid_orientation(std::move(g));
             break;
         }
+        case 10:  // another layer's field: the renderer sets the field for each frame
+            layer_source(f);
+            break;
         default: {  // the named modes as a table
             p.orientation = static_cast<sim::OrientationMode>(type - 6);
             f.finish();

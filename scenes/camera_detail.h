@@ -4,6 +4,7 @@
 // layer (internal to impulse::scenes).
 
 #include <filesystem>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -19,10 +20,12 @@ namespace impulse::scenes::detail {
 void read_camera_view(Reader& r, CameraConfig& c, int width, int height);
 
 /// layer.orientation: a mode name ("fixed", "random", "flow", "vorticity") or a field table
-/// { type = "constant" | "radial" | "circular" | "polyline" | "sine" | "image", ... }.
-/// Images are read here (OpenImageIO) relative to `base`.
+/// { type = "constant" | "radial" | "circular" | "polyline" | "sine" | "image" | "layer", ... }.
+/// Images are read here (OpenImageIO) relative to `base`. Type "layer" (another layer's field,
+/// set by the renderer) hands the table to `layer_source`, then reads `jitter`.
 void read_orientation(Reader& layer, sim::ProcessConfig& process,
-                      const std::filesystem::path& base);
+                      const std::filesystem::path& base,
+                      const std::function<void(Reader&)>& layer_source);
 
 /// Per-layer kernel pyramids and the per-frame perspective geometry, used by Renderer::render.
 class CameraPipeline {

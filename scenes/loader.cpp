@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "scenes/camera_detail.h"
+#include "scenes/compose_detail.h"
 #include "scenes/marginal.h"
 #include "scenes/reader.h"
 #include "scenes/scenes.h"
@@ -147,16 +148,20 @@ CameraConfig read_camera(std::optional<Reader> r, int width, int height) {
 }
 
 std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& process,
-                                      const fs::path& base) {
+                                      const fs::path& base, detail::CompositionReader& compose,
+                                      size_t index) {
     auto list = layer.tables("flow");
     if (list.empty()) return nullptr;
     if (process.lifetime_s <= 0)
         layer.fail(layer.node("flow"), "flow",
                    "a flow moves particles that are born and die: set lifetime > 0 in this layer");
     auto sum = std::make_shared<sim::FlowSum>();
-    const std::array<std::string_view, 6> types = {"uniform", "shear", "vortex", "source", "curl", "image"};
+    const std::array<std::string_view, 7> types = {"uniform", "shear", "vortex", "source",
+                                                   "curl",    "image", "layer"};
     for (auto& f : list) {
-        if (!f.has("type")) f.fail(nullptr, "type", "missing: expected one of uniform, shear, vortex, source, curl, image");
+        if (!f.has("type"))
+            f.fail(nullptr, "type",
+                   "missing: expected one of uniform, shear, vortex, source, curl, image, layer");
         const size_t type = f.choice("type", types, 0);
         auto center = [&](sim::Keyframed& x, sim::Keyframed& y) {
             const toml::node* n = f.node("center");
@@ -249,6 +254,9 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
                 sum->push(sim::make_grid_flow(std::move(g), gain));
                 break;
             }
+            case 6:  // another layer's field as stream function (scenes/compose_config.cpp)
+                compose.read_flow(f, index, *sum);
+                break;
         }
         f.finish();
     }
@@ -661,6 +669,7 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
 
     auto layers = top.tables("layer");
     if (layers.empty()) top.fail(nullptr, "layer", "a scene needs at least one [[layer]]");
+    detail::CompositionReader compose;  // keys naming other layers, resolved after the loop
     for (size_t i = 0; i < layers.size(); ++i) {
         Reader& r = layers[i];
         LayerConfig L;
@@ -691,7 +700,8 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
         p.integrator = static_cast<sim::Integrator>(r.choice("integrator", sim::kIntegratorNames, 0));
         p.substeps = static_cast<int>(r.integer("substeps", 2, 1, 64));
         p.jacobian = r.boolean("jacobian", true);
-        detail::read_orientation(r, p, base);  // a mode name or a field table
+        // a mode name or a field table; { type = "layer" } is composition's
+        detail::read_orientation(r, p, base, [&](Reader& f) { compose.read_orientation(f, i); });
         detail::read_region(r, p, base);       // births confined to a shape or a mask
         p.max_travel = r.number("max_travel", 4096.0, kPositive, "a distance > 0 in texture units");
         if (p.lifetime_s <= 0 && !L.density.is_constant())
@@ -703,13 +713,15 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
         } catch (const ValueError& e) {  // combinations the per-key checks cannot see
             r.fail(r.node("kernel"), "kernel", e.what());
         }
-        L.flow = read_flows(r, p, base);
+        L.flow = read_flows(r, p, base, compose, i);
         detail::read_marginal(r, L, base);
+        compose.read_layer(r, i, L);
         if (L.density.min() < 1.0)
             r.warn("density", "below 1 impulse per kernel area the noise is lumpy, see Lewis 1989 §4.1");
         r.finish();
         s.layers.push_back(std::move(L));
     }
+    compose.resolve(s);
     top.finish();
     return s;
 }

@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "scenes/camera_detail.h"
+#include "scenes/compose_detail.h"
 #include "scenes/marginal.h"
 #include "scenes/scenes.h"
 #include "util/errors.h"
@@ -108,22 +109,33 @@ Theory layer_theory(const LayerConfig& layer, double t_s) {
 }
 
 Theory scene_theory(const Scene& scene, double t_s) {
+    // The visible layers blended in order onto the empty (zero) picture, each independent of
+    // the result before it, at frame time t_s; the weights at their largest over the animation
+    // (a fade's range is the fully faded-in one).
     Theory t;
     for (const auto& l : scene.layers) {
-        const Theory lt = layer_theory(l, t_s);
-        t.mean += lt.mean;
-        t.variance += lt.variance;
+        if (!l.compose.visible) continue;
+        t = detail::blend_theory(t, l, layer_theory(l, t_s), l.compose.opacity.max_abs());
     }
     return t;
+}
+
+bool is_sum_of_layers(const Scene& scene) {
+    for (const auto& l : scene.layers) {
+        const Composition& c = l.compose;
+        if (!c.visible || c.blend != Blend::Add || !c.opacity.is_constant() ||
+            c.opacity.value(0.0) != 1.0 || c.warp)
+            return false;
+    }
+    return true;
 }
 
 struct Renderer::State {
     Scene scene;
     std::vector<kernels::Kernel> kernels;
     std::vector<sim::LayerSimulator> sims;
-    std::vector<sim::Impulses> impulses;
+    std::vector<sim::Impulses> impulses;  ///< per layer, on the frame's view
     std::vector<std::shared_ptr<const kernels::MarginalTransform>> marginals;  ///< per layer
-    render::Frame scratch;  ///< a shaped layer's own field
     /// Per layer, what the current kernel and marginal transfer were built from (keyframed
     /// layers rebuild them when the evaluated values change: frame independence holds because
     /// each is a pure function of the layer time).
@@ -131,6 +143,41 @@ struct Renderer::State {
     std::vector<std::vector<double>> marginal_built;
     /// Camera-dependent evaluation: pyramids, perspective (scenes/camera_render.cpp).
     std::unique_ptr<detail::CameraPipeline> camera;
+
+    // Composition (docs/scenes.md "Composition").
+    /// The field of layers oriented by another layer's, filled before each of their evaluations.
+    std::vector<std::shared_ptr<detail::LatticeOrientation>> orientations;
+    std::vector<bool> warp_source;  ///< a warp reads its own field on the frame's view
+    std::vector<bool> rendered;     ///< visible or read by a warp of one (for the estimates)
+    std::vector<render::Frame> fields;  ///< own fields on the frame's view, this frame
+    std::vector<bool> field_ready;
+
+    /// Camera: as the camera sees the layer (pyramid, perspective); Texture: the kernel itself
+    /// at the pixel centres of an orthographic view (sampled fields of a layer).
+    enum class Space { Camera, Texture };
+    struct Pass {
+        int64_t frame;
+        double t;
+        const render::EvalOptions* options;
+    };
+
+    /// The layer's own field on the frame's view (computed once per frame).
+    const render::Frame& main_field(size_t i, const Pass& pass, const render::View& view);
+    /// The layer's own field on `v`: impulses, warp, mean or marginal (not opacity or blend).
+    /// `main`: v is the frame's view in camera space, whose fields are kept for the frame.
+    void field(size_t i, const Pass& pass, const render::View& v, Space space, bool main,
+               render::Frame& out, sim::Impulses& impulses);
+    /// The sum of the layer's impulses on `v` (added to `out`).
+    void raw(size_t i, const Pass& pass, const render::View& v, Space space, render::Frame& out,
+             sim::Impulses& impulses);
+    /// The layer's impulses covering `box`, gain applied, oriented by its source layer if any.
+    void layer_impulses(size_t i, const Pass& pass, const sim::Box& box, sim::Impulses& out);
+    /// Samples layer i's orientation source on a lattice covering the impulses of `box`.
+    void orient(size_t i, const Pass& pass, const sim::Box& box);
+    /// Rebuilds layer i's marginal transfer for layer time tl when its target or source varies.
+    void update_marginal(size_t i, double tl);
+    /// Refuses a frame buffer of `pixels` beyond limits.max_memory_mib.
+    void check_buffer(double pixels, const std::string& what) const;
 };
 
 Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
@@ -138,13 +185,41 @@ Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
     S.scene = std::move(scene);
     const auto& out = S.scene.output;
     sim::Timing timing{out.fps, std::llround(out.start_s * out.fps)};
-    for (const auto& l : S.scene.layers) {
+    const size_t count = S.scene.layers.size();
+    S.orientations.resize(count);
+    for (size_t i = 0; i < count; ++i) {
+        const auto& l = S.scene.layers[i];
         S.kernels.emplace_back(l.kernel);
         S.kernel_built.push_back(l.kernel);
-        S.sims.emplace_back(l.process, l.flow, timing, l.max_radius());
+        sim::ProcessConfig process = l.process;
+        if (l.compose.orientation) {
+            S.orientations[i] =
+                std::make_shared<detail::LatticeOrientation>(l.compose.orientation->level_lines);
+            process.orientation_field = S.orientations[i];
+        }
+        S.sims.emplace_back(process, l.flow, timing, l.max_radius());
     }
-    S.marginal_built.resize(S.scene.layers.size());
-    S.impulses.resize(S.scene.layers.size());
+    S.marginal_built.resize(count);
+    S.impulses.resize(count);
+    S.fields.resize(count);
+    S.field_ready.assign(count, false);
+    S.warp_source.assign(count, false);
+    S.rendered.assign(count, false);
+    for (size_t i = 0; i < count; ++i) {
+        const auto& c = S.scene.layers[i].compose;
+        S.rendered[i] = c.visible;
+        if (c.warp)
+            for (size_t j : c.warp->source) S.warp_source[j] = true;
+    }
+    for (bool changed = true; changed;) {  // warp sources of rendered layers are rendered
+        changed = false;
+        for (size_t i = 0; i < count; ++i) {
+            const auto& c = S.scene.layers[i].compose;
+            if (!S.rendered[i] || !c.warp) continue;
+            for (size_t j : c.warp->source)
+                if (!S.rendered[j]) S.rendered[j] = changed = true;
+        }
+    }
     S.camera = std::make_unique<detail::CameraPipeline>(S.scene, S.kernels);
     // Refuse what would exhaust memory or time, with the estimate (design.md §4).
     const double n = estimated_impulses();
@@ -179,23 +254,50 @@ double Renderer::estimated_impulses() const {
     const State& S = *m_state;
     double n = 0.0;
     for (size_t i = 0; i < S.sims.size(); ++i) {
+        // A hidden layer no frame reads (a flow's stream function only) is never rendered.
+        if (!S.rendered[i]) continue;
         // The largest view over the animation bounds the birth region (zoom keys are extrema).
         double min_zoom = 1e300;
         for (const auto& k : S.scene.camera.zoom.keys) min_zoom = std::min(min_zoom, k.second);
         render::View v = S.scene.camera.view(S.scene.output.width, S.scene.output.height, 0.0);
         v.scale = 1.0 / min_zoom;
-        n += sim::expected_impulses(S.sims[i].config(),
-                                    S.sims[i].birth_region(S.camera->estimate_box(i, v)));
+        sim::Box box = S.camera->estimate_box(i, v);
+        const Composition& c = S.scene.layers[i].compose;
+        // A warp reads the layer up to its largest displacement beyond the view: about 5 sd of
+        // the sources over a frame of a million pixels, 6 sd taken.
+        if (c.warp) box = box.expanded(6.0 * c.warp->amount.max_abs());
+        n += sim::expected_impulses(S.sims[i].config(), S.sims[i].birth_region(box));
+        // The orientation source sampled where this layer's impulses are.
+        if (c.orientation) {
+            const size_t j = c.orientation->source;
+            n += sim::expected_impulses(
+                S.sims[j].config(),
+                S.sims[j].birth_region(box.expanded(S.scene.layers[i].kernel.radius)));
+        }
     }
     return n;
 }
 
 double Renderer::estimated_memory_mib() const {
-    const auto& o = m_state->scene.output;
+    const State& S = *m_state;
+    const auto& o = S.scene.output;
     const double pixels = double(o.width) * o.height;
     // float frame + RGB float + 16-bit conversion buffers; ~120 bytes of state per impulse
     // (two generations of the live set plus the prepared arrays).
-    return (pixels * 4.0 * 6.0 + estimated_impulses() * 120.0) / (1024.0 * 1024.0);
+    double bytes = pixels * 4.0 * 6.0 + estimated_impulses() * 120.0;
+    // Composition: a frame per layer that is not simply added; a warped layer's grown frame
+    // (margin as in estimated_impulses) and its two displacement frames.
+    for (const auto& l : S.scene.layers) {
+        const Composition& c = l.compose;
+        if (c.blend != Blend::Add || !(c.opacity.is_constant() && c.opacity.value(0) == 1.0) ||
+            l.marginal || c.warp)
+            bytes += pixels * 4.0;
+        if (c.warp) {
+            const double m = 2.0 * (6.0 * c.warp->amount.max_abs() * S.scene.camera.zoom.max_abs() + 2.0);
+            bytes += ((o.width + m) * (o.height + m) + 2.0 * pixels) * 4.0;
+        }
+    }
+    return bytes / (1024.0 * 1024.0);
 }
 
 render::ValueMapping Renderer::mapping() const {
@@ -250,51 +352,175 @@ void Renderer::render(int64_t frame, render::Frame& out, const render::EvalOptio
     out.resize(o.width, o.height);
     const double t = S.scene.frame_time(frame);
     const render::View view = S.scene.camera.view(o.width, o.height, t);
-    double mean = 0.0;
+    const State::Pass pass{frame, t, &options};
+    std::fill(S.field_ready.begin(), S.field_ready.end(), false);
+    // The visible layers in order onto the empty picture (docs/scenes.md "Composition").
+    double mean = 0.0;  // means of the layers added straight into the frame, not yet added
     for (size_t i = 0; i < S.sims.size(); ++i) {
-        sim::Impulses& imp = S.impulses[i];
-        S.sims[i].impulses_at(frame, S.camera->box(i, view, t), imp);
         const auto& layer = S.scene.layers[i];
-        const double tl = S.scene.layer_time(i, frame);  // the layer's keys run on its own time
-        const double gain = layer.gain.value(tl);
-        if (gain != 1.0)
-            for (auto& w : imp.weight) w = static_cast<float>(w * gain);
-        if (!layer.kernel_keys.empty()) {
-            // The kernel at tl; its orientation turns every impulse instead (so the pyramid of
-            // an anti-aliased layer, built once, serves it too).
-            kernels::KernelParams k = layer.kernel_at(tl);
-            const double turn = k.orientation - layer.kernel.orientation;
-            k.orientation = layer.kernel.orientation;
-            if (!same_kernel(k, S.kernel_built[i])) {
-                S.kernels[i] = kernels::Kernel(k);
-                S.kernel_built[i] = k;
-            }
-            if (turn != 0.0)
-                for (auto& th : imp.theta) th = static_cast<float>(th + turn);
-        }
-        if (S.marginals[i]) {  // shaped (Lewis 1986 §4): its own field, through g, then added
-            update_marginal(i, tl);
-            S.scratch.resize(o.width, o.height);
-            S.camera->accumulate(i, imp, view, t, S.scratch, options);
-            S.marginals[i]->apply(S.scratch.data, layer.mean.value(tl));
-            for (size_t p = 0; p < out.data.size(); ++p) out.data[p] += S.scratch.data[p];
+        const Composition& c = layer.compose;
+        if (!c.visible) continue;
+        const double opacity = c.opacity.value(t);
+        const bool warped = c.warp && c.warp->amount.value(t) != 0.0;
+        if (c.blend == Blend::Add && opacity == 1.0 && !S.marginals[i] && !warped &&
+            !S.warp_source[i]) {
+            // A plain sum: impulses straight into the frame, the mean added at the end.
+            sim::Impulses& imp = S.impulses[i];
+            S.layer_impulses(i, pass, S.camera->box(i, view, t), imp);
+            S.camera->accumulate(i, imp, view, t, out, options);
+            mean += layer.mean.value(S.scene.layer_time(i, frame));
             continue;
         }
-        S.camera->accumulate(i, imp, view, t, out, options);
-        mean += layer.mean.value(tl);
+        const render::Frame& own = S.main_field(i, pass, view);
+        if (c.blend != Blend::Add && mean != 0.0) {  // what lies under a non-additive blend
+            for (auto& v : out.data) v = static_cast<float>(v + mean);
+            mean = 0.0;
+        }
+        detail::blend(c.blend, opacity, c.alpha, own, out);
     }
     if (mean != 0.0)
         for (auto& v : out.data) v = static_cast<float>(v + mean);
     if (S.scene.transform.type != render::FieldTransform::Type::None) {
         // Marble and wood (Lewis 1989 §5.1) of the field in standard deviations.
-        const Theory th = scene_theory(S.scene);
+        const Theory th = scene_theory(S.scene, t);
         render::apply_transform(S.scene.transform, view, th.mean, std::sqrt(th.variance), out);
     }
 }
 
-void Renderer::update_marginal(size_t i, double tl) {
-    State& S = *m_state;
-    const LayerConfig& layer = S.scene.layers[i];
+const render::Frame& Renderer::State::main_field(size_t i, const Pass& pass,
+                                                 const render::View& view) {
+    if (!field_ready[i]) {
+        field(i, pass, view, Space::Camera, true, fields[i], impulses[i]);
+        field_ready[i] = true;
+    }
+    return fields[i];
+}
+
+void Renderer::State::field(size_t i, const Pass& pass, const render::View& v, Space space,
+                            bool main, render::Frame& out, sim::Impulses& imp) {
+    const LayerConfig& layer = scene.layers[i];
+    const double amount = layer.compose.warp ? layer.compose.warp->amount.value(pass.t) : 0.0;
+    out.resize(v.width, v.height);
+    if (amount != 0.0) {
+        // Domain warp: the layer at x + amount z(x), z the sources' standardised values on this
+        // view. The layer is evaluated on the view grown by the largest displacement of the
+        // frame (so every lookup lands inside, whatever the values) and resampled bicubically.
+        std::array<std::vector<float>, 2> d;
+        double largest = 0.0;
+        for (int k = 0; k < 2; ++k) {
+            const size_t j = layer.compose.warp->source[k];
+            render::Frame local;
+            sim::Impulses local_impulses;
+            const render::Frame* src = &local;
+            if (main)
+                src = &main_field(j, pass, v);
+            else
+                field(j, pass, v, space, false, local, local_impulses);
+            const Theory th = layer_theory(scene.layers[j], pass.t);
+            const double px = amount / (std::sqrt(th.variance) * v.scale);  // pixels per sd
+            d[k].resize(src->data.size());
+            for (size_t p = 0; p < d[k].size(); ++p) {
+                d[k][p] = static_cast<float>((src->data[p] - th.mean) * px);
+                largest = std::max(largest, std::abs(double(d[k][p])));
+            }
+        }
+        const int margin = static_cast<int>(std::ceil(largest)) + 2;  // + the bicubic's reach
+        render::View grown = v;
+        grown.width += 2 * margin, grown.height += 2 * margin;
+        grown.x0 -= margin * v.scale, grown.y0 -= margin * v.scale;
+        check_buffer(double(grown.width) * grown.height,
+                     "the domain warp of layer[" + std::to_string(i) + "] (displacements up to " +
+                         std::to_string(std::lround(largest * v.scale)) + " texture units)");
+        render::Frame src;
+        src.resize(grown.width, grown.height);
+        raw(i, pass, grown, space, src, imp);
+        detail::warp_resample(src, margin, d[0], d[1], out);
+    } else {
+        raw(i, pass, v, space, out, imp);
+    }
+    const double tl = scene.layer_time(i, pass.frame);  // the layer's keys run on its own time
+    const double mean = layer.mean.value(tl);
+    if (marginals[i]) {  // shaped (Lewis 1986 §4): through g, which adds the mean first
+        update_marginal(i, tl);
+        marginals[i]->apply(out.data, mean);
+    } else if (mean != 0.0) {
+        for (auto& x : out.data) x = static_cast<float>(x + mean);
+    }
+}
+
+void Renderer::State::raw(size_t i, const Pass& pass, const render::View& v, Space space,
+                          render::Frame& out, sim::Impulses& imp) {
+    if (space == Space::Camera) {
+        layer_impulses(i, pass, camera->box(i, v, pass.t), imp);
+        camera->accumulate(i, imp, v, pass.t, out, *pass.options);
+    } else {
+        layer_impulses(i, pass, v.box(), imp);
+        render::accumulate(kernels[i], imp, v, out, *pass.options);
+    }
+}
+
+void Renderer::State::layer_impulses(size_t i, const Pass& pass, const sim::Box& box,
+                                     sim::Impulses& out) {
+    if (orientations[i]) orient(i, pass, box);
+    sims[i].impulses_at(pass.frame, box, out);
+    const LayerConfig& layer = scene.layers[i];
+    const double tl = scene.layer_time(i, pass.frame);  // the layer's keys run on its own time
+    const double gain = layer.gain.value(tl);
+    if (gain != 1.0)
+        for (auto& w : out.weight) w = static_cast<float>(w * gain);
+    if (!layer.kernel_keys.empty()) {
+        // The kernel at tl; its orientation turns every impulse instead (so the pyramid of an
+        // anti-aliased layer, built once, serves it too).
+        kernels::KernelParams k = layer.kernel_at(tl);
+        const double turn = k.orientation - layer.kernel.orientation;
+        k.orientation = layer.kernel.orientation;
+        if (!same_kernel(k, kernel_built[i])) {
+            kernels[i] = kernels::Kernel(k);
+            kernel_built[i] = k;
+        }
+        if (turn != 0.0)
+            for (auto& th : out.theta) th = static_cast<float>(th + turn);
+    }
+}
+
+void Renderer::State::orient(size_t i, const Pass& pass, const sim::Box& box) {
+    // The source's own field (kernel itself, in texture space) on a lattice of spacing R / 8
+    // whose nodes are whole multiples of the spacing, covering every impulse the simulator
+    // emits for `box` (within the layer's support radius of it) with the bicubic stencil's two
+    // nodes to spare.
+    const size_t j = scene.layers[i].compose.orientation->source;
+    const double h = kernels[j].radius() / 8.0;
+    const sim::Box b = box.expanded(scene.layers[i].kernel.radius);
+    const int64_t i0 = static_cast<int64_t>(std::floor(b.x0 / h)) - 2;
+    const int64_t j0 = static_cast<int64_t>(std::floor(b.y0 / h)) - 2;
+    const int64_t i1 = static_cast<int64_t>(std::floor(b.x1 / h)) + 3;
+    const int64_t j1 = static_cast<int64_t>(std::floor(b.y1 / h)) + 3;
+    check_buffer(double(i1 - i0 + 1) * double(j1 - j0 + 1),
+                 "the orientation of layer[" + std::to_string(i) + "] sampled from layer[" +
+                     std::to_string(j) + "]");
+    render::View lattice;
+    lattice.width = static_cast<int>(i1 - i0 + 1), lattice.height = static_cast<int>(j1 - j0 + 1);
+    lattice.x0 = (double(i0) - 0.5) * h, lattice.y0 = (double(j0) - 0.5) * h;
+    lattice.scale = h;
+    render::Frame values;
+    sim::Impulses imp;
+    field(j, pass, lattice, Space::Texture, false, values, imp);
+    orientations[i]->set(std::move(values), i0, j0, h);
+}
+
+void Renderer::State::check_buffer(double pixels, const std::string& what) const {
+    const double mib = pixels * 4.0 / (1024.0 * 1024.0);
+    if (mib > scene.limits.max_memory_mib) {
+        std::ostringstream s;
+        s << scene.path << ": " << what << " needs a buffer of " << mib
+          << " MiB, over the budget of " << scene.limits.max_memory_mib
+          << " MiB (limits.max_memory_mib)";
+        throw BudgetError(s.str());
+    }
+}
+
+void Renderer::State::update_marginal(size_t i, double tl) {
+    const LayerConfig& layer = scene.layers[i];
     // An empirical F_x and a fixed layer keep the transfer built at load (or calibrated).
     const bool source_varies = !layer.density.is_constant() || !layer.kernel_keys.empty();
     if (layer.marginal_cdf != kernels::SourceCdf::Gaussian ||
@@ -304,10 +530,10 @@ void Renderer::update_marginal(size_t i, double tl) {
     const Theory raw = unshaped_theory(layer, tl);
     std::vector<double> built = {P.a, P.b, P.rate, P.mu, P.scale, P.sigma, P.nu, raw.mean,
                                  raw.variance};
-    if (built == S.marginal_built[i]) return;
-    S.marginals[i] = std::make_shared<const kernels::MarginalTransform>(P, raw.mean,
+    if (built == marginal_built[i]) return;
+    marginals[i] = std::make_shared<const kernels::MarginalTransform>(P, raw.mean,
                                                                         std::sqrt(raw.variance));
-    S.marginal_built[i] = std::move(built);
+    marginal_built[i] = std::move(built);
 }
 
 std::string builtin_scene_dir() {

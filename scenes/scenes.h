@@ -70,6 +70,39 @@ struct Limits {
     double max_memory_mib = 8192; ///< estimated peak memory of one frame
 };
 
+/// How a layer enters the picture: its blend onto the result of the layers before it
+/// (docs/scenes.md "Composition").
+enum class Blend { Add, Multiply, Max, Min, Over };
+inline constexpr std::array<std::string_view, 5> kBlendNames = {"add", "multiply", "max", "min",
+                                                                 "over"};
+
+/// A domain warp: the layer's field is looked up at x + amount(t) (z_x(x), z_y(x)), z the
+/// standardised values (v - mean) / sd of two source layers (Campbell mean and sd).
+struct WarpConfig {
+    std::array<size_t, 2> source{};  ///< layers giving the x and y displacement (may be equal)
+    sim::Keyframed amount = 0.0;     ///< texture units per standard deviation of the sources, >= 0
+};
+
+/// Kernel rotation from another layer's field at each impulse's position at the frame time.
+struct LayerOrientation {
+    size_t source = 0;
+    bool level_lines = false;  ///< false: along the gradient; true: along the level lines
+};
+
+/// A layer's part in the composition and the layers it reads.
+struct Composition {
+    std::string name;                ///< "" when unnamed
+    bool visible = true;             ///< false: rendered only as a source for other layers
+    Blend blend = Blend::Add;
+    sim::Keyframed opacity = 1.0;    ///< weight of the layer in its blend, in [0, 1]
+    /// Over: alpha = opacity * smoothstep(lo, hi, value), value = the layer's own field; absent:
+    /// alpha = opacity.
+    std::optional<std::array<double, 2>> alpha;
+    std::optional<WarpConfig> warp;
+    std::optional<LayerOrientation> orientation;  ///< process.orientation is then Field
+    std::vector<size_t> flow_sources;  ///< layers streaming this layer's flow (type = "layer")
+};
+
 /// A keyframed field of a layer's kernel: kernel.*field = value(t) (docs/scenes.md "Keyframes").
 struct KernelKey {
     double kernels::KernelParams::*field = nullptr;
@@ -106,6 +139,7 @@ struct LayerConfig {
     /// layer has the original kernel's spectrum): what it achieved. process.intensity and
     /// cell_size still refer to the original kernel.
     std::shared_ptr<const kernels::PrecorrectionReport> precorrection;
+    Composition compose;  ///< blend, opacity, visibility, warp, orientation source
 
     /// The kernel at layer time t_s: `kernel` with the keyframed fields evaluated.
     kernels::KernelParams kernel_at(double t_s) const;
@@ -174,8 +208,14 @@ struct Theory {
 /// a keyframed density acts through the births of the last lifetime. A shaped layer has its
 /// target's moments at t.
 Theory layer_theory(const LayerConfig& layer, double t_s = 0.0);
-/// Sum over layers at frame time t_s (independent layers add).
+/// The composed result's mean and variance at frame time t_s: the visible layers blended in
+/// order, each independent of the others (exact for add and multiply; max, min and over with an
+/// alpha range in the Gaussian approximation, see docs/scenes.md "Composition"). Sums add means
+/// and variances.
 Theory scene_theory(const Scene& scene, double t_s = 0.0);
+/// True when the frame is the plain sum of all layers (every layer visible, added at opacity 1,
+/// unwarped): what the spectral theory of `impulse analyze` covers.
+bool is_sum_of_layers(const Scene& scene);
 
 /// Renders frames of a scene. Frame f is a pure function of (scene, f): rendering frames in
 /// order reuses particle state, rendering any frame alone integrates from birth, with the
@@ -201,8 +241,6 @@ public:
     render::ValueMapping mapping() const;
 
 private:
-    /// A shaped layer whose target or unshaped moments vary: the transfer at layer time t_s.
-    void update_marginal(size_t layer, double t_s);
     struct State;
     std::unique_ptr<State> m_state;
 };

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "sim/lattice.h"
 #include "sim/layout.h"
 #include "sim/rng.h"
 #include "sim/sim.h"
@@ -151,166 +152,55 @@ private:
     Keyframed m_cx, m_cy, m_rate, m_radius;
 };
 
+/// Adds a cell's terms a_i phi(|X - x_i|^2 / s^2) at node (X, Y).
+struct CurlContribution {
+    double inv_s2 = 1.0;
+    void operator()(double X, double Y, const CellImpulses& c, double& psi) const {
+        for (size_t k = 0; k < c.x.size(); ++k) {
+            const double ddx = X - c.x[k], ddy = Y - c.y[k];
+            const double q = (ddx * ddx + ddy * ddy) * inv_s2;
+            if (q < 1.0) {
+                const double u = 1.0 - q;
+                psi += c.amplitude[k] * u * u * u;
+            }
+        }
+    }
+};
+
 /// Curl of a sparse-convolution potential psi = sum a_i phi(|x - x_i|^2 / s^2),
 /// phi(q) = (1 - q)^3: v = (d psi/dy, -d psi/dx), curl v = -lap psi.
 ///
-/// psi is evaluated exactly at the nodes of a fixed lattice (spacing s/8, nodes at whole
-/// multiples of the spacing, so any region and any periodic copy sees the same node values) and
+/// psi is evaluated exactly at the nodes of a fixed lattice (spacing s/8, sim/lattice.h) and
 /// interpolated with Catmull-Rom bicubics; the velocity is the curl of that interpolant, so it
 /// stays exactly divergence-free (div curl = 0) while an evaluation costs 16 node reads instead
 /// of a sum over ~36 impulses. Node values are cached for the region the simulator prepares;
 /// outside it they are computed on the fly (the same numbers).
-class CurlNoiseFlow final : public Flow {
+class CurlNoiseFlow final : public detail::LatticeStreamFlow<CurlContribution> {
 public:
     static constexpr double kPerCell = 4.0;  // impulses per s x s cell: 4 pi per kernel area
     static constexpr int kNodesPerCell = 8;
     CurlNoiseFlow(uint64_t seed, double scale, Keyframed speed,
                   std::optional<std::array<double, 2>> period)
-        : m_speed(std::move(speed)) {
-        m_config.seed = seed;
-        m_config.layer = 0x40000000u;  // a stream of its own, apart from every layer's births
-        m_config.cell_size = scale;
-        m_config.period = period;
-        m_config.intensity = kPerCell / (scale * scale);
-        m_config.amplitude = Amplitude::Normal;
-        m_layout = std::make_unique<detail::Layout>(m_config);
+        : LatticeStreamFlow(potential_process(seed, scale, period), kNodesPerCell, std::move(speed)) {
         // E|grad psi|^2 = lambda E[a^2] int |grad phi|^2 = lambda * 1.2 pi (independent of s),
         // so unit RMS speed needs amplitudes scaled by 1/sqrt(1.2 pi lambda).
-        m_norm = 1.0 / std::sqrt(1.2 * kPi * m_config.intensity);
-        m_hx = m_layout->cell_x / kNodesPerCell;
-        m_hy = m_layout->cell_y / kNodesPerCell;
-    }
-
-    void prepare(const Box& region) override {
-        const int64_t i0 = static_cast<int64_t>(std::floor(region.x0 / m_hx)) - 2;
-        const int64_t j0 = static_cast<int64_t>(std::floor(region.y0 / m_hy)) - 2;
-        const int64_t i1 = static_cast<int64_t>(std::floor(region.x1 / m_hx)) + 3;
-        const int64_t j1 = static_cast<int64_t>(std::floor(region.y1 / m_hy)) + 3;
-        if (i0 >= m_nx0 && j0 >= m_ny0 && i1 < m_nx0 + m_nw && j1 < m_ny0 + m_nh) return;  // cached
-        // Grow by a quarter on every side so a slowly moving view rarely rebuilds.
-        const int64_t mx = (i1 - i0) / 4 + 1, my = (j1 - j0) / 4 + 1;
-        m_nx0 = i0 - mx, m_ny0 = j0 - my;
-        m_nw = i1 - i0 + 1 + 2 * mx, m_nh = j1 - j0 + 1 + 2 * my;
-        m_nodes.assign(static_cast<size_t>(m_nw * m_nh), 0.0);
-        // Splat each cell's impulses into the nodes whose 3 x 3 cell neighbourhood holds it.
-        // Cells are visited row by row and impulses in order, so every node sums the same terms
-        // in the same order as psi_node (identical bits whether cached or not).
-        const int64_t c0x = detail::floor_div(m_nx0, kNodesPerCell) - 1;
-        const int64_t c1x = detail::floor_div(m_nx0 + m_nw - 1, kNodesPerCell) + 1;
-        const int64_t c0y = detail::floor_div(m_ny0, kNodesPerCell) - 1;
-        const int64_t c1y = detail::floor_div(m_ny0 + m_nh - 1, kNodesPerCell) + 1;
-        const double inv_s2 = 1.0 / (m_layout->cell_x * m_layout->cell_y);
-        CellImpulses c;
-        for (int64_t cy = c0y; cy <= c1y; ++cy)
-            for (int64_t cx = c0x; cx <= c1x; ++cx) {
-                detail::generate_cell(m_config, *m_layout, cx, cy, 0, c, nullptr);
-                if (c.x.empty()) continue;
-                const int64_t ni0 = std::max(m_nx0, (cx - 1) * kNodesPerCell);
-                const int64_t ni1 = std::min(m_nx0 + m_nw - 1, (cx + 2) * kNodesPerCell - 1);
-                const int64_t nj0 = std::max(m_ny0, (cy - 1) * kNodesPerCell);
-                const int64_t nj1 = std::min(m_ny0 + m_nh - 1, (cy + 2) * kNodesPerCell - 1);
-                for (int64_t nj = nj0; nj <= nj1; ++nj)
-                    for (int64_t ni = ni0; ni <= ni1; ++ni) {
-                        const double X = static_cast<double>(ni) * m_hx, Y = static_cast<double>(nj) * m_hy;
-                        double& psi = m_nodes[static_cast<size_t>((nj - m_ny0) * m_nw + (ni - m_nx0))];
-                        for (size_t k = 0; k < c.x.size(); ++k) {
-                            const double ddx = X - c.x[k], ddy = Y - c.y[k];
-                            const double q = (ddx * ddx + ddy * ddy) * inv_s2;
-                            if (q < 1.0) {
-                                const double u = 1.0 - q;
-                                psi += c.amplitude[k] * u * u * u;
-                            }
-                        }
-                    }
-            }
-    }
-
-    void add(double t, size_t n, const double* x, const double* y, double* vx, double* vy, double*,
-             double* curl) const override {
-        const double amp = m_speed.value(t) * m_norm;
-        thread_local CellImpulses scratch;
-        for (size_t p = 0; p < n; ++p) {
-            const double fx = x[p] / m_hx, fy = y[p] / m_hy;
-            const double flx = std::floor(fx), fly = std::floor(fy);
-            const int64_t i = static_cast<int64_t>(flx), j = static_cast<int64_t>(fly);
-            const double tx = fx - flx, ty = fy - fly;
-            double wx[4], dx[4], ddx[4], wy[4], dy[4], ddy[4];
-            catmull_rom(tx, wx, dx, ddx);
-            catmull_rom(ty, wy, dy, ddy);
-            double node[4][4];
-            const int64_t gi = i - 1 - m_nx0, gj = j - 1 - m_ny0;
-            if (gi >= 0 && gj >= 0 && gi + 3 < m_nw && gj + 3 < m_nh) {
-                for (int b = 0; b < 4; ++b)
-                    for (int a = 0; a < 4; ++a)
-                        node[b][a] = m_nodes[static_cast<size_t>((gj + b) * m_nw + gi + a)];
-            } else {
-                for (int b = 0; b < 4; ++b)
-                    for (int a = 0; a < 4; ++a) node[b][a] = psi_node(i - 1 + a, j - 1 + b, scratch);
-            }
-            double px = 0, py = 0, lap = 0;
-            for (int b = 0; b < 4; ++b) {
-                double rx = 0, rdx = 0, rddx = 0;
-                for (int a = 0; a < 4; ++a) {
-                    rx += wx[a] * node[b][a];
-                    rdx += dx[a] * node[b][a];
-                    rddx += ddx[a] * node[b][a];
-                }
-                px += wy[b] * rdx;
-                py += dy[b] * rx;
-                lap += wy[b] * rddx / (m_hx * m_hx) + ddy[b] * rx / (m_hy * m_hy);
-            }
-            px /= m_hx, py /= m_hy;  // d psi/dx, d psi/dy
-            vx[p] += amp * py;
-            vy[p] -= amp * px;
-            curl[p] -= amp * lap;
-        }
-    }
-
-    double max_speed(const Box&) const override {
-        // A statistical bound: |v| exceeds 4x its RMS with probability about 3e-4 per point
-        // for a Gaussian field; the sparse potential has slightly heavier tails.
-        return 4.0 * m_speed.max_abs();
+        m_norm = 1.0 / std::sqrt(1.2 * kPi * m_lattice.config().intensity);
+        const detail::Layout& L = m_lattice.layout();
+        m_contribution.inv_s2 = 1.0 / (L.cell_x * L.cell_y);
     }
 
 private:
-    /// Catmull-Rom weights and their first and second derivatives (per unit t) at t in [0, 1)
-    /// for the nodes -1, 0, 1, 2.
-    static void catmull_rom(double t, double w[4], double d[4], double dd[4]) {
-        const double t2 = t * t, t3 = t2 * t;
-        w[0] = 0.5 * (-t + 2 * t2 - t3), w[1] = 0.5 * (2 - 5 * t2 + 3 * t3);
-        w[2] = 0.5 * (t + 4 * t2 - 3 * t3), w[3] = 0.5 * (-t2 + t3);
-        d[0] = 0.5 * (-1 + 4 * t - 3 * t2), d[1] = 0.5 * (-10 * t + 9 * t2);
-        d[2] = 0.5 * (1 + 8 * t - 9 * t2), d[3] = 0.5 * (-2 * t + 3 * t2);
-        dd[0] = 2 - 3 * t, dd[1] = -5 + 9 * t, dd[2] = 4 - 9 * t, dd[3] = -1 + 3 * t;
+    static ProcessConfig potential_process(uint64_t seed, double scale,
+                                           std::optional<std::array<double, 2>> period) {
+        ProcessConfig c;
+        c.seed = seed;
+        c.layer = 0x40000000u;  // a stream of its own, apart from every layer's births
+        c.cell_size = scale;
+        c.period = period;
+        c.intensity = kPerCell / (scale * scale);
+        c.amplitude = Amplitude::Normal;
+        return c;
     }
-
-    /// psi (unscaled) at lattice node (i, j): the exact sum over the 3 x 3 cells around it.
-    double psi_node(int64_t i, int64_t j, CellImpulses& c) const {
-        const double X = static_cast<double>(i) * m_hx, Y = static_cast<double>(j) * m_hy;
-        const int64_t ci = detail::floor_div(i, kNodesPerCell), cj = detail::floor_div(j, kNodesPerCell);
-        const double inv_s2 = 1.0 / (m_layout->cell_x * m_layout->cell_y);
-        double psi = 0.0;
-        for (int64_t b = -1; b <= 1; ++b)
-            for (int64_t a = -1; a <= 1; ++a) {
-                detail::generate_cell(m_config, *m_layout, ci + a, cj + b, 0, c, nullptr);
-                for (size_t k = 0; k < c.x.size(); ++k) {
-                    const double ddx = X - c.x[k], ddy = Y - c.y[k];
-                    const double q = (ddx * ddx + ddy * ddy) * inv_s2;
-                    if (q < 1.0) {
-                        const double u = 1.0 - q;
-                        psi += c.amplitude[k] * u * u * u;
-                    }
-                }
-            }
-        return psi;
-    }
-
-    Keyframed m_speed;
-    ProcessConfig m_config;
-    std::unique_ptr<detail::Layout> m_layout;
-    double m_norm = 1.0, m_hx = 1.0, m_hy = 1.0;
-    int64_t m_nx0 = 0, m_ny0 = 0, m_nw = 0, m_nh = 0;
-    std::vector<double> m_nodes;
 };
 
 class GridFlow final : public Flow {

@@ -22,6 +22,7 @@
 #include "render/render.h"
 #include "scenes/scenes.h"
 #include "sim/sim.h"
+#include "tests/structure_tensor.h"
 #include "util/errors.h"
 
 namespace {
@@ -31,11 +32,7 @@ namespace sim = impulse::sim;
 using Catch::Matchers::Contains;
 constexpr double kPi = std::numbers::pi;
 
-/// Angle difference modulo pi (orientations), in degrees, in [0, 90].
-double orientation_error_deg(double a, double b) {
-    double d = std::remainder(a - b, kPi);
-    return std::abs(d) * 180.0 / kPi;
-}
+using impulse::test::orientation_error_deg;
 
 float angle_at(const sim::OrientationField& f, double x, double y, double t = 0.0) {
     float th = 0.0f;
@@ -158,31 +155,7 @@ TEST_CASE("orientation fields in the simulator: current positions and jitter and
 
 namespace {
 
-/// Local orientation of the streaks of `f` in windows of `win` pixels: the structure tensor
-/// (gradients by central differences; the tensor summed over the window) has its dominant
-/// gradient direction phi = atan2(2 Jxy, Jxx - Jyy) / 2 across the streaks; the streaks (the
-/// kernels' long axis) run at phi + pi/2.
-struct Estimate {
-    double cx, cy, angle;
-    double coherence;  ///< (l1 - l2) / (l1 + l2)
-};
-std::vector<Estimate> structure_tensor(const impulse::render::Frame& f, int win) {
-    std::vector<Estimate> out;
-    for (int y0 = 1; y0 + win <= f.height - 1; y0 += win)
-        for (int x0 = 1; x0 + win <= f.width - 1; x0 += win) {
-            double jxx = 0, jxy = 0, jyy = 0;
-            for (int y = y0; y < y0 + win; ++y)
-                for (int x = x0; x < x0 + win; ++x) {
-                    const double gx = 0.5 * (f.at(x + 1, y) - f.at(x - 1, y));
-                    const double gy = 0.5 * (f.at(x, y + 1) - f.at(x, y - 1));
-                    jxx += gx * gx, jxy += gx * gy, jyy += gy * gy;
-                }
-            const double phi = 0.5 * std::atan2(2.0 * jxy, jxx - jyy);
-            const double l = std::hypot(jxx - jyy, 2.0 * jxy);
-            out.push_back({x0 + 0.5 * win, y0 + 0.5 * win, phi + 0.5 * kPi, l / (jxx + jyy)});
-        }
-    return out;
-}
+using impulse::test::structure_tensor;
 
 impulse::render::Frame render_scene(const std::string& text) {
     impulse::scenes::Renderer r(impulse::scenes::load_scene_string(text, "orientation.toml"));
@@ -314,7 +287,7 @@ TEST_CASE("orientation scene keys: modes and fields and one-line errors",
 
     CHECK(error_of("{ type = \"spiral\" }") ==
           "o.toml:3:24: layer[0].orientation.type = \"spiral\": expected one of constant, radial, "
-          "circular, polyline, sine, image, fixed, random, flow, vorticity");
+          "circular, polyline, sine, image, fixed, random, flow, vorticity, layer");
     CHECK_THAT(error_of("{ type = \"circular\" }"),
                Contains("layer[0].orientation.center: missing"));
     CHECK_THAT(error_of("{ type = \"polyline\", points = [[0.0, 0.0]] }"),
