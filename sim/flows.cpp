@@ -7,11 +7,18 @@
 #include <cmath>
 #include <numbers>
 
+#include "sim/curl_detail.h"
 #include "sim/layout.h"
 #include "sim/rng.h"
 #include "sim/sim.h"
 
 namespace impulse::sim {
+
+bool detail::cpu_has_avx2() {
+    static const bool has = __builtin_cpu_supports("avx2");
+    return has;
+}
+
 namespace {
 
 constexpr double kPi = std::numbers::pi;
@@ -30,6 +37,7 @@ public:
         const double ux = m_vx.value(t), uy = m_vy.value(t);
         for (size_t i = 0; i < n; ++i) vx[i] += ux, vy[i] += uy;
     }
+    bool divergence_free() const override { return true; }
     double max_speed(const Box&) const override { return std::hypot(m_vx.max_abs(), m_vy.max_abs()); }
     std::array<double, 4> velocity_bounds(const Box&) const override {
         auto range = [](const Keyframed& k) {  // interpolation never leaves the keys' range
@@ -58,9 +66,11 @@ public:
             const double s = -(x[i] - m_cx) * m_dy + (y[i] - m_cy) * m_dx;
             vx[i] += k * s * m_dx;
             vy[i] += k * s * m_dy;
-            curl[i] -= k;
         }
+        if (curl)
+            for (size_t i = 0; i < n; ++i) curl[i] -= k;
     }
+    bool divergence_free() const override { return true; }
     double max_speed(const Box& r) const override {
         return m_rate.max_abs() * max_corner_distance(r, m_cx, m_cy);
     }
@@ -97,9 +107,10 @@ public:
             }
             vx[i] -= f * dy;
             vy[i] += f * dx;
-            curl[i] += w;
+            if (curl) curl[i] += w;
         }
     }
+    bool divergence_free() const override { return true; }
     double max_speed(const Box&) const override {
         // Peak of v_theta: Lamb–Oseen 0.6382 G/(2 pi rc) at r = 1.1209 rc; Rankine G/(2 pi rc).
         const double peak = m_gamma.max_abs() / (2.0 * kPi * m_core);
@@ -123,7 +134,7 @@ public:
             for (size_t i = 0; i < n; ++i) {
                 vx[i] += k * (x[i] - cx);
                 vy[i] += k * (y[i] - cy);
-                div[i] += 2.0 * k;
+                if (div) div[i] += 2.0 * k;
             }
             return;
         }
@@ -134,7 +145,7 @@ public:
             const double g = std::exp(-q);
             vx[i] += k * g * dx;
             vy[i] += k * g * dy;
-            div[i] += k * g * (2.0 - 2.0 * q);  // div(k g(r) (x - c)) = k (2 g + r g')
+            if (div) div[i] += k * g * (2.0 - 2.0 * q);  // div(k g(r) (x - c)) = k (2 g + r g')
         }
     }
     double max_speed(const Box& r) const override {
@@ -152,14 +163,16 @@ private:
 };
 
 /// Curl of a sparse-convolution potential psi = sum a_i phi(|x - x_i|^2 / s^2),
-/// phi(q) = (1 - q)^3: v = (d psi/dy, -d psi/dx), curl v = -lap psi.
+/// phi(q) = (1 - q)^3: v = (d psi/dy, -d psi/dx), curl v = -lap psi (Bridson et al. 2007,
+/// "Curl-noise for procedural fluid flow", in 2-D).
 ///
 /// psi is evaluated exactly at the nodes of a fixed lattice (spacing s/8, nodes at whole
 /// multiples of the spacing, so any region and any periodic copy sees the same node values) and
 /// interpolated with Catmull-Rom bicubics; the velocity is the curl of that interpolant, so it
 /// stays exactly divergence-free (div curl = 0) while an evaluation costs 16 node reads instead
 /// of a sum over ~36 impulses. Node values are cached for the region the simulator prepares;
-/// outside it they are computed on the fly (the same numbers).
+/// outside it they are computed on the fly (the same numbers). The interpolation itself is
+/// sim/curl_loops.inc (baseline and AVX2 builds, identical bits).
 class CurlNoiseFlow final : public Flow {
 public:
     static constexpr double kPerCell = 4.0;  // impulses per s x s cell: 4 pi per kernel area
@@ -199,7 +212,8 @@ public:
         const int64_t c1x = detail::floor_div(m_nx0 + m_nw - 1, kNodesPerCell) + 1;
         const int64_t c0y = detail::floor_div(m_ny0, kNodesPerCell) - 1;
         const int64_t c1y = detail::floor_div(m_ny0 + m_nh - 1, kNodesPerCell) + 1;
-        const double inv_s2 = 1.0 / (m_layout->cell_x * m_layout->cell_y);
+        const double s2 = m_layout->cell_x * m_layout->cell_y, inv_s2 = 1.0 / s2;
+        const double s = std::sqrt(s2);
         CellImpulses c;
         for (int64_t cy = c0y; cy <= c1y; ++cy)
             for (int64_t cx = c0x; cx <= c1x; ++cx) {
@@ -209,62 +223,49 @@ public:
                 const int64_t ni1 = std::min(m_nx0 + m_nw - 1, (cx + 2) * kNodesPerCell - 1);
                 const int64_t nj0 = std::max(m_ny0, (cy - 1) * kNodesPerCell);
                 const int64_t nj1 = std::min(m_ny0 + m_nh - 1, (cy + 2) * kNodesPerCell - 1);
-                for (int64_t nj = nj0; nj <= nj1; ++nj)
-                    for (int64_t ni = ni0; ni <= ni1; ++ni) {
-                        const double X = static_cast<double>(ni) * m_hx, Y = static_cast<double>(nj) * m_hy;
-                        double& psi = m_nodes[static_cast<size_t>((nj - m_ny0) * m_nw + (ni - m_nx0))];
-                        for (size_t k = 0; k < c.x.size(); ++k) {
-                            const double ddx = X - c.x[k], ddy = Y - c.y[k];
+                for (size_t k = 0; k < c.x.size(); ++k) {
+                    // Only the nodes of the impulse's disk q < 1: its rows, and in each row its
+                    // chord widened by a node spacing. A node left out has q >= 1 + 1/64 (the
+                    // spacing is s/8), far beyond rounding, so each node still sums exactly
+                    // the terms psi_node sums, in the same order.
+                    const int64_t r0 = std::max(nj0, static_cast<int64_t>(std::floor((c.y[k] - s) / m_hy)) - 1);
+                    const int64_t r1 = std::min(nj1, static_cast<int64_t>(std::ceil((c.y[k] + s) / m_hy)) + 1);
+                    for (int64_t nj = r0; nj <= r1; ++nj) {
+                        const double Y = static_cast<double>(nj) * m_hy;
+                        const double ddy = Y - c.y[k];
+                        const double chord = std::sqrt(std::max(0.0, s2 - ddy * ddy)) + m_hx;
+                        const int64_t q0 = std::max(ni0, static_cast<int64_t>(std::floor((c.x[k] - chord) / m_hx)));
+                        const int64_t q1 = std::min(ni1, static_cast<int64_t>(std::ceil((c.x[k] + chord) / m_hx)));
+                        double* row = m_nodes.data() + (nj - m_ny0) * m_nw;
+                        for (int64_t ni = q0; ni <= q1; ++ni) {
+                            const double X = static_cast<double>(ni) * m_hx;
+                            const double ddx = X - c.x[k];
                             const double q = (ddx * ddx + ddy * ddy) * inv_s2;
                             if (q < 1.0) {
                                 const double u = 1.0 - q;
-                                psi += c.amplitude[k] * u * u * u;
+                                row[ni - m_nx0] += c.amplitude[k] * u * u * u;
                             }
                         }
                     }
+                }
             }
     }
 
     void add(double t, size_t n, const double* x, const double* y, double* vx, double* vy, double*,
              double* curl) const override {
+        detail::CurlLattice lattice;
+        lattice.nodes = m_nodes.data();
+        lattice.i0 = m_nx0, lattice.j0 = m_ny0, lattice.width = m_nw, lattice.height = m_nh;
+        lattice.inv_hx = 1.0 / m_hx, lattice.inv_hy = 1.0 / m_hy;
+        lattice.fetch = &fetch_nodes;
+        lattice.fetch_context = this;
         const double amp = m_speed.value(t) * m_norm;
-        thread_local CellImpulses scratch;
-        for (size_t p = 0; p < n; ++p) {
-            const double fx = x[p] / m_hx, fy = y[p] / m_hy;
-            const double flx = std::floor(fx), fly = std::floor(fy);
-            const int64_t i = static_cast<int64_t>(flx), j = static_cast<int64_t>(fly);
-            const double tx = fx - flx, ty = fy - fly;
-            double wx[4], dx[4], ddx[4], wy[4], dy[4], ddy[4];
-            catmull_rom(tx, wx, dx, ddx);
-            catmull_rom(ty, wy, dy, ddy);
-            double node[4][4];
-            const int64_t gi = i - 1 - m_nx0, gj = j - 1 - m_ny0;
-            if (gi >= 0 && gj >= 0 && gi + 3 < m_nw && gj + 3 < m_nh) {
-                for (int b = 0; b < 4; ++b)
-                    for (int a = 0; a < 4; ++a)
-                        node[b][a] = m_nodes[static_cast<size_t>((gj + b) * m_nw + gi + a)];
-            } else {
-                for (int b = 0; b < 4; ++b)
-                    for (int a = 0; a < 4; ++a) node[b][a] = psi_node(i - 1 + a, j - 1 + b, scratch);
-            }
-            double px = 0, py = 0, lap = 0;
-            for (int b = 0; b < 4; ++b) {
-                double rx = 0, rdx = 0, rddx = 0;
-                for (int a = 0; a < 4; ++a) {
-                    rx += wx[a] * node[b][a];
-                    rdx += dx[a] * node[b][a];
-                    rddx += ddx[a] * node[b][a];
-                }
-                px += wy[b] * rdx;
-                py += dy[b] * rx;
-                lap += wy[b] * rddx / (m_hx * m_hx) + ddy[b] * rx / (m_hy * m_hy);
-            }
-            px /= m_hx, py /= m_hy;  // d psi/dx, d psi/dy
-            vx[p] += amp * py;
-            vy[p] -= amp * px;
-            curl[p] -= amp * lap;
-        }
+        if (detail::cpu_has_avx2())
+            detail::curl_add_avx2(lattice, amp, n, x, y, vx, vy, curl);
+        else
+            detail::curl_add_base(lattice, amp, n, x, y, vx, vy, curl);
     }
+    bool divergence_free() const override { return true; }
 
     double max_speed(const Box&) const override {
         // A statistical bound: |v| exceeds 4x its RMS with probability about 3e-4 per point
@@ -273,15 +274,12 @@ public:
     }
 
 private:
-    /// Catmull-Rom weights and their first and second derivatives (per unit t) at t in [0, 1)
-    /// for the nodes -1, 0, 1, 2.
-    static void catmull_rom(double t, double w[4], double d[4], double dd[4]) {
-        const double t2 = t * t, t3 = t2 * t;
-        w[0] = 0.5 * (-t + 2 * t2 - t3), w[1] = 0.5 * (2 - 5 * t2 + 3 * t3);
-        w[2] = 0.5 * (t + 4 * t2 - 3 * t3), w[3] = 0.5 * (-t2 + t3);
-        d[0] = 0.5 * (-1 + 4 * t - 3 * t2), d[1] = 0.5 * (-10 * t + 9 * t2);
-        d[2] = 0.5 * (1 + 8 * t - 9 * t2), d[3] = 0.5 * (-2 * t + 3 * t2);
-        dd[0] = 2 - 3 * t, dd[1] = -5 + 9 * t, dd[2] = 4 - 9 * t, dd[3] = -1 + 3 * t;
+    /// detail::CurlNodeFetch for points whose stencil leaves the cache.
+    static void fetch_nodes(const void* self, int64_t i0, int64_t j0, double out[16]) {
+        thread_local CellImpulses scratch;
+        const auto& flow = *static_cast<const CurlNoiseFlow*>(self);
+        for (int b = 0; b < 4; ++b)
+            for (int a = 0; a < 4; ++a) out[4 * b + a] = flow.psi_node(i0 + a, j0 + b, scratch);
     }
 
     /// psi (unscaled) at lattice node (i, j): the exact sum over the 3 x 3 cells around it.
@@ -356,8 +354,8 @@ public:
             };
             vx[i] += gain * lerp(m_g.vx);
             vy[i] += gain * lerp(m_g.vy);
-            div[i] += gain * lerp(m_div);
-            curl[i] += gain * lerp(m_curl);
+            if (div) div[i] += gain * lerp(m_div);
+            if (curl) curl[i] += gain * lerp(m_curl);
         }
     }
     double max_speed(const Box&) const override { return m_gain.max_abs() * m_max; }
@@ -374,6 +372,11 @@ private:
 void FlowSum::add(double t, size_t n, const double* x, const double* y, double* vx, double* vy,
                   double* div, double* curl) const {
     for (const auto& f : m_terms) f->add(t, n, x, y, vx, vy, div, curl);
+}
+bool FlowSum::divergence_free() const {
+    for (const auto& f : m_terms)
+        if (!f->divergence_free()) return false;
+    return true;
 }
 double FlowSum::max_speed(const Box& region) const {
     double s = 0.0;

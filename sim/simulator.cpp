@@ -53,13 +53,16 @@ struct Particles {
     }
 };
 
-/// Scratch arrays for one chunk of the integrator.
+/// Scratch arrays for one chunk of the integrator. The div and curl arrays stay empty when
+/// not wanted (the flow is then passed null for them and skips their work).
 struct Scratch {
     std::vector<double> h, xt, yt, k[4][4];  // k[stage][x, y, div, curl]
-    void resize(size_t n) {
+    void resize(size_t n, bool div, bool curl) {
         h.resize(n), xt.resize(n), yt.resize(n);
-        for (auto& s : k)
-            for (auto& v : s) v.resize(n);
+        for (auto& s : k) {
+            s[0].resize(n), s[1].resize(n);
+            s[2].resize(div ? n : 0), s[3].resize(curl ? n : 0);
+        }
     }
 };
 
@@ -161,6 +164,11 @@ void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& o
     // the same whichever chunk, thread or frame it is advanced in.
     constexpr size_t kChunk = 512;
     const size_t n = order.size();
+    // ln J only matters with the compensation on, and stays exactly 0 in a divergence-free
+    // flow; theta integrates the vorticity only in OrientationMode::Vorticity (the other modes
+    // set it at birth or at the frame time). Skipping them changes no bit of x and y.
+    const bool want_div = config.jacobian && !flow->divergence_free();
+    const bool want_curl = config.orientation == OrientationMode::Vorticity;
     const size_t chunks = (n + kChunk - 1) / kChunk;
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
         const size_t i0 = c * kChunk, i1 = std::min(n, i0 + kChunk), m = i1 - i0;
@@ -175,13 +183,17 @@ void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& o
             frac[j] = p.birth_frac[i];
         }
         Scratch s;
-        s.resize(m);
+        s.resize(m, want_div, want_curl);
         size_t active = 0;
         const bool rk4 = config.integrator == Integrator::RK4;
         auto eval = [&](int stage, double t, size_t na, const double* px, const double* py) {
-            for (auto& v : s.k[stage]) std::fill(v.begin(), v.begin() + na, 0.0);
-            flow->add(t, na, px, py, s.k[stage][0].data(), s.k[stage][1].data(),
-                      s.k[stage][2].data(), s.k[stage][3].data());
+            double* out[4];
+            for (int q = 0; q < 4; ++q) {
+                auto& v = s.k[stage][q];
+                out[q] = v.empty() ? nullptr : v.data();
+                if (out[q]) std::fill(out[q], out[q] + na, 0.0);
+            }
+            flow->add(t, na, px, py, out[0], out[1], out[2], out[3]);
         };
         for (int64_t g = m ? first[0] : target; g < target; ++g) {
             while (active < m && first[active] <= g) ++active;
@@ -203,9 +215,13 @@ void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& o
                     const double hh = 0.5 * s.h[j];
                     x[j] += hh * (s.k[0][0][j] + s.k[1][0][j]);
                     y[j] += hh * (s.k[0][1][j] + s.k[1][1][j]);
-                    lj[j] += hh * (s.k[0][2][j] + s.k[1][2][j]);  // d ln J / dt = div v
-                    th[j] += hh * 0.5 * (s.k[0][3][j] + s.k[1][3][j]);  // d theta / dt = w / 2
                 }
+                if (want_div)  // d ln J / dt = div v
+                    for (size_t j = 0; j < active; ++j)
+                        lj[j] += 0.5 * s.h[j] * (s.k[0][2][j] + s.k[1][2][j]);
+                if (want_curl)  // d theta / dt = w / 2
+                    for (size_t j = 0; j < active; ++j)
+                        th[j] += 0.5 * s.h[j] * 0.5 * (s.k[0][3][j] + s.k[1][3][j]);
             } else {  // classical RK4
                 for (int st = 1; st < 4; ++st) {
                     const double frac_h = st == 3 ? 1.0 : 0.5;
@@ -222,8 +238,8 @@ void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& o
                     };
                     x[j] += h6 * comb(0);
                     y[j] += h6 * comb(1);
-                    lj[j] += h6 * comb(2);
-                    th[j] += h6 * 0.5 * comb(3);
+                    if (want_div) lj[j] += h6 * comb(2);
+                    if (want_curl) th[j] += h6 * 0.5 * comb(3);
                 }
             }
         }
@@ -336,9 +352,9 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
     if (c.orientation == OrientationMode::Flow && S.flow && !still) {
         // Kernels aligned with the local flow direction at the frame time.
         const size_t n = out.size();
-        std::vector<double> vx(n, 0.0), vy(n, 0.0), dv(n, 0.0), cu(n, 0.0);
+        std::vector<double> vx(n, 0.0), vy(n, 0.0);
         S.flow->add(S.time_of_step(target), n, out.x.data(), out.y.data(), vx.data(), vy.data(),
-                    dv.data(), cu.data());
+                    nullptr, nullptr);
         for (size_t j = 0; j < n; ++j)
             out.theta[j] = static_cast<float>(std::atan2(vy[j], vx[j]));
     }
