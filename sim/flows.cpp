@@ -3,6 +3,8 @@
 // Each returns divergence and vorticity analytically so the Jacobian (d ln J/dt = div v) and
 // vorticity-driven spin (d theta/dt = w/2) are integrated along with the position.
 
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -206,37 +208,41 @@ public:
         m_nw = i1 - i0 + 1 + 2 * mx, m_nh = j1 - j0 + 1 + 2 * my;
         m_nodes.assign(static_cast<size_t>(m_nw * m_nh), 0.0);
         // Splat each cell's impulses into the nodes whose 3 x 3 cell neighbourhood holds it.
-        // Cells are visited row by row and impulses in order, so every node sums the same terms
-        // in the same order as psi_node (identical bits whether cached or not).
+        // Every node sums the same terms in the same order as psi_node (cells row by row,
+        // impulses in order), so the bits are the same whether cached or not. The cells are
+        // generated in parallel, then node rows are filled in parallel, each row visiting the
+        // cells in that order.
         const int64_t c0x = detail::floor_div(m_nx0, kNodesPerCell) - 1;
         const int64_t c1x = detail::floor_div(m_nx0 + m_nw - 1, kNodesPerCell) + 1;
         const int64_t c0y = detail::floor_div(m_ny0, kNodesPerCell) - 1;
         const int64_t c1y = detail::floor_div(m_ny0 + m_nh - 1, kNodesPerCell) + 1;
+        const int64_t ncx = c1x - c0x + 1, ncy = c1y - c0y + 1;
+        std::vector<CellImpulses> cells(static_cast<size_t>(ncx * ncy));
+        tbb::parallel_for(int64_t(0), ncx * ncy, [&](int64_t i) {
+            detail::generate_cell(m_config, *m_layout, c0x + i % ncx, c0y + i / ncx, 0,
+                                  cells[static_cast<size_t>(i)], nullptr);
+        });
         const double s2 = m_layout->cell_x * m_layout->cell_y, inv_s2 = 1.0 / s2;
         const double s = std::sqrt(s2);
-        CellImpulses c;
-        for (int64_t cy = c0y; cy <= c1y; ++cy)
-            for (int64_t cx = c0x; cx <= c1x; ++cx) {
-                detail::generate_cell(m_config, *m_layout, cx, cy, 0, c, nullptr);
-                if (c.x.empty()) continue;
-                const int64_t ni0 = std::max(m_nx0, (cx - 1) * kNodesPerCell);
-                const int64_t ni1 = std::min(m_nx0 + m_nw - 1, (cx + 2) * kNodesPerCell - 1);
-                const int64_t nj0 = std::max(m_ny0, (cy - 1) * kNodesPerCell);
-                const int64_t nj1 = std::min(m_ny0 + m_nh - 1, (cy + 2) * kNodesPerCell - 1);
-                for (size_t k = 0; k < c.x.size(); ++k) {
-                    // Only the nodes of the impulse's disk q < 1: its rows, and in each row its
-                    // chord widened by a node spacing. A node left out has q >= 1 + 1/64 (the
-                    // spacing is s/8), far beyond rounding, so each node still sums exactly
-                    // the terms psi_node sums, in the same order.
-                    const int64_t r0 = std::max(nj0, static_cast<int64_t>(std::floor((c.y[k] - s) / m_hy)) - 1);
-                    const int64_t r1 = std::min(nj1, static_cast<int64_t>(std::ceil((c.y[k] + s) / m_hy)) + 1);
-                    for (int64_t nj = r0; nj <= r1; ++nj) {
-                        const double Y = static_cast<double>(nj) * m_hy;
+        tbb::parallel_for(m_ny0, m_ny0 + m_nh, [&](int64_t nj) {
+            const double Y = static_cast<double>(nj) * m_hy;
+            double* row = m_nodes.data() + (nj - m_ny0) * m_nw;
+            const int64_t cj = detail::floor_div(nj, kNodesPerCell);
+            for (int64_t cy = std::max(c0y, cj - 1); cy <= std::min(c1y, cj + 1); ++cy)
+                for (int64_t cx = c0x; cx <= c1x; ++cx) {
+                    const CellImpulses& c = cells[static_cast<size_t>((cy - c0y) * ncx + cx - c0x)];
+                    const int64_t ni0 = std::max(m_nx0, (cx - 1) * kNodesPerCell);
+                    const int64_t ni1 = std::min(m_nx0 + m_nw - 1, (cx + 2) * kNodesPerCell - 1);
+                    for (size_t k = 0; k < c.x.size(); ++k) {
+                        // Only the nodes of the impulse's disk q < 1: its chord on this row
+                        // widened by a node spacing. A node left out has q >= 1 + 1/64 (the
+                        // spacing is s/8), far beyond rounding, so each node still sums
+                        // exactly the terms psi_node sums.
                         const double ddy = Y - c.y[k];
+                        if (std::abs(ddy) >= s + m_hy) continue;
                         const double chord = std::sqrt(std::max(0.0, s2 - ddy * ddy)) + m_hx;
                         const int64_t q0 = std::max(ni0, static_cast<int64_t>(std::floor((c.x[k] - chord) / m_hx)));
                         const int64_t q1 = std::min(ni1, static_cast<int64_t>(std::ceil((c.x[k] + chord) / m_hx)));
-                        double* row = m_nodes.data() + (nj - m_ny0) * m_nw;
                         for (int64_t ni = q0; ni <= q1; ++ni) {
                             const double X = static_cast<double>(ni) * m_hx;
                             const double ddx = X - c.x[k];
@@ -248,7 +254,7 @@ public:
                         }
                     }
                 }
-            }
+        });
     }
 
     void add(double t, size_t n, const double* x, const double* y, double* vx, double* vy, double*,

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 #include "sim/sim.h"
 
@@ -52,6 +53,19 @@ struct BirthTime {
     double phase_s = 0;
     int64_t loop_index = 0;
 };
+
+/// Impulse k of a cell: a pure function of (config, cell, k), so cells can be generated in
+/// pieces and in parallel (the simulator writes each straight into its particle arrays).
+struct CellBirth {
+    double x = 0, y = 0;
+    BirthTime time;
+    float amplitude = 0, theta0 = 0;
+};
+/// How many impulses cell (cx, cy, ct) holds (Poisson).
+int cell_count(const ProcessConfig& config, const Layout& layout, int64_t cx, int64_t cy,
+               int64_t ct);
+CellBirth cell_birth(const ProcessConfig& config, const Layout& layout, int64_t cx, int64_t cy,
+                     int64_t ct, int k);
 
 /// cell_impulses with the birth times in reduced form (used by the simulator).
 void generate_cell(const ProcessConfig& config, const Layout& layout, int64_t cx, int64_t cy,

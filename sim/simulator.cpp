@@ -2,6 +2,7 @@
 // The live impulses of a layer at any frame: births, integration from birth or from the
 // previous frame with identical arithmetic, Jacobian compensation, orientation.
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -40,18 +41,21 @@ struct Particles {
     std::vector<float> th0;  // random angle drawn at birth, in [0, 2 pi) (orientation jitter)
 
     size_t size() const { return x.size(); }
-    void clear() {
-        x.clear(), y.clear(), lnj.clear(), th.clear(), step.clear(), birth_step.clear();
-        birth_frac.clear(), stepped.clear(), amp.clear(), th0.clear();
+    void resize(size_t n) {
+        x.resize(n), y.resize(n), lnj.resize(n), th.resize(n), step.resize(n), birth_step.resize(n);
+        birth_frac.resize(n), stepped.resize(n), amp.resize(n), th0.resize(n);
     }
-    void copy_from(const Particles& o, size_t i) {
-        x.push_back(o.x[i]), y.push_back(o.y[i]), lnj.push_back(o.lnj[i]), th.push_back(o.th[i]);
-        step.push_back(o.step[i]), birth_step.push_back(o.birth_step[i]);
-        birth_frac.push_back(o.birth_frac[i]), stepped.push_back(o.stepped[i]);
-        amp.push_back(o.amp[i]);
-        th0.push_back(o.th0[i]);
+    /// Particles [from, from + n) of `o` to [to, to + n) here.
+    void copy_range(const Particles& o, size_t from, size_t n, size_t to) {
+        for (size_t k = 0; k < n; ++k) {
+            const size_t i = from + k, j = to + k;
+            x[j] = o.x[i], y[j] = o.y[i], lnj[j] = o.lnj[i], th[j] = o.th[i];
+            step[j] = o.step[i], birth_step[j] = o.birth_step[i], birth_frac[j] = o.birth_frac[i];
+            stepped[j] = o.stepped[i], amp[j] = o.amp[i], th0[j] = o.th0[i];
+        }
     }
 };
+
 
 /// Scratch arrays for one chunk of the integrator. The div and curl arrays stay empty when
 /// not wanted (the flow is then passed null for them and skips their work).
@@ -80,10 +84,9 @@ struct LayerSimulator::State {
 
     Particles live, next;
     std::vector<Block> blocks, next_blocks;  // sorted by key (canonical order)
+    std::vector<size_t> block_source;        // impulses_at scratch
     int64_t last_step = 0;
     bool valid = false;
-    CellImpulses cell;
-    std::vector<BirthTime> births;
 
     State(ProcessConfig c, std::shared_ptr<Flow> f, Timing t, double r)
         : config(std::move(c)), layout(config), flow(std::move(f)), timing(t), support_radius(r) {
@@ -278,37 +281,60 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
         ct1 = static_cast<int64_t>(std::floor(t_frame / L.time_cell_s)) + 1;
     }
 
-    Particles& P = S.next;
-    P.clear();
+    // The blocks of the birth region in canonical order, each carried over from the previous
+    // frame or generated. New cells are counted, then generated straight into their place, in
+    // parallel (an impulse is a pure function of its cell and index): the layout is the
+    // canonical order whatever the threads do.
+    constexpr size_t kGenerate = static_cast<size_t>(-1);
     S.next_blocks.clear();
+    std::vector<size_t>& source = S.block_source;  // per block: index in S.blocks, or kGenerate
+    source.clear();
     for (int64_t ct = ct0; ct <= ct1; ++ct)
         for (int64_t cy = cy0; cy <= cy1; ++cy)
             for (int64_t cx = cx0; cx <= cx1; ++cx) {
                 const BlockKey key{ct, cy, cx};
-                const size_t start = P.size();
                 while (reuse && cursor < S.blocks.size() && S.blocks[cursor].key < key) ++cursor;
-                if (reuse && cursor < S.blocks.size() && S.blocks[cursor].key == key) {
-                    const Block& b = S.blocks[cursor];
-                    for (size_t i = b.start; i < b.start + b.count; ++i) P.copy_from(S.live, i);
-                } else {
-                    detail::generate_cell(c, L, cx, cy, ct, S.cell, &S.births);
-                    for (size_t k = 0; k < S.cell.x.size(); ++k) {
-                        P.x.push_back(S.cell.x[k]);
-                        P.y.push_back(S.cell.y[k]);
-                        P.lnj.push_back(0.0);
-                        P.th.push_back(c.orientation == OrientationMode::Random ? S.cell.theta0[k]
-                                                                                 : 0.0);
-                        const auto [bs, bf] = S.birth_grid(S.births[k]);
-                        P.birth_step.push_back(bs);
-                        P.birth_frac.push_back(bf);
-                        P.step.push_back(bs);
-                        P.stepped.push_back(0);
-                        P.amp.push_back(S.cell.amplitude[k]);
-                        P.th0.push_back(S.cell.theta0[k]);
-                    }
-                }
-                S.next_blocks.push_back({key, start, P.size() - start});
+                const bool kept = reuse && cursor < S.blocks.size() && S.blocks[cursor].key == key;
+                S.next_blocks.push_back({key, 0, kept ? S.blocks[cursor].count : 0});
+                source.push_back(kept ? cursor : kGenerate);
             }
+    const size_t n_blocks = S.next_blocks.size();
+    constexpr size_t kGrain = 64;  // blocks per task: cells hold a few impulses each
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n_blocks, kGrain), [&](const auto& r) {
+        for (size_t b = r.begin(); b != r.end(); ++b) {
+            if (source[b] != kGenerate) continue;
+            const BlockKey& k = S.next_blocks[b].key;
+            S.next_blocks[b].count = static_cast<size_t>(detail::cell_count(c, L, k.cx, k.cy, k.ct));
+        }
+    });
+    size_t total = 0;
+    for (Block& blk : S.next_blocks) blk.start = total, total += blk.count;
+    Particles& P = S.next;
+    P.resize(total);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n_blocks, kGrain), [&](const auto& r) {
+        for (size_t b = r.begin(); b != r.end(); ++b) {
+            const Block& blk = S.next_blocks[b];
+            if (source[b] != kGenerate) {
+                P.copy_range(S.live, S.blocks[source[b]].start, blk.count, blk.start);
+                continue;
+            }
+            for (size_t k = 0, i = blk.start; k < blk.count; ++k, ++i) {
+                const detail::CellBirth nb = detail::cell_birth(c, L, blk.key.cx, blk.key.cy,
+                                                                blk.key.ct, static_cast<int>(k));
+                const auto [bs, bf] = S.birth_grid(nb.time);
+                P.x[i] = nb.x;
+                P.y[i] = nb.y;
+                P.lnj[i] = 0.0;
+                P.th[i] = c.orientation == OrientationMode::Random ? nb.theta0 : 0.0;
+                P.birth_step[i] = bs;
+                P.birth_frac[i] = bf;
+                P.step[i] = bs;
+                P.stepped[i] = 0;
+                P.amp[i] = nb.amplitude;
+                P.th0[i] = nb.theta0;
+            }
+        }
+    });
 
     // Age in grid steps (exact integer part) so looped copies agree bit for bit.
     auto age_s = [&](size_t i) {
@@ -321,15 +347,22 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
     };
 
     if (!still && S.flow) {
-        std::vector<std::pair<int64_t, size_t>> todo;
+        // The live particles behind `target`, ordered by the step they start from (then by
+        // index): a counting sort, as those steps span about one lifetime. The order only
+        // groups particles that move together; it changes no particle's arithmetic.
+        std::vector<size_t> todo;
+        int64_t lowest = target;
         for (size_t i = 0; i < P.size(); ++i) {
             if (!alive(i)) continue;
             const int64_t first = P.stepped[i] ? P.step[i] : P.birth_step[i];
-            if (first < target) todo.emplace_back(first, i);
+            if (first < target) todo.push_back(i), lowest = std::min(lowest, first);
         }
-        std::sort(todo.begin(), todo.end());
+        auto first_of = [&](size_t i) { return P.stepped[i] ? P.step[i] : P.birth_step[i]; };
+        std::vector<size_t> starts(static_cast<size_t>(target - lowest) + 1, 0);
+        for (size_t i : todo) ++starts[static_cast<size_t>(first_of(i) - lowest) + 1];
+        for (size_t k = 1; k < starts.size(); ++k) starts[k] += starts[k - 1];
         std::vector<size_t> order(todo.size());
-        for (size_t j = 0; j < todo.size(); ++j) order[j] = todo[j].second;
+        for (size_t i : todo) order[starts[static_cast<size_t>(first_of(i) - lowest)]++] = i;
         S.integrate(P, order, target);
     }
 
