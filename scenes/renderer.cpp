@@ -117,9 +117,15 @@ double Renderer::estimated_impulses() const {
 double Renderer::estimated_memory_mib() const {
     const auto& o = m_state->scene.output;
     const double pixels = double(o.width) * o.height;
-    // float frame + RGB float + 16-bit conversion buffers; ~120 bytes of state per impulse
-    // (two generations of the live set plus the prepared arrays).
-    return (pixels * 4.0 * 6.0 + estimated_impulses() * 120.0) / (1024.0 * 1024.0);
+    // Bytes per pixel of the larger of the CLI's two output paths (app/commands.cpp):
+    //  - images: two float frames (frame f + 1 renders while f is saved), the float RGB of the
+    //    shading (12) and the image writer's 8- or 16-bit copy (up to 6): 26;
+    //  - video: one float frame and the encoder's input picture (up to 6, 4:4:4 at 16 bits;
+    //    the RGB passes through in bands of rows): at most 10, plus the encoder's own frames,
+    //    which are not counted (x264 holds ~190 MiB at 3840x2160 for a short clip, more with
+    //    its lookahead full).
+    // ~120 bytes of state per impulse (two generations of the live set plus the prepared arrays).
+    return (pixels * 26.0 + estimated_impulses() * 120.0) / (1024.0 * 1024.0);
 }
 
 render::ValueMapping Renderer::mapping() const {
