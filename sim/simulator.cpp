@@ -165,7 +165,7 @@ void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& o
     // `order` lists the particles to advance sorted by their first step, so at any grid step
     // the particles already moving are a prefix of the chunk. Each particle's arithmetic is
     // the same whichever chunk, thread or frame it is advanced in.
-    constexpr size_t kChunk = 512;
+    constexpr size_t kChunk = 256;  // small enough to balance two threads in random access
     const size_t n = order.size();
     // ln J only matters with the compensation on, and stays exactly 0 in a divergence-free
     // flow; theta integrates the vorticity only in OrientationMode::Vorticity (the other modes
