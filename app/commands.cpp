@@ -144,10 +144,12 @@ int run_render(const RenderOptions& opt) {
         throw ValueError("--resume: applies to image sequences; a video is always written whole");
     ensure_directory(sequence ? expand_pattern(opt.output, first) : opt.output);
 
-    scenes::Renderer renderer(std::move(scene));
-    const scenes::Scene& sc = renderer.scene();
+    // Held by pointer so it can be freed before the encoder's flush (below).
+    auto renderer = std::make_unique<scenes::Renderer>(std::move(scene));
+    const scenes::Scene& sc = renderer->scene();
     const scenes::OutputConfig& out = sc.output;
-    const render::ValueMapping mapping = renderer.mapping();
+    const int width = out.width, height = out.height;
+    const render::ValueMapping mapping = renderer->mapping();
     render::EvalOptions eo;
     eo.tile_size = opt.tile;
 
@@ -174,8 +176,11 @@ int run_render(const RenderOptions& opt) {
     g_interrupted = false;
     auto previous = std::signal(SIGINT, on_sigint);
     Progress progress(last - first + 1, opt.quiet);
-    // Frame f + 1 renders while frame f is shaded and written (two frame buffers): on two
-    // cores the encoder and the renderer overlap instead of taking turns.
+    // Frame f + 1 renders while frame f is written: on two cores the encoder and the renderer
+    // overlap instead of taking turns. Images: two float frames, f + 1 renders while f is
+    // shaded and saved. Video: one float frame, shaded band by band straight into the
+    // encoder's 8-bit input (no float RGB frame: 100 MiB at 4K) before f + 1 renders into it;
+    // the conversion and encoding of f overlap the rendering of f + 1.
     render::Frame frames[2];
     std::vector<float> rgb;
     long long written = 0, skipped = 0;
@@ -187,12 +192,7 @@ int run_render(const RenderOptions& opt) {
                                                     opt.threads);
     auto emit = [&](const render::Frame& frame, long long f, const std::string& target) {
         const double t = sc.frame_time(f);
-        const render::Shading shading = sc.shading_at(t);
-        if (video) {
-            render::shade(frame, mapping, shading, rgb);
-            writer.write_frame(rgb.data());
-            return;
-        }
+        const render::Shading shading = sc.shading_at(t);  // keyframed shading at the frame time
         render::Metadata m = meta;
         m.emplace_back("frame", std::to_string(f));
         m.emplace_back("time", std::to_string(t));
@@ -220,8 +220,15 @@ int run_render(const RenderOptions& opt) {
             ++skipped;
             continue;
         }
-        renderer.render(f, frames[slot], eo);
+        renderer->render(f, frames[slot], eo);
         finish_pending();
+        if (video) {
+            const render::Frame& frame = frames[slot];
+            const render::Shader shader(mapping, sc.shading_at(sc.frame_time(f)));
+            writer.stage_frame([&](int y0, int y1, float* band) { shader.rows(frame, y0, y1, band); });
+            pending = std::async(std::launch::async, [&] { writer.encode_staged(); });
+            continue;  // the frame is free again: f + 1 renders into it
+        }
         pending = std::async(std::launch::async,
                              [&, s = slot, f, target] { emit(frames[s], f, target); });
         slot ^= 1;
@@ -229,14 +236,21 @@ int run_render(const RenderOptions& opt) {
     finish_pending();
     progress.done();
     std::signal(SIGINT, previous);
-    if (video) writer.close();  // on interruption too: what was encoded stays playable
+    if (video) {
+        // Closing flushes the encoder, which then encodes every frame it still holds (x264's
+        // lookahead): the peak of a short render. The renderer and the float frames are no
+        // longer needed (sc and out refer into the renderer: not used below).
+        frames[0] = {}, frames[1] = {};
+        renderer.reset();
+        writer.close();  // on interruption too: what was encoded stays playable
+    }
     if (g_interrupted) {
         std::cerr << "interrupted: " << written << " frames written to " << opt.output << "\n";
         return 130;
     }
     std::cout << "wrote " << opt.output << " (" << written << " frame" << (written == 1 ? "" : "s");
     if (skipped) std::cout << ", " << skipped << " already present";
-    std::cout << ", " << out.width << "x" << out.height << ")\n";
+    std::cout << ", " << width << "x" << height << ")\n";
     return 0;
 }
 

@@ -5,10 +5,10 @@
 //   1. sequential frame cost: one scenes::Renderer stepping frames forward (design.md §3);
 //   2. random-access cost of frame 10 000: a fresh Renderer integrating every live particle
 //      from birth, and its ratio to (1);
-//   3. end-to-end frames per second of a 1080p30 H.264 render (render + render::shade, the
-//      CLI's field -> display RGB, + render::VideoWriter) with the ultrafast and veryfast
-//      presets, and render alone;
-//   4. peak resident memory of the `impulse` CLI rendering one 3840x2160 frame to EXR and two
+//   3. end-to-end frames per second of a 1080p30 H.264 render as the CLI does it (render, shade
+//      band by band into the encoder's input, encode on another thread while the next frame
+//      renders) with the ultrafast and veryfast presets, and render alone;
+//   4. peak resident memory of the `impulse` CLI rendering one 3840x2160 frame to EXR and three
 //      to MP4, measured on the child process with wait4().
 // Times are medians of repetitions with min and max (std::chrono::steady_clock). See
 // bench/README.md ("impulse_bench_motion") for what each row measures.
@@ -28,6 +28,7 @@
 #include <exception>
 #include <filesystem>
 #include <fstream>
+#include <future>
 #include <optional>
 #include <sstream>
 #include <stdexcept>
@@ -314,19 +315,22 @@ Split measure_split(const Options& o, int64_t seq_first) {
 struct Variant {
     const char* name;
     const char* preset;  ///< nullptr: render only, no mapping, no encoder
-    std::vector<double> fps, cpu_ms, render_ms, rgb_ms, write_ms, open_close_ms;
+    std::vector<double> fps, cpu_ms, render_ms, stage_ms, encode_ms, wait_ms, open_close_ms;
 };
 
 /// One run: frames 0 .. n-1 of the default scene on a fresh Renderer, as `impulse render`
-/// does for a video. Returns frames per second over the whole run (open and close included).
+/// does for a video (app/commands.cpp): render frame f, stage it (render::Shader rows
+/// quantised into the encoder's input by VideoWriter::stage_frame), then encode it on another
+/// thread (VideoWriter::encode_staged) while frame f + 1 renders. Returns frames per second
+/// over the whole run (open and close included).
 void run_e2e(Variant& v, int n, const std::string& path) {
     scenes::Renderer renderer(load_default());
     const scenes::OutputConfig& out = renderer.scene().output;
-    const render::ValueMapping mapping = renderer.mapping();
+    const render::Shader shader(renderer.mapping(), renderer.scene().shading);
     render::Frame frame;
-    std::vector<float> rgb;
     render::VideoWriter writer;
-    double render_ms = 0, rgb_ms = 0, write_ms = 0, oc_ms = 0;
+    double render_ms = 0, stage_ms = 0, encode_ms = 0, wait_ms = 0, oc_ms = 0;
+    std::future<void> pending;  // the previous frame's encode
     const auto start = Clock::now();
     const double cpu0 = own_cpu_s();
     if (v.preset) {
@@ -344,14 +348,22 @@ void run_e2e(Variant& v, int n, const std::string& path) {
         render_ms += ms_since(t0);
         if (!v.preset) continue;
         t0 = Clock::now();
-        render::shade(frame, mapping, renderer.scene().shading, rgb);  // as app/commands.cpp
-        rgb_ms += ms_since(t0);
+        if (pending.valid()) pending.get();
+        wait_ms += ms_since(t0);
         t0 = Clock::now();
-        writer.write_frame(rgb.data());
-        write_ms += ms_since(t0);
+        writer.stage_frame([&](int y0, int y1, float* rgb) { shader.rows(frame, y0, y1, rgb); });
+        stage_ms += ms_since(t0);
+        pending = std::async(std::launch::async, [&] {
+            const auto e0 = Clock::now();
+            writer.encode_staged();
+            encode_ms += ms_since(e0);  // read after pending.get(): ordered by the future
+        });
     }
     if (v.preset) {
-        const auto t0 = Clock::now();
+        auto t0 = Clock::now();
+        if (pending.valid()) pending.get();
+        wait_ms += ms_since(t0);
+        t0 = Clock::now();
         writer.close();  // flushes the frames x264 still holds (lookahead, frame threads)
         oc_ms += ms_since(t0);
     }
@@ -359,8 +371,9 @@ void run_e2e(Variant& v, int n, const std::string& path) {
     v.fps.push_back(n / total_s);
     v.cpu_ms.push_back((own_cpu_s() - cpu0) * 1e3 / n);
     v.render_ms.push_back(render_ms / n);
-    v.rgb_ms.push_back(rgb_ms / n);
-    v.write_ms.push_back(write_ms / n);
+    v.stage_ms.push_back(stage_ms / n);
+    v.encode_ms.push_back(encode_ms / n);
+    v.wait_ms.push_back(wait_ms / n);
     v.open_close_ms.push_back(oc_ms);
     std::error_code ec;
     fs::remove(path, ec);
@@ -467,7 +480,7 @@ Memory measure_memory(const Options& o, const TempDir& tmp) {
     m.rows = {{"startup (info)", {"info", kScene, "--size", size}, "", {}, {}},
               {"1 frame .exr", {"render", kScene, "--size", size, "--frames", "0", "-q", "-o"},
                tmp.file("big.exr"), {}, {}},
-              {"2 frames .mp4", {"render", kScene, "--size", size, "--frames", "0-1", "-q", "-o"},
+              {"3 frames .mp4", {"render", kScene, "--size", size, "--frames", "0-2", "-q", "-o"},
                tmp.file("big.mp4"), {}, {}}};
     m.own_anon_mib = own_anon_mib();
     for (int r = 0; r < o.rss_reps; ++r)
@@ -558,9 +571,9 @@ int main(int argc, char** argv) {
         rep.row("random_accumulate", "ms", sp.random_eval);
 
         // 3 ---------------------------------------------------------------------------------
-        std::vector<Variant> variants = {{"render only", nullptr, {}, {}, {}, {}, {}, {}},
-                                         {"h264 ultrafast", "ultrafast", {}, {}, {}, {}, {}, {}},
-                                         {"h264 veryfast", "veryfast", {}, {}, {}, {}, {}, {}}};
+        std::vector<Variant> variants = {{"render only", nullptr, {}, {}, {}, {}, {}, {}, {}},
+                                         {"h264 ultrafast", "ultrafast", {}, {}, {}, {}, {}, {}, {}},
+                                         {"h264 veryfast", "veryfast", {}, {}, {}, {}, {}, {}, {}}};
         // Variants interleaved run by run, so drift in machine speed hits them alike.
         for (int r = 0; r < o.e2e_reps; ++r)
             for (auto& v : variants) run_e2e(v, o.e2e_frames, tmp.file("e2e.mp4"));
@@ -568,14 +581,16 @@ int main(int argc, char** argv) {
                            "crf %d, encoder threads auto (%d run%s each)\n",
                      o.e2e_frames - 1, kScene, out.width, out.height, out.fps, out.crf,
                      o.e2e_reps, o.e2e_reps == 1 ? "" : "s");
-        std::fprintf(info, "    %-15s %-20s %-8s  per frame, ms: %-19s %-17s %-19s  open+close ms\n",
-                     "", "fps", "CPU-ms/f", "render", "shade", "write_frame");
+        std::fprintf(info, "    %-15s %-20s %-8s  per frame, ms: %-19s %-17s %-19s %-17s  "
+                           "open+close ms\n",
+                     "", "fps", "CPU-ms/f", "render", "stage", "encode (overlaps)", "wait");
         for (const auto& v : variants) {
-            std::fprintf(info, "    %-15s %-20s %-8.1f  %-19s %-17s %-19s  %s\n", v.name,
+            std::fprintf(info, "    %-15s %-20s %-8.1f  %-19s %-17s %-19s %-17s  %s\n", v.name,
                          cell(summarise(v.fps)).c_str(), summarise(v.cpu_ms).med,
                          cell(summarise(v.render_ms)).c_str(),
-                         v.preset ? cell(summarise(v.rgb_ms)).c_str() : "-",
-                         v.preset ? cell(summarise(v.write_ms)).c_str() : "-",
+                         v.preset ? cell(summarise(v.stage_ms)).c_str() : "-",
+                         v.preset ? cell(summarise(v.encode_ms)).c_str() : "-",
+                         v.preset ? cell(summarise(v.wait_ms)).c_str() : "-",
                          v.preset ? cell(summarise(v.open_close_ms)).c_str() : "-");
         }
         rep.row("e2e_render_only", "fps", summarise(variants[0].fps));

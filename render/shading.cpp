@@ -35,53 +35,56 @@ void ramp_at(const std::vector<ColorStop>& ramp, double t, float out[4]) {
 
 }  // namespace
 
-void shade(const Frame& field, const ValueMapping& mapping, const Shading& sh,
-           std::vector<float>& rgb) {
-    const int w = field.width, h = field.height;
-    rgb.resize(size_t(w) * h * 3);
+Shader::Shader(const ValueMapping& mapping, const Shading& sh) {
     // The ramp as a 4096-entry table of display value -> RGBA (finer than 8- and 10-bit output
     // can show), so the per-pixel work is a clamp, a lookup and the compositing.
-    constexpr int kLut = 4096;
-    std::vector<float> lut(size_t(kLut) * 4);
+    m_lut.resize(size_t(kLut) * 4);
     for (int i = 0; i < kLut; ++i) {
         const double t = double(i) / (kLut - 1);
-        float* c = lut.data() + size_t(i) * 4;
+        float* c = m_lut.data() + size_t(i) * 4;
         if (sh.ramp.empty()) {
             c[0] = c[1] = c[2] = float(t), c[3] = 1.0f;
         } else {
             ramp_at(sh.ramp, t, c);
         }
     }
-    const float lo = static_cast<float>(mapping.lo);
-    const float scale = static_cast<float>((kLut - 1) / (mapping.hi - mapping.lo));
+    m_lo = static_cast<float>(mapping.lo);
+    m_scale = static_cast<float>((kLut - 1) / (mapping.hi - mapping.lo));
     const double az = sh.light_azimuth_deg * std::numbers::pi / 180.0;
     const double el = sh.light_elevation_deg * std::numbers::pi / 180.0;
     // Light direction in image coordinates (x right, y down, z out of the screen).
-    const float lx = float(std::cos(el) * std::cos(az)), ly = float(-std::cos(el) * std::sin(az));
-    const float lz = float(std::sin(el));
-    const float relief = static_cast<float>(sh.relief), ambient = static_cast<float>(sh.ambient);
-    const bool plain_grey = sh.ramp.empty() && sh.relief == 0.0;
-    tbb::parallel_for(0, h, [&](int y) {
+    m_lx = float(std::cos(el) * std::cos(az)), m_ly = float(-std::cos(el) * std::sin(az));
+    m_lz = float(std::sin(el));
+    m_relief = static_cast<float>(sh.relief), m_ambient = static_cast<float>(sh.ambient);
+    for (int k = 0; k < 3; ++k) m_top[k] = sh.top[k], m_bottom[k] = sh.bottom[k];
+    m_plain_grey = sh.ramp.empty() && sh.relief == 0.0;
+}
+
+void Shader::rows(const Frame& field, int y0, int y1, float* rgb) const {
+    const int w = field.width, h = field.height;
+    const float lo = m_lo, scale = m_scale, relief = m_relief, ambient = m_ambient;
+    const float lx = m_lx, ly = m_ly, lz = m_lz;
+    for (int y = y0; y < y1; ++y) {
         const float s = h > 1 ? float(y) / float(h - 1) : 0.0f;
         float bg[3];
-        for (int k = 0; k < 3; ++k) bg[k] = sh.top[k] + s * (sh.bottom[k] - sh.top[k]);
+        for (int k = 0; k < 3; ++k) bg[k] = m_top[k] + s * (m_bottom[k] - m_top[k]);
         const float* row = field.data.data() + size_t(y) * w;
-        float* o = rgb.data() + size_t(y) * w * 3;
+        float* o = rgb + size_t(y - y0) * w * 3;
         for (int x = 0; x < w; ++x) {
             const float fi = std::clamp((row[x] - lo) * scale, 0.0f, float(kLut - 1));
-            if (plain_grey) {  // the exact display value, as the grey image path writes it
+            if (m_plain_grey) {  // the exact display value, as the grey image path writes it
                 const float t = fi / float(kLut - 1);
                 o[3 * x] = o[3 * x + 1] = o[3 * x + 2] = t;
                 continue;
             }
-            const float* c0 = lut.data() + size_t(fi + 0.5f) * 4;
+            const float* c0 = m_lut.data() + size_t(fi + 0.5f) * 4;
             float c[4] = {c0[0], c0[1], c0[2], c0[3]};
             if (relief != 0.0f) {
                 // Central differences (one-sided at the borders) of the height field.
                 const int x0 = std::max(0, x - 1), x1 = std::min(w - 1, x + 1);
-                const int y0 = std::max(0, y - 1), y1 = std::min(h - 1, y + 1);
+                const int ya = std::max(0, y - 1), yb = std::min(h - 1, y + 1);
                 const float dzdx = relief * (field.at(x1, y) - field.at(x0, y)) / float(std::max(1, x1 - x0));
-                const float dzdy = relief * (field.at(x, y1) - field.at(x, y0)) / float(std::max(1, y1 - y0));
+                const float dzdy = relief * (field.at(x, yb) - field.at(x, ya)) / float(std::max(1, yb - ya));
                 const float n = std::sqrt(dzdx * dzdx + dzdy * dzdy + 1.0f);
                 const float lambert = std::max(0.0f, (-dzdx * lx - dzdy * ly + lz) / n);
                 // Normalised so a flat field keeps its ramp colour.
@@ -90,7 +93,15 @@ void shade(const Frame& field, const ValueMapping& mapping, const Shading& sh,
             }
             for (int k = 0; k < 3; ++k) o[3 * x + k] = std::clamp(c[3] * c[k] + (1.0f - c[3]) * bg[k], 0.0f, 1.0f);
         }
-    });
+    }
+}
+
+void shade(const Frame& field, const ValueMapping& mapping, const Shading& sh,
+           std::vector<float>& rgb) {
+    const int w = field.width, h = field.height;
+    rgb.resize(size_t(w) * h * 3);
+    const Shader shader(mapping, sh);
+    tbb::parallel_for(0, h, [&](int y) { shader.rows(field, y, y + 1, rgb.data() + size_t(y) * w * 3); });
 }
 
 }  // namespace impulse::render

@@ -37,4 +37,24 @@ struct Shading {
 void shade(const Frame& field, const ValueMapping& mapping, const Shading& shading,
            std::vector<float>& rgb);
 
+/// `shade` prepared once for a mapping and a shading (the ramp table, the light), applied to
+/// any band of rows: so a caller can shade a frame band by band into a small buffer instead of
+/// holding the whole float RGB frame (the video path quantises each band to 8 or 16 bits at
+/// once). Every pixel gets exactly the value `shade` gives it. Thread-safe once built.
+class Shader {
+public:
+    Shader(const ValueMapping& mapping, const Shading& shading);
+    /// Rows [y0, y1) of `field` (0 <= y0 <= y1 <= height) as display RGB into `rgb`: 3 floats
+    /// per pixel, field.width * 3 per row, row y0 first.
+    void rows(const Frame& field, int y0, int y1, float* rgb) const;
+
+private:
+    static constexpr int kLut = 4096;
+    std::vector<float> m_lut;  ///< kLut entries of RGBA
+    float m_lo = 0, m_scale = 1;
+    float m_lx = 0, m_ly = 0, m_lz = 1, m_relief = 0, m_ambient = 0;
+    float m_top[3] = {}, m_bottom[3] = {};
+    bool m_plain_grey = true;
+};
+
 }  // namespace impulse::render

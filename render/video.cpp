@@ -1,13 +1,15 @@
 // SPDX-License-Identifier: Apache-2.0
 // Video files through FFmpeg's libav* (FFmpeg 5.1 API: send/receive, AVCodecParameters).
-// Writing: float RGB is quantised to 8- or 16-bit RGB here, converted by swscale to the codec's
-// pixel format (BT.709, limited range for YUV targets), encoded and muxed into a temporary file
-// beside the target, which close() renames into place. Reading: decode every frame, for
-// probing and for luma analysis.
+// Writing: float RGB is quantised to 8- or 16-bit RGB here, band by band, converted by swscale to
+// the codec's pixel format (BT.709, limited range for YUV targets), encoded and muxed into a
+// temporary file beside the target, which close() renames into place. Reading: decode every
+// frame, for probing and for luma analysis.
 
-#include <tbb/parallel_for.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_pipeline.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <cctype>
 #include <climits>
@@ -329,8 +331,39 @@ struct VideoWriter::Impl {
     FramePtr frame;
     PacketPtr packet;
     SwsPtr sws;
-    AvBuffer rgb;        ///< quantised input frame, reused
-    int rgb_stride = 0;  ///< bytes per row of `rgb`
+    // The input goes through in bands of kBandRows rows (stage_frame): float RGB from the
+    // caller, quantised to 8- or 16-bit RGB in one of kBandSlots band buffers, converted by
+    // swscale slice by slice, top to bottom, into `frame`. swscale gives the same bytes for any
+    // slicing (it keeps the rows its vertical filters need), so no frame-sized RGB buffer is
+    // needed: at 4K that saves 100 MiB of float RGB and 24 MiB of 8-bit RGB.
+    static constexpr int kBandRows = 16;
+    static constexpr int kBandSlots = 8;  ///< bands in flight: threads shading + one converting
+    AvBuffer bands;       ///< kBandSlots quantised bands, kBandRows rows of rgb_stride bytes
+    int rgb_stride = 0;   ///< bytes per row of a quantised band
+    bool staged = false;  ///< `frame` holds a picture not yet encoded
+    tbb::enumerable_thread_specific<std::vector<float>> float_band;  ///< per thread
+
+    uint8_t* band_slot(int slot) const {
+        return bands.get() + static_cast<size_t>(slot) * kBandRows * rgb_stride;
+    }
+
+    /// Clamp, round and store `rows` rows given as floats (3 per pixel) into `dst_rows`.
+    void quantise_rows(int rows, const float* src, uint8_t* dst_rows) const {
+        const size_t row_values = static_cast<size_t>(width) * 3;
+        for (int r = 0; r < rows; ++r, src += row_values) {
+            uint8_t* row = dst_rows + static_cast<size_t>(r) * rgb_stride;
+            if (deep) {
+                auto* dst = reinterpret_cast<uint16_t*>(row);
+                for (size_t i = 0; i < row_values; ++i)
+                    dst[i] = static_cast<uint16_t>(clamp01(src[i]) * 65535.0f + 0.5f);
+            } else {
+                for (size_t i = 0; i < row_values; ++i)
+                    row[i] = static_cast<uint8_t>(clamp01(src[i]) * 255.0f + 0.5f);
+            }
+        }
+    }
+
+    void stage(const VideoWriter::RowSource& rows);
 
     /// Free every libav object (closing the temporary file) without writing a trailer.
     void release() {
@@ -340,7 +373,7 @@ struct VideoWriter::Impl {
         encoder.reset();
         format.reset();
         stream = nullptr;
-        rgb.reset();
+        bands.reset();
     }
 
     void remove_temp() {
@@ -485,7 +518,7 @@ void VideoWriter::Impl::setup(const std::string& final_path, const VideoOptions&
     if (err < 0) throw_av(path, "cannot allocate frame", err);
 
     rgb_stride = aligned_stride(o.width * 3 * (deep ? 2 : 1));
-    rgb = alloc_buffer(static_cast<size_t>(rgb_stride) * o.height);
+    bands = alloc_buffer(static_cast<size_t>(rgb_stride) * kBandRows * kBandSlots);
     sws = make_sws(o.width, o.height, deep ? AV_PIX_FMT_RGB48 : AV_PIX_FMT_RGB24, true,
                    spec.pix_fmt, !spec.yuv, path);
     open = true;
@@ -510,37 +543,69 @@ void VideoWriter::open(const std::string& path, const VideoOptions& options) {
     m_impl = std::move(impl);
 }
 
+/// The band pipeline of stage_frame: band indices in order; each band fetched from `rows` and
+/// quantised in parallel; converted by swscale in order. At most kBandSlots bands are in flight
+/// and they leave the pipeline in order, so band b + kBandSlots reuses the slot of band b only
+/// after band b has been converted.
+void VideoWriter::Impl::stage(const VideoWriter::RowSource& rows) {
+    // The encoder may still hold a reference to the previous frame's buffers: make_writable
+    // copies only in that case.
+    const int err = av_frame_make_writable(frame.get());
+    if (err < 0) throw_av(path, "cannot allocate frame", err);
+    const int n_bands = (height + kBandRows - 1) / kBandRows;
+    const size_t band_values = static_cast<size_t>(width) * 3 * kBandRows;
+    int next = 0;
+    tbb::parallel_pipeline(
+        kBandSlots,
+        tbb::make_filter<void, int>(tbb::filter_mode::serial_in_order,
+                                    [&](tbb::flow_control& fc) {
+                                        if (next == n_bands) fc.stop();
+                                        return next++;
+                                    }) &
+            tbb::make_filter<int, int>(tbb::filter_mode::parallel,
+                                       [&](int b) {
+                                           std::vector<float>& buf = float_band.local();
+                                           buf.resize(band_values);
+                                           const int y0 = b * kBandRows;
+                                           const int y1 = std::min(height, y0 + kBandRows);
+                                           rows(y0, y1, buf.data());
+                                           quantise_rows(y1 - y0, buf.data(),
+                                                         band_slot(b % kBandSlots));
+                                           return b;
+                                       }) &
+            tbb::make_filter<int, void>(tbb::filter_mode::serial_in_order, [&](int b) {
+                const int y0 = b * kBandRows;
+                const uint8_t* const src_planes[1] = {band_slot(b % kBandSlots)};
+                const int src_strides[1] = {rgb_stride};
+                sws_scale(sws.get(), src_planes, src_strides, y0,
+                          std::min(kBandRows, height - y0), frame->data, frame->linesize);
+            }));
+    staged = true;
+}
+
 /// Quantise (clamp, round to nearest), convert with swscale and encode one frame.
 void VideoWriter::write_frame(const float* rgb) {
     if (!is_open()) throw ValueError("write_frame: video writer is not open");
-    Impl& m = *m_impl;
-    const int row_values = m.width * 3;
-    // Quantise rows in parallel (independent rows: the bytes do not depend on the split).
-    tbb::parallel_for(0, m.height, [&](int y) {
-        const float* src = rgb + static_cast<size_t>(y) * row_values;
-        uint8_t* row = m.rgb.get() + static_cast<size_t>(y) * m.rgb_stride;
-        if (m.deep) {
-            auto* dst = reinterpret_cast<uint16_t*>(row);
-            for (int i = 0; i < row_values; ++i) {
-                dst[i] = static_cast<uint16_t>(clamp01(src[i]) * 65535.0f + 0.5f);
-            }
-        } else {
-            for (int i = 0; i < row_values; ++i) {
-                row[i] = static_cast<uint8_t>(clamp01(src[i]) * 255.0f + 0.5f);
-            }
-        }
+    const size_t row_values = static_cast<size_t>(m_impl->width) * 3;
+    m_impl->stage([&](int y0, int y1, float* band) {
+        std::copy(rgb + y0 * row_values, rgb + y1 * row_values, band);
     });
+    encode_staged();
+}
 
-    // The encoder may still hold a reference to the previous frame's buffers (x264 lookahead):
-    // make_writable copies only in that case.
-    int err = av_frame_make_writable(m.frame.get());
-    if (err < 0) throw_av(m.path, "cannot allocate frame", err);
-    const uint8_t* const src_planes[1] = {m.rgb.get()};
-    const int src_strides[1] = {m.rgb_stride};
-    sws_scale(m.sws.get(), src_planes, src_strides, 0, m.height, m.frame->data, m.frame->linesize);
+void VideoWriter::stage_frame(const RowSource& rows) {
+    if (!is_open()) throw ValueError("stage_frame: video writer is not open");
+    m_impl->stage(rows);
+}
+
+/// Encode the staged frame.
+void VideoWriter::encode_staged() {
+    if (!is_open()) throw ValueError("encode_staged: video writer is not open");
+    Impl& m = *m_impl;
+    if (!m.staged) throw ValueError(m.path + ": encode_staged: no frame was staged");
+    m.staged = false;
     m.frame->pts = m.frames;
-
-    err = avcodec_send_frame(m.encoder.get(), m.frame.get());
+    const int err = avcodec_send_frame(m.encoder.get(), m.frame.get());
     if (err < 0) throw_av(m.path, "cannot encode frame " + std::to_string(m.frames), err);
     m.drain();
     ++m.frames;

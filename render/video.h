@@ -4,6 +4,7 @@
 // Part of impulse::render; included by render/render.h.
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -51,6 +52,19 @@ public:
     /// Encode one frame: `rgb` has width*height*3 floats, clamped to [0,1] and quantised with
     /// rounding (the documented display mapping); throws IoError on encoder failure.
     void write_frame(const float* rgb);
+
+    /// Fills rows [y0, y1) of a frame as RGB floats (3 per pixel, width * 3 per row, row y0
+    /// first) into its third argument. Called in parallel for disjoint bands of rows.
+    using RowSource = std::function<void(int y0, int y1, float* rgb)>;
+    /// The first half of write_frame, without a frame-sized buffer: take the frame from `rows`
+    /// a band of rows at a time (bands in parallel), quantise each band as write_frame does and
+    /// convert it into the encoder's input picture (same bytes as write_frame). `encode_staged`
+    /// then encodes it. Must not run while `encode_staged` runs; throws IoError.
+    void stage_frame(const RowSource& rows);
+    /// The second half: encode the staged picture. A caller may run it on another thread while
+    /// it renders the next frame. Throws IoError on encoder failure, ValueError if no frame was
+    /// staged.
+    void encode_staged();
     /// Flush, write the trailer, rename the temporary file to the final path.
     void close();
     /// Close what was written so far into a playable file (used on interruption).

@@ -282,9 +282,15 @@ double Renderer::estimated_memory_mib() const {
     const State& S = *m_state;
     const auto& o = S.scene.output;
     const double pixels = double(o.width) * o.height;
-    // float frame + RGB float + 16-bit conversion buffers; ~120 bytes of state per impulse
-    // (two generations of the live set plus the prepared arrays).
-    double bytes = pixels * 4.0 * 6.0 + estimated_impulses() * 120.0;
+    // Bytes per pixel of the larger of the CLI's two output paths (app/commands.cpp):
+    //  - images: two float frames (frame f + 1 renders while f is saved), the float RGB of the
+    //    shading (12) and the image writer's 8- or 16-bit copy (up to 6): 26;
+    //  - video: one float frame and the encoder's input picture (up to 6, 4:4:4 at 16 bits;
+    //    the RGB passes through in bands of rows): at most 10, plus the encoder's own frames,
+    //    which are not counted (x264 holds ~190 MiB at 3840x2160 for a short clip, more with
+    //    its lookahead full).
+    // ~120 bytes of state per impulse (two generations of the live set plus the prepared arrays).
+    double bytes = pixels * 26.0 + estimated_impulses() * 120.0;
     // Composition: a frame per layer that is not simply added; a warped layer's grown frame
     // (margin as in estimated_impulses) and its two displacement frames.
     for (const auto& l : S.scene.layers) {

@@ -25,6 +25,103 @@ int poisson_inverse(double mean, double u) {
     return k;
 }
 
+namespace {
+
+/// The key of a cell: wrapped (periodic domain, looped time), with the loop index of ct.
+struct CellKey {
+    int64_t kx, ky, kt, loop_index;
+};
+CellKey cell_key(const Layout& L, int64_t cx, int64_t cy, int64_t ct) {
+    // The key uses the wrapped cell (periodic domain, looped time); positions and birth times
+    // use the unwrapped ones, so copies are the same impulses shifted by a period.
+    return {L.period_cells_x ? floor_mod(cx, L.period_cells_x) : cx,
+            L.period_cells_y ? floor_mod(cy, L.period_cells_y) : cy,
+            L.loop_cells ? floor_mod(ct, L.loop_cells) : ct,
+            L.loop_cells ? floor_div(ct, L.loop_cells) : 0};
+}
+
+}  // namespace
+
+int cell_candidates(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t cy, int64_t ct) {
+    const CellKey key = cell_key(L, cx, cy, ct);
+    const CounterRng rng(c.seed, c.layer);
+    // Large means are split into independent Poisson parts (the sum of Poissons is Poisson)
+    // so the inversion stays accurate (exp(-mean) does not underflow).
+    const int parts = static_cast<int>(std::ceil(L.mean_per_cell / 200.0));
+    int count = 0;
+    for (int p = 0; p < std::max(parts, 1); ++p) {
+        const auto u = rng.uniforms(key.kx, key.ky, key.kt, 0xFFFFFFFFu - static_cast<uint32_t>(p));
+        count += poisson_inverse(L.mean_per_cell / std::max(parts, 1), u[0]);
+    }
+    return count;
+}
+
+bool thins(const ProcessConfig& c, const Layout& L) {
+    return c.region || (c.density_scale && L.time_cell_s > 0);
+}
+
+bool outside_region(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t cy) {
+    // Birth-region culling: a seeding cell outside the region's support would have every birth
+    // thinned away (p = 0 there), so it is not generated at all. The test has a margin of a
+    // millionth of a cell for rounding in the positions; empty (inverted) supports meet nothing.
+    if (!c.region) return false;
+    const std::optional<Box> support = c.region->support();
+    if (!support) return false;
+    const double m = 1e-6 * std::max(L.cell_x, L.cell_y);
+    const double x0 = static_cast<double>(cx) * L.cell_x - m, x1 = (cx + 1.0) * L.cell_x + m;
+    const double y0 = static_cast<double>(cy) * L.cell_y - m, y1 = (cy + 1.0) * L.cell_y + m;
+    return std::max(x0, support->x0) > std::min(x1, support->x1) ||
+           std::max(y0, support->y0) > std::min(y1, support->y1);
+}
+
+int cell_count(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t cy, int64_t ct) {
+    if (outside_region(c, L, cx, cy)) return 0;
+    const int candidates = cell_candidates(c, L, cx, cy, ct);
+    if (!thins(c, L)) return candidates;
+    int count = 0;
+    CellBirth b;
+    for (int k = 0; k < candidates; ++k) count += cell_birth(c, L, cx, cy, ct, k, b);
+    return count;
+}
+
+bool cell_birth(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t cy, int64_t ct, int k,
+                CellBirth& b) {
+    const CellKey key = cell_key(L, cx, cy, ct);
+    const CounterRng rng(c.seed, c.layer);
+    // Uniforms of candidate k: r0 = (x, y, birth time, amplitude), r1 = (normal amplitude's
+    // angle, theta0, density thinning, unused).
+    const auto r0 = rng.uniforms(key.kx, key.ky, key.kt, 2u * k);
+    b.x = (static_cast<double>(cx) + r0[0]) * L.cell_x;
+    b.y = (static_cast<double>(cy) + r0[1]) * L.cell_y;
+    // Birth region (Lewis 1986 §3.1, points "restricted to an area of the plane"): keep the
+    // birth iff its own uniform u in (0, 1] is <= p(x, y) at the birth position. Thinning a
+    // Poisson process by p gives a Poisson process of intensity lambda p (p = 1 keeps all). The
+    // uniform comes from a stream of its own, so a region changes no other draw.
+    if (c.region) {
+        const CounterRng region_rng(c.seed, c.layer ^ kRegionStream);
+        if (region_rng.uniforms(key.kx, key.ky, key.kt, k)[0] > c.region->acceptance(b.x, b.y))
+            return false;
+    }
+    const auto r1 = rng.uniforms(key.kx, key.ky, key.kt, 2u * k + 1u);
+    b.time = {};
+    if (L.time_cell_s > 0) b.time = {(static_cast<double>(key.kt) + r0[2]) * L.time_cell_s, key.loop_index};
+    // A time-varying birth rate by thinning (Lewis & Shedler 1979): a birth at t_b of the
+    // maximum-rate process is kept with probability density_scale(t_b), decided by a uniform of
+    // its own identity, so any region and frame order keeps the same births. The loop-reduced
+    // time makes a looped process thin alike in every period.
+    if (c.density_scale && L.time_cell_s > 0 && r1[2] > c.density_scale(b.time.phase_s)) return false;
+    switch (c.amplitude) {
+        case Amplitude::Normal:  // Box–Muller; u in (0, 1] so the log is finite
+            b.amplitude = static_cast<float>(std::sqrt(-2.0 * std::log(r0[3])) *
+                                             std::cos(2.0 * std::numbers::pi * r1[0]));
+            break;
+        case Amplitude::Uniform: b.amplitude = static_cast<float>(2.0 * r0[3] - 1.0); break;
+        case Amplitude::Sign: b.amplitude = r0[3] < 0.5 ? -1.0f : 1.0f; break;
+    }
+    b.theta0 = static_cast<float>(2.0 * std::numbers::pi * r1[1]);
+    return true;
+}
+
 void generate_cell(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t cy, int64_t ct,
                    CellImpulses& out, std::vector<BirthTime>* births) {
     out.x.clear();
@@ -33,62 +130,16 @@ void generate_cell(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t 
     out.amplitude.clear();
     out.theta0.clear();
     if (births) births->clear();
-
-    // The key uses the wrapped cell (periodic domain, looped time); positions and birth times
-    // use the unwrapped ones, so copies are the same impulses shifted by a period.
-    const int64_t kx = L.period_cells_x ? floor_mod(cx, L.period_cells_x) : cx;
-    const int64_t ky = L.period_cells_y ? floor_mod(cy, L.period_cells_y) : cy;
-    const int64_t kt = L.loop_cells ? floor_mod(ct, L.loop_cells) : ct;
-    const int64_t loop_index = L.loop_cells ? floor_div(ct, L.loop_cells) : 0;
-    const CounterRng rng(c.seed, c.layer);
-    // Birth-region thinning draws from a stream of its own, so adding a region changes no other
-    // draw: a region that accepts everything gives the same impulses, bit for bit.
-    const CounterRng region_rng(c.seed, c.layer ^ kRegionStream);
-
-    // Large means are split into independent Poisson parts (the sum of Poissons is Poisson)
-    // so the inversion stays accurate (exp(-mean) does not underflow).
-    const int parts = static_cast<int>(std::ceil(L.mean_per_cell / 200.0));
-    int count = 0;
-    for (int p = 0; p < std::max(parts, 1); ++p) {
-        const auto u = rng.uniforms(kx, ky, kt, 0xFFFFFFFFu - static_cast<uint32_t>(p));
-        count += poisson_inverse(L.mean_per_cell / std::max(parts, 1), u[0]);
-    }
-
-    // Uniforms of impulse k: r0 = (x, y, birth time, amplitude), r1 = (normal amplitude's
-    // angle, theta0, density thinning, unused).
-    const bool thinned = c.density_scale && L.time_cell_s > 0;
-    for (int k = 0; k < count; ++k) {
-        const auto r0 = rng.uniforms(kx, ky, kt, 2u * k);
-        const double x = (static_cast<double>(cx) + r0[0]) * L.cell_x;
-        const double y = (static_cast<double>(cy) + r0[1]) * L.cell_y;
-        // Birth region (Lewis 1986 §3.1, points "restricted to an area of the plane"): keep the
-        // birth iff its own uniform u in (0, 1] is <= p(x, y) at the birth position. Thinning a
-        // Poisson process by p gives a Poisson process of intensity lambda p (p = 1 keeps all).
-        if (c.region && region_rng.uniforms(kx, ky, kt, k)[0] > c.region->acceptance(x, y))
-            continue;
-        const auto r1 = rng.uniforms(kx, ky, kt, 2u * k + 1u);
-        BirthTime b;
-        if (L.time_cell_s > 0) b = {(static_cast<double>(kt) + r0[2]) * L.time_cell_s, loop_index};
-        // A time-varying birth rate by thinning (Lewis & Shedler 1979): a birth at t_b of the
-        // maximum-rate process is kept with probability density_scale(t_b), decided by a
-        // uniform of its own identity, so any region and frame order keeps the same births.
-        // The loop-reduced time makes a looped process thin alike in every period.
-        if (thinned && r1[2] > c.density_scale(b.phase_s)) continue;
-        out.x.push_back(x);
-        out.y.push_back(y);
-        out.birth_s.push_back(b.phase_s + static_cast<double>(b.loop_index) * c.loop_s);
-        if (births) births->push_back(b);
-        float a = 0.0f;
-        switch (c.amplitude) {
-            case Amplitude::Normal:  // Box–Muller; u in (0, 1] so the log is finite
-                a = static_cast<float>(std::sqrt(-2.0 * std::log(r0[3])) *
-                                       std::cos(2.0 * std::numbers::pi * r1[0]));
-                break;
-            case Amplitude::Uniform: a = static_cast<float>(2.0 * r0[3] - 1.0); break;
-            case Amplitude::Sign: a = r0[3] < 0.5 ? -1.0f : 1.0f; break;
-        }
-        out.amplitude.push_back(a);
-        out.theta0.push_back(static_cast<float>(2.0 * std::numbers::pi * r1[1]));
+    const int candidates = outside_region(c, L, cx, cy) ? 0 : cell_candidates(c, L, cx, cy, ct);
+    CellBirth b;
+    for (int k = 0; k < candidates; ++k) {
+        if (!cell_birth(c, L, cx, cy, ct, k, b)) continue;
+        out.x.push_back(b.x);
+        out.y.push_back(b.y);
+        out.birth_s.push_back(b.time.phase_s + static_cast<double>(b.time.loop_index) * c.loop_s);
+        if (births) births->push_back(b.time);
+        out.amplitude.push_back(b.amplitude);
+        out.theta0.push_back(b.theta0);
     }
 }
 

@@ -155,9 +155,10 @@ public:
             const PotentialSample s = m_lattice.sample(x[p], y[p], m_contribution);
             vx[p] += amp * s.py;
             vy[p] -= amp * s.px;
-            curl[p] -= amp * s.lap;
+            if (curl) curl[p] -= amp * s.lap;
         }
     }
+    bool divergence_free() const override { return true; }
 
     double max_speed(const Box&) const override {
         // A statistical bound: for a Gaussian field with an isotropic kernel |v|^2 / E|v|^2 is

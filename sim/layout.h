@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 #include "sim/sim.h"
 
@@ -52,6 +53,27 @@ struct BirthTime {
     double phase_s = 0;
     int64_t loop_index = 0;
 };
+
+/// Impulse k of a cell: a pure function of (config, cell, k), so cells can be generated in
+/// pieces and in parallel (the simulator writes each straight into its particle arrays).
+struct CellBirth {
+    double x = 0, y = 0;
+    BirthTime time;
+    float amplitude = 0, theta0 = 0;
+};
+/// How many candidate births cell (cx, cy, ct) holds (Poisson at the process's maximum rate).
+int cell_candidates(const ProcessConfig& config, const Layout& layout, int64_t cx, int64_t cy,
+                    int64_t ct);
+/// Whether births are thinned (a birth region, or a keyframed density).
+bool thins(const ProcessConfig& config, const Layout& layout);
+/// Whether the cell lies outside the birth region's support (it then holds no impulse).
+bool outside_region(const ProcessConfig& config, const Layout& layout, int64_t cx, int64_t cy);
+/// How many impulses cell (cx, cy, ct) holds: its candidates that survive the thinning.
+int cell_count(const ProcessConfig& config, const Layout& layout, int64_t cx, int64_t cy,
+               int64_t ct);
+/// Candidate k of a cell into `b`; false when the thinning removes it (b is then partly set).
+bool cell_birth(const ProcessConfig& config, const Layout& layout, int64_t cx, int64_t cy,
+                int64_t ct, int k, CellBirth& b);
 
 /// cell_impulses with the birth times in reduced form (used by the simulator).
 void generate_cell(const ProcessConfig& config, const Layout& layout, int64_t cx, int64_t cy,

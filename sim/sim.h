@@ -83,9 +83,14 @@ struct Box {
 class Flow {
 public:
     virtual ~Flow() = default;
-    /// Add v, div v and curl v at n points (x[i], y[i]) at time t.
+    /// Add v, div v and curl v at n points (x[i], y[i]) at time t. `div` and `curl` may be
+    /// null when the caller does not need them (the flow then skips their work); v is the same
+    /// either way, bit for bit.
     virtual void add(double t_s, size_t n, const double* x, const double* y, double* vx,
                      double* vy, double* div, double* curl) const = 0;
+    /// True when div v = 0 everywhere and at all times, so `add` would only add zeros to `div`
+    /// (the simulator then does not integrate ln J: it stays exactly 0).
+    virtual bool divergence_free() const { return false; }
     /// Upper bound of |v| over `region` and all time.
     virtual double max_speed(const Box& region) const = 0;
     /// Bounds {vx_min, vx_max, vy_min, vy_max} over `region` and all time (default: +-max_speed);
@@ -106,6 +111,7 @@ public:
     bool empty() const { return m_terms.empty(); }
     void add(double t_s, size_t n, const double* x, const double* y, double* vx, double* vy,
              double* div, double* curl) const override;
+    bool divergence_free() const override;
     double max_speed(const Box& region) const override;
     std::array<double, 4> velocity_bounds(const Box& region) const override;
     void prepare(const Box& region) override;
@@ -278,7 +284,10 @@ enum class Integrator { RK2, RK4 };
 inline constexpr std::array<std::string_view, 2> kIntegratorNames = {"rk2", "rk4"};
 std::optional<Integrator> integrator_from_string(std::string_view name);
 
-/// How a particle's kernel rotation theta evolves. `Field`: from ProcessConfig::orientation_field
+/// How a particle's kernel rotation theta evolves. `Fixed`: 0 (the kernel's own orientation);
+/// `Random`: an angle uniform in [0, 2 pi) drawn at birth, kept for life; `Flow`: the direction
+/// of v at the particle at the frame time; `Vorticity`: integrated along the path from 0 at
+/// birth, d theta/dt = omega/2 (design.md §1). `Field`: from ProcessConfig::orientation_field
 /// (set by a table in scene files, hence not among the names below).
 enum class OrientationMode { Fixed, Random, Flow, Vorticity, Field };
 inline constexpr std::array<std::string_view, 4> kOrientationModeNames = {"fixed", "random", "flow",

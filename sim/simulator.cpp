@@ -2,6 +2,7 @@
 // The live impulses of a layer at any frame: births, integration from birth or from the
 // previous frame with identical arithmetic, Jacobian compensation, orientation.
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -40,26 +41,32 @@ struct Particles {
     std::vector<float> th0;  // random angle drawn at birth, in [0, 2 pi) (orientation jitter)
 
     size_t size() const { return x.size(); }
-    void clear() {
-        x.clear(), y.clear(), lnj.clear(), th.clear(), step.clear(), birth_step.clear();
-        birth_frac.clear(), stepped.clear(), amp.clear(), th0.clear();
+    void resize(size_t n) {
+        x.resize(n), y.resize(n), lnj.resize(n), th.resize(n), step.resize(n), birth_step.resize(n);
+        birth_frac.resize(n), stepped.resize(n), amp.resize(n), th0.resize(n);
     }
-    void copy_from(const Particles& o, size_t i) {
-        x.push_back(o.x[i]), y.push_back(o.y[i]), lnj.push_back(o.lnj[i]), th.push_back(o.th[i]);
-        step.push_back(o.step[i]), birth_step.push_back(o.birth_step[i]);
-        birth_frac.push_back(o.birth_frac[i]), stepped.push_back(o.stepped[i]);
-        amp.push_back(o.amp[i]);
-        th0.push_back(o.th0[i]);
+    /// Particles [from, from + n) of `o` to [to, to + n) here.
+    void copy_range(const Particles& o, size_t from, size_t n, size_t to) {
+        for (size_t k = 0; k < n; ++k) {
+            const size_t i = from + k, j = to + k;
+            x[j] = o.x[i], y[j] = o.y[i], lnj[j] = o.lnj[i], th[j] = o.th[i];
+            step[j] = o.step[i], birth_step[j] = o.birth_step[i], birth_frac[j] = o.birth_frac[i];
+            stepped[j] = o.stepped[i], amp[j] = o.amp[i], th0[j] = o.th0[i];
+        }
     }
 };
 
-/// Scratch arrays for one chunk of the integrator.
+
+/// Scratch arrays for one chunk of the integrator. The div and curl arrays stay empty when
+/// not wanted (the flow is then passed null for them and skips their work).
 struct Scratch {
     std::vector<double> h, xt, yt, k[4][4];  // k[stage][x, y, div, curl]
-    void resize(size_t n) {
+    void resize(size_t n, bool div, bool curl) {
         h.resize(n), xt.resize(n), yt.resize(n);
-        for (auto& s : k)
-            for (auto& v : s) v.resize(n);
+        for (auto& s : k) {
+            s[0].resize(n), s[1].resize(n);
+            s[2].resize(div ? n : 0), s[3].resize(curl ? n : 0);
+        }
     }
 };
 
@@ -77,10 +84,9 @@ struct LayerSimulator::State {
 
     Particles live, next;
     std::vector<Block> blocks, next_blocks;  // sorted by key (canonical order)
+    std::vector<size_t> block_source;        // impulses_at scratch
     int64_t last_step = 0;
     bool valid = false;
-    CellImpulses cell;
-    std::vector<BirthTime> births;
 
     State(ProcessConfig c, std::shared_ptr<Flow> f, Timing t, double r)
         : config(std::move(c)), layout(config), flow(std::move(f)), timing(t), support_radius(r) {
@@ -159,8 +165,13 @@ void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& o
     // `order` lists the particles to advance sorted by their first step, so at any grid step
     // the particles already moving are a prefix of the chunk. Each particle's arithmetic is
     // the same whichever chunk, thread or frame it is advanced in.
-    constexpr size_t kChunk = 512;
+    constexpr size_t kChunk = 256;  // small enough to balance two threads in random access
     const size_t n = order.size();
+    // ln J only matters with the compensation on, and stays exactly 0 in a divergence-free
+    // flow; theta integrates the vorticity only in OrientationMode::Vorticity (the other modes
+    // set it at birth or at the frame time). Skipping them changes no bit of x and y.
+    const bool want_div = config.jacobian && !flow->divergence_free();
+    const bool want_curl = config.orientation == OrientationMode::Vorticity;
     const size_t chunks = (n + kChunk - 1) / kChunk;
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
         const size_t i0 = c * kChunk, i1 = std::min(n, i0 + kChunk), m = i1 - i0;
@@ -175,13 +186,17 @@ void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& o
             frac[j] = p.birth_frac[i];
         }
         Scratch s;
-        s.resize(m);
+        s.resize(m, want_div, want_curl);
         size_t active = 0;
         const bool rk4 = config.integrator == Integrator::RK4;
         auto eval = [&](int stage, double t, size_t na, const double* px, const double* py) {
-            for (auto& v : s.k[stage]) std::fill(v.begin(), v.begin() + na, 0.0);
-            flow->add(t, na, px, py, s.k[stage][0].data(), s.k[stage][1].data(),
-                      s.k[stage][2].data(), s.k[stage][3].data());
+            double* out[4];
+            for (int q = 0; q < 4; ++q) {
+                auto& v = s.k[stage][q];
+                out[q] = v.empty() ? nullptr : v.data();
+                if (out[q]) std::fill(out[q], out[q] + na, 0.0);
+            }
+            flow->add(t, na, px, py, out[0], out[1], out[2], out[3]);
         };
         for (int64_t g = m ? first[0] : target; g < target; ++g) {
             while (active < m && first[active] <= g) ++active;
@@ -203,9 +218,13 @@ void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& o
                     const double hh = 0.5 * s.h[j];
                     x[j] += hh * (s.k[0][0][j] + s.k[1][0][j]);
                     y[j] += hh * (s.k[0][1][j] + s.k[1][1][j]);
-                    lj[j] += hh * (s.k[0][2][j] + s.k[1][2][j]);  // d ln J / dt = div v
-                    th[j] += hh * 0.5 * (s.k[0][3][j] + s.k[1][3][j]);  // d theta / dt = w / 2
                 }
+                if (want_div)  // d ln J / dt = div v
+                    for (size_t j = 0; j < active; ++j)
+                        lj[j] += 0.5 * s.h[j] * (s.k[0][2][j] + s.k[1][2][j]);
+                if (want_curl)  // d theta / dt = w / 2
+                    for (size_t j = 0; j < active; ++j)
+                        th[j] += 0.5 * s.h[j] * 0.5 * (s.k[0][3][j] + s.k[1][3][j]);
             } else {  // classical RK4
                 for (int st = 1; st < 4; ++st) {
                     const double frac_h = st == 3 ? 1.0 : 0.5;
@@ -222,8 +241,8 @@ void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& o
                     };
                     x[j] += h6 * comb(0);
                     y[j] += h6 * comb(1);
-                    lj[j] += h6 * comb(2);
-                    th[j] += h6 * 0.5 * comb(3);
+                    if (want_div) lj[j] += h6 * comb(2);
+                    if (want_curl) th[j] += h6 * 0.5 * comb(3);
                 }
             }
         }
@@ -262,51 +281,64 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
         ct1 = static_cast<int64_t>(std::floor(t_frame / L.time_cell_s)) + 1;
     }
 
-    // Birth-region culling: a seeding cell outside the region's support would have every birth
-    // thinned away (p = 0 there), so it is not generated at all. The test has a margin of a
-    // millionth of a cell for rounding in the positions; empty (inverted) supports meet nothing.
-    const std::optional<Box> support = c.region ? c.region->support() : std::nullopt;
-    auto outside_region = [&](int64_t cx, int64_t cy) {
-        if (!support) return false;
-        const double m = 1e-6 * std::max(L.cell_x, L.cell_y);
-        const double x0 = static_cast<double>(cx) * L.cell_x - m, x1 = (cx + 1.0) * L.cell_x + m;
-        const double y0 = static_cast<double>(cy) * L.cell_y - m, y1 = (cy + 1.0) * L.cell_y + m;
-        return std::max(x0, support->x0) > std::min(x1, support->x1) ||
-               std::max(y0, support->y0) > std::min(y1, support->y1);
-    };
-
-    Particles& P = S.next;
-    P.clear();
+    // The blocks of the birth region in canonical order, each carried over from the previous
+    // frame or generated. New cells are counted, then generated straight into their place, in
+    // parallel (an impulse is a pure function of its cell and index): the layout is the
+    // canonical order whatever the threads do.
+    constexpr size_t kGenerate = static_cast<size_t>(-1);
     S.next_blocks.clear();
+    std::vector<size_t>& source = S.block_source;  // per block: index in S.blocks, or kGenerate
+    source.clear();
     for (int64_t ct = ct0; ct <= ct1; ++ct)
         for (int64_t cy = cy0; cy <= cy1; ++cy)
             for (int64_t cx = cx0; cx <= cx1; ++cx) {
                 const BlockKey key{ct, cy, cx};
-                const size_t start = P.size();
-                if (outside_region(cx, cy)) continue;  // no births: no block
                 while (reuse && cursor < S.blocks.size() && S.blocks[cursor].key < key) ++cursor;
-                if (reuse && cursor < S.blocks.size() && S.blocks[cursor].key == key) {
-                    const Block& b = S.blocks[cursor];
-                    for (size_t i = b.start; i < b.start + b.count; ++i) P.copy_from(S.live, i);
-                } else {
-                    detail::generate_cell(c, L, cx, cy, ct, S.cell, &S.births);
-                    for (size_t k = 0; k < S.cell.x.size(); ++k) {
-                        P.x.push_back(S.cell.x[k]);
-                        P.y.push_back(S.cell.y[k]);
-                        P.lnj.push_back(0.0);
-                        P.th.push_back(c.orientation == OrientationMode::Random ? S.cell.theta0[k]
-                                                                                 : 0.0);
-                        const auto [bs, bf] = S.birth_grid(S.births[k]);
-                        P.birth_step.push_back(bs);
-                        P.birth_frac.push_back(bf);
-                        P.step.push_back(bs);
-                        P.stepped.push_back(0);
-                        P.amp.push_back(S.cell.amplitude[k]);
-                        P.th0.push_back(S.cell.theta0[k]);
-                    }
-                }
-                S.next_blocks.push_back({key, start, P.size() - start});
+                const bool kept = reuse && cursor < S.blocks.size() && S.blocks[cursor].key == key;
+                S.next_blocks.push_back({key, 0, kept ? S.blocks[cursor].count : 0});
+                source.push_back(kept ? cursor : kGenerate);
             }
+    const size_t n_blocks = S.next_blocks.size();
+    constexpr size_t kGrain = 64;  // blocks per task: cells hold a few impulses each
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n_blocks, kGrain), [&](const auto& r) {
+        for (size_t b = r.begin(); b != r.end(); ++b) {
+            if (source[b] != kGenerate) continue;
+            const BlockKey& k = S.next_blocks[b].key;
+            S.next_blocks[b].count = static_cast<size_t>(detail::cell_count(c, L, k.cx, k.cy, k.ct));
+        }
+    });
+    size_t total = 0;
+    for (Block& blk : S.next_blocks) blk.start = total, total += blk.count;
+    Particles& P = S.next;
+    P.resize(total);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n_blocks, kGrain), [&](const auto& r) {
+        for (size_t b = r.begin(); b != r.end(); ++b) {
+            const Block& blk = S.next_blocks[b];
+            if (source[b] != kGenerate) {
+                P.copy_range(S.live, S.blocks[source[b]].start, blk.count, blk.start);
+                continue;
+            }
+            // The block's survivors of the thinning (all its candidates when nothing thins),
+            // in candidate order.
+            detail::CellBirth nb;
+            size_t i = blk.start;
+            for (int k = 0; i < blk.start + blk.count; ++k) {
+                if (!detail::cell_birth(c, L, blk.key.cx, blk.key.cy, blk.key.ct, k, nb)) continue;
+                const auto [bs, bf] = S.birth_grid(nb.time);
+                P.x[i] = nb.x;
+                P.y[i] = nb.y;
+                P.lnj[i] = 0.0;
+                P.th[i] = c.orientation == OrientationMode::Random ? nb.theta0 : 0.0;
+                P.birth_step[i] = bs;
+                P.birth_frac[i] = bf;
+                P.step[i] = bs;
+                P.stepped[i] = 0;
+                P.amp[i] = nb.amplitude;
+                P.th0[i] = nb.theta0;
+                ++i;
+            }
+        }
+    });
 
     // Age in grid steps (exact integer part) so looped copies agree bit for bit.
     auto age_s = [&](size_t i) {
@@ -319,15 +351,22 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
     };
 
     if (!still && S.flow) {
-        std::vector<std::pair<int64_t, size_t>> todo;
+        // The live particles behind `target`, ordered by the step they start from (then by
+        // index): a counting sort, as those steps span about one lifetime. The order only
+        // groups particles that move together; it changes no particle's arithmetic.
+        std::vector<size_t> todo;
+        int64_t lowest = target;
         for (size_t i = 0; i < P.size(); ++i) {
             if (!alive(i)) continue;
             const int64_t first = P.stepped[i] ? P.step[i] : P.birth_step[i];
-            if (first < target) todo.emplace_back(first, i);
+            if (first < target) todo.push_back(i), lowest = std::min(lowest, first);
         }
-        std::sort(todo.begin(), todo.end());
+        auto first_of = [&](size_t i) { return P.stepped[i] ? P.step[i] : P.birth_step[i]; };
+        std::vector<size_t> starts(static_cast<size_t>(target - lowest) + 1, 0);
+        for (size_t i : todo) ++starts[static_cast<size_t>(first_of(i) - lowest) + 1];
+        for (size_t k = 1; k < starts.size(); ++k) starts[k] += starts[k - 1];
         std::vector<size_t> order(todo.size());
-        for (size_t j = 0; j < todo.size(); ++j) order[j] = todo[j].second;
+        for (size_t i : todo) order[starts[static_cast<size_t>(first_of(i) - lowest)]++] = i;
         S.integrate(P, order, target);
     }
 
@@ -350,9 +389,9 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
     if (c.orientation == OrientationMode::Flow && S.flow && !still) {
         // Kernels aligned with the local flow direction at the frame time.
         const size_t n = out.size();
-        std::vector<double> vx(n, 0.0), vy(n, 0.0), dv(n, 0.0), cu(n, 0.0);
+        std::vector<double> vx(n, 0.0), vy(n, 0.0);
         S.flow->add(S.time_of_step(target), n, out.x.data(), out.y.data(), vx.data(), vy.data(),
-                    dv.data(), cu.data());
+                    nullptr, nullptr);
         for (size_t j = 0; j < n; ++j)
             out.theta[j] = static_cast<float>(std::atan2(vy[j], vx[j]));
     }

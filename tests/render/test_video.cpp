@@ -230,6 +230,70 @@ TEST_CASE("decoded luma matches the BT.709 luma of the input", "[render][video]"
     }
 }
 
+TEST_CASE("stage_frame + encode_staged write what write_frame writes, band by band",
+          "[render][video]") {
+    // The writer converts a frame in bands of rows (16 at present); heights that are not a
+    // multiple of the band and odd sizes exercise the last, short band. Each staged frame must
+    // ask for every row exactly once and decode to exactly what write_frame gives; FFV1 and
+    // H.264 at crf 0 are lossless, so the decoded luma is also held to the bound derived in
+    // "decoded luma matches the BT.709 luma of the input" (a band written to the wrong rows
+    // would be off by far more).
+    struct Case {
+        const char* ext;
+        VideoCodec codec;
+        int width, height;
+        float tolerance;
+    };
+    const Case c = GENERATE(Case{"mkv", VideoCodec::FFV1, 63, 37, 1.5f / 255.0f},
+                            Case{"mp4", VideoCodec::H264, 64, 38, 2.5f / 255.0f},
+                            Case{"mov", VideoCodec::ProRes, 65, 17, 1.5f / 255.0f});
+    DYNAMIC_SECTION(c.ext << " " << c.width << "x" << c.height) {
+        TempDir dir;
+        VideoOptions o = small_options(c.codec);
+        o.width = c.width, o.height = c.height, o.crf = 0;
+        constexpr int kFrames = 5;
+        write_gradient(dir.file(std::string("whole.") + c.ext), o, kFrames);
+        {
+            VideoWriter writer;
+            writer.open(dir.file(std::string("staged.") + c.ext), o);
+            for (int t = 0; t < kFrames; ++t) {
+                const auto rgb = gradient_frame(c.width, c.height, t);
+                std::vector<std::atomic<int>> asked(static_cast<size_t>(c.height));
+                const size_t row = static_cast<size_t>(c.width) * 3;
+                writer.stage_frame([&](int y0, int y1, float* band) {
+                    for (int y = y0; y < y1; ++y) ++asked[static_cast<size_t>(y)];
+                    std::copy(rgb.begin() + y0 * row, rgb.begin() + y1 * row, band);
+                });
+                CHECK(std::all_of(asked.begin(), asked.end(), [](const auto& a) { return a == 1; }));
+                writer.encode_staged();
+            }
+            writer.close();
+        }
+        int w = 0, h = 0;
+        const auto whole = decode_video_luma(dir.file(std::string("whole.") + c.ext), w, h);
+        const auto staged = decode_video_luma(dir.file(std::string("staged.") + c.ext), w, h);
+        REQUIRE(w == c.width);
+        REQUIRE(h == c.height);
+        REQUIRE(staged.size() == static_cast<size_t>(kFrames));
+        REQUIRE(whole.size() == staged.size());
+        for (int t = 0; t < kFrames; ++t) {
+            INFO("frame " << t);
+            CHECK(staged[t] == whole[t]);
+            CHECK(max_abs_diff(staged[t], bt709_luma(gradient_frame(c.width, c.height, t))) <=
+                  c.tolerance);
+        }
+    }
+}
+
+TEST_CASE("encode_staged without a staged frame is a ValueError", "[render][video]") {
+    TempDir dir;
+    VideoWriter writer;
+    writer.open(dir.file("none.mp4"), small_options());
+    const std::string msg = thrown_message<impulse::ValueError>([&] { writer.encode_staged(); });
+    CHECK_THAT(msg, Contains("no frame was staged"));
+    writer.abort();
+}
+
 TEST_CASE("input is clamped to [0,1] and rounded to the nearest 8-bit level", "[render][video]") {
     // FFV1 keeps the 8-bit RGB exactly and grey input reduces to the same grey level (the
     // BT.709 weights sum to 1 within 1/32768), so the decoded level is exact: 0.25/255 only

@@ -3,6 +3,8 @@
 // shading of a field into display colour.
 #include <catch2/catch.hpp>
 
+#include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 
@@ -61,4 +63,31 @@ TEST_CASE("shading maps the field through the ramp and composites alpha over the
     // Grey without a ramp is the display value itself.
     render::shade(f, {-1.0, 1.0}, render::Shading{}, rgb);
     CHECK(rgb[3] == Approx(0.5f).margin(1e-6));
+}
+
+TEST_CASE("a Shader shades any band of rows exactly as shade does", "[render][shading]") {
+    // The video path shades a frame band by band (render::Shader) into the encoder's input; its
+    // pixels must be shade's, bit for bit, for every shading (grey, ramp with alpha, relief,
+    // whose central differences reach into the neighbouring rows of a band).
+    render::Frame f;
+    f.resize(37, 23);
+    for (int y = 0; y < f.height; ++y)
+        for (int x = 0; x < f.width; ++x)
+            f.data[size_t(y) * f.width + x] = std::sin(0.3f * x) * std::cos(0.2f * y) * 1.3f;
+    render::Shading grey, ramp, relief;
+    ramp.ramp = {{0.0, 1, 0, 0, 0}, {0.4, 0.2f, 0.8f, 0.1f, 0.6f}, {1.0, 0, 0, 1, 1}};
+    relief = ramp;
+    relief.relief = 3.0;
+    for (const render::Shading* sh : {&grey, &ramp, &relief}) {
+        std::vector<float> whole;
+        render::shade(f, {-1.0, 1.0}, *sh, whole);
+        const render::Shader shader({-1.0, 1.0}, *sh);
+        std::vector<float> banded(whole.size(), -1.0f);
+        const size_t row = size_t(f.width) * 3;
+        for (int y0 : {0, 5, 6, 13, 22}) {  // uneven bands: [0,5) [5,6) [6,13) [13,22) [22,23)
+            const int y1 = y0 == 0 ? 5 : y0 == 5 ? 6 : y0 == 6 ? 13 : y0 == 13 ? 22 : 23;
+            shader.rows(f, y0, y1, banded.data() + y0 * row);
+        }
+        CHECK(std::memcmp(whole.data(), banded.data(), whole.size() * sizeof(float)) == 0);
+    }
 }

@@ -150,6 +150,43 @@ TEST_CASE("orientation fields in the simulator: current positions and jitter and
     CHECK(std::sqrt(spread / double(jit.size())) == Approx(0.3 / std::sqrt(3.0)).epsilon(0.15));
 }
 
+TEST_CASE("orientation modes: only vorticity integrates the spin", "[sim][orientation]") {
+    // A Lamb–Oseen vortex, circulation G = 20000, core 40: vorticity w = w0 exp(-r^2/rc^2) with
+    // w0 = G / (pi rc^2) = 3.98/s, so d theta/dt = w/2 turns a kernel near the core by up to
+    // w0/2 * T = 3.98 rad over its T = 2 s life. `fixed` must stay at 0 and `random` at its birth
+    // angle in [0, 2 pi) (the old behaviour, integrating the spin in every mode, fails both).
+    sim::ProcessConfig c;
+    c.seed = 8;
+    c.cell_size = 16.0;
+    c.intensity = 16.0 / (kPi * 256.0);
+    c.lifetime_s = 2.0;
+    auto flow = std::shared_ptr<sim::Flow>(
+        sim::make_vortex_flow(sim::VortexModel::LambOseen, sim::Keyframed{0.0}, sim::Keyframed{0.0},
+                              sim::Keyframed{20000.0}, 40.0));
+    const sim::Box view{-60, -60, 60, 60};
+    auto run = [&](sim::OrientationMode mode) {
+        c.orientation = mode;
+        sim::LayerSimulator s(c, flow, {}, 16.0);
+        sim::Impulses out;
+        s.impulses_at(90, view, out);
+        REQUIRE(out.size() > 100);
+        return out.theta;
+    };
+    const auto spun = run(sim::OrientationMode::Vorticity);
+    const double w0 = 20000.0 / (kPi * 1600.0);
+    CHECK(*std::min_element(spun.begin(), spun.end()) >= 0.0f);
+    CHECK(*std::max_element(spun.begin(), spun.end()) <= w0 / 2 * c.lifetime_s + 1e-6);
+    CHECK(*std::max_element(spun.begin(), spun.end()) > 2.0);
+
+    const auto fixed = run(sim::OrientationMode::Fixed);
+    CHECK(std::all_of(fixed.begin(), fixed.end(), [](float t) { return t == 0.0f; }));
+
+    const auto random = run(sim::OrientationMode::Random);
+    CHECK(*std::min_element(random.begin(), random.end()) >= 0.0f);
+    CHECK(*std::max_element(random.begin(), random.end()) < 2.0 * kPi);
+    CHECK(*std::max_element(random.begin(), random.end()) > 5.0);  // spread over [0, 2 pi)
+}
+
 // ---------------------------------------------------------------------------------------------
 // (c) structure tensor
 
