@@ -320,24 +320,37 @@ double PerspectiveView::horizon_row() const {
     return m_cy - s * m_f * std::tan(p);
 }
 
+void PerspectiveView::texture_row(double py, int n, double ox, double oy, float* x, float* y,
+                                  uint8_t* hit) const {
+    // The same arithmetic as texture_point: the ray's z component does not depend on the column
+    // (the right vector is horizontal, m_R[2] = 0), so neither does the ray parameter t.
+    const double b = py - m_cy;
+    const double d2 = m_f * m_F[2] + 0.0 * m_R[2] - b * m_U[2];
+    const double t = m_z / d2;
+    const bool any = t > 0.0 && std::isfinite(t);
+    for (int i = 0; i < n; ++i) {
+        const double a = (i + 0.5) - m_cx;
+        const double d0 = m_f * m_F[0] + a * m_R[0] - b * m_U[0];
+        const double d1 = m_f * m_F[1] + a * m_R[1] - b * m_U[1];
+        const double rx = (m_cam.x + t * d0) - ox, ry = (m_cam.y + t * d1) - oy;
+        const bool ok = any && std::abs(rx) < 1e15 && std::abs(ry) < 1e15;
+        x[i] = ok ? static_cast<float>(rx) : kFar;
+        y[i] = ok ? static_cast<float>(ry) : kFar;
+        hit[i] = ok ? 1 : 0;
+    }
+}
+
 PixelCoords pixel_coords(const PerspectiveView& view) {
     const auto& cam = view.camera();
     PixelCoords pc;
     pc.width = cam.width, pc.height = cam.height;
     pc.origin_x = cam.x, pc.origin_y = cam.y;
     const size_t n = size_t(cam.width) * cam.height;
-    pc.x.assign(n, kFar), pc.y.assign(n, kFar), pc.hit.assign(n, 0);
+    pc.x.resize(n), pc.y.resize(n), pc.hit.resize(n);
     tbb::parallel_for(0, cam.height, [&](int j) {
-        for (int i = 0; i < cam.width; ++i) {
-            double x, y;
-            if (!view.texture_point(i + 0.5, j + 0.5, x, y)) continue;
-            const double rx = x - pc.origin_x, ry = y - pc.origin_y;
-            if (!(std::abs(rx) < 1e15 && std::abs(ry) < 1e15)) continue;
-            const size_t p = size_t(j) * cam.width + i;
-            pc.x[p] = static_cast<float>(rx);
-            pc.y[p] = static_cast<float>(ry);
-            pc.hit[p] = 1;
-        }
+        const size_t p = size_t(j) * cam.width;
+        view.texture_row(j + 0.5, cam.width, pc.origin_x, pc.origin_y, pc.x.data() + p,
+                         pc.y.data() + p, pc.hit.data() + p);
     });
     return pc;
 }
@@ -413,56 +426,132 @@ std::vector<detail::PerspLevel> loop_levels(const kernels::KernelPyramid& pyr) {
 
 }  // namespace
 
-sim::Box perspective_region(const kernels::KernelPyramid& pyr, const PerspectiveView& view,
-                            const AntiAlias& aa) {
+sim::Region perspective_region(const kernels::KernelPyramid& pyr, const PerspectiveView& view,
+                               const AntiAlias& aa) {
     const auto& cam = view.camera();
     const int W = cam.width, H = cam.height;
     // A row of pixels maps to a straight segment of the plane, so samples along each row bound
     // it; the fade varies smoothly along the row, so a sample next to a kept one is kept too.
-    constexpr int kSamples = 17;
-    struct RowBox {
-        double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+    constexpr int kSamples = 16;  // segments per row
+    struct Sample {
+        double x = 0, y = 0, ext = 0;
+        bool hit = false, kept = false, near = false;
     };
-    std::vector<RowBox> rows(static_cast<size_t>(H));
+    auto sample_px = [&](int k) {
+        return k == 0 ? 0.5 : k == kSamples ? W - 0.5 : W * double(k) / kSamples;
+    };
+    // Whether the impulses at image point (px, py) are drawn, and their extent.
+    auto probe = [&](double px, double py, Sample& s) {
+        s.hit = view.texture_point(px, py, s.x, s.y);
+        s.kept = false;
+        if (!s.hit) return;
+        if (aa.max_distance > 0.0 && std::hypot(s.x - cam.x, s.y - cam.y) > aa.max_distance)
+            return;
+        const auto f = view.footprint(s.x, s.y);
+        const Plan p = plan_for(pyr, aa, f.s_major, f.s_minor);
+        s.kept = p.keep;
+        // The line form's long axis points along the depth, where the neighbouring rows are
+        // (the region spans the rows between samples): only its across extent widens it.
+        s.ext = 1.25 * (p.mode == detail::kPerspLine ? p.across : std::max(p.along, p.across));
+    };
+    std::vector<Sample> grid(size_t(H) * (kSamples + 1));
     tbb::parallel_for(0, H, [&](int j) {
-        std::array<double, kSamples + 1> X{}, Y{}, ext{};
-        std::array<bool, kSamples + 1> hit{}, keep{};
+        Sample* row = grid.data() + size_t(j) * (kSamples + 1);
+        for (int k = 0; k <= kSamples; ++k) probe(sample_px(k), j + 0.5, row[k]);
+        // A sample next to a kept one along the row counts as kept, with its neighbour's extent.
+        std::array<double, kSamples + 1> ext{};
         for (int k = 0; k <= kSamples; ++k) {
-            const double px = k == 0 ? 0.5 : k == kSamples ? W - 0.5 : W * double(k) / kSamples;
-            hit[size_t(k)] = view.texture_point(px, j + 0.5, X[size_t(k)], Y[size_t(k)]);
-            if (!hit[size_t(k)]) continue;
-            if (aa.max_distance > 0.0 &&
-                std::hypot(X[size_t(k)] - cam.x, Y[size_t(k)] - cam.y) > aa.max_distance)
-                continue;
-            const auto f = view.footprint(X[size_t(k)], Y[size_t(k)]);
-            const Plan p = plan_for(pyr, aa, f.s_major, f.s_minor);
-            keep[size_t(k)] = p.keep;
-            // The line form's long axis points along the depth, where the neighbouring rows
-            // are: only its across extent widens the region.
-            ext[size_t(k)] =
-                1.25 * (p.mode == detail::kPerspLine ? p.across : std::max(p.along, p.across));
+            const bool left = k > 0 && row[k - 1].kept, right = k < kSamples && row[k + 1].kept;
+            row[k].near = row[k].hit && (row[k].kept || left || right);
+            double e = row[k].kept ? row[k].ext : 0.0;
+            if (left) e = std::max(e, row[k - 1].ext);
+            if (right) e = std::max(e, row[k + 1].ext);
+            ext[size_t(k)] = e;
         }
-        RowBox b;
-        for (int k = 0; k <= kSamples; ++k) {
-            if (!hit[size_t(k)]) continue;
-            const bool near_kept = keep[size_t(k)] || (k > 0 && keep[size_t(k - 1)]) ||
-                                   (k < kSamples && keep[size_t(k + 1)]);
-            if (!near_kept) continue;
-            double e = ext[size_t(k)];
-            if (k > 0 && keep[size_t(k - 1)]) e = std::max(e, ext[size_t(k - 1)]);
-            if (k < kSamples && keep[size_t(k + 1)]) e = std::max(e, ext[size_t(k + 1)]);
-            b.x0 = std::min(b.x0, X[size_t(k)] - e), b.x1 = std::max(b.x1, X[size_t(k)] + e);
-            b.y0 = std::min(b.y0, Y[size_t(k)] - e), b.y1 = std::max(b.y1, Y[size_t(k)] + e);
-        }
-        rows[size_t(j)] = b;
+        for (int k = 0; k <= kSamples; ++k) row[k].ext = ext[size_t(k)];
     });
-    sim::Box box{1e300, 1e300, -1e300, -1e300};
-    for (const auto& r : rows) {
-        box.x0 = std::min(box.x0, r.x0), box.y0 = std::min(box.y0, r.y0);
-        box.x1 = std::max(box.x1, r.x1), box.y1 = std::max(box.y1, r.y1);
+    auto at = [&](int j, int k) -> const Sample& {
+        return grid[size_t(j) * (kSamples + 1) + size_t(k)];
+    };
+    // Where a column of samples passes from kept (row jk) to not kept (row ju), the texture point
+    // just past the cut-off (bisection in the image row): rows near the horizon lie far apart on
+    // the plane, and the region should end at the cut-off, not at the next row.
+    auto boundary = [&](int k, int jk, int ju, double& x, double& y) {
+        double a = jk + 0.5, b = ju + 0.5;  // kept, not kept
+        for (int it = 0; it < 16; ++it) {
+            Sample s;
+            probe(sample_px(k), 0.5 * (a + b), s);
+            (s.kept ? a : b) = 0.5 * (a + b);
+        }
+        if (view.texture_point(sample_px(k), b, x, y)) return;
+        x = at(jk, k).x, y = at(jk, k).y;
+    };
+    // Cells of the sample grid (rows j, j + 1 and samples k, k + 1): the box of the corners
+    // that see the plane (a corner past the cut-off moved back to it), expanded by the largest
+    // extent among the kept ones.
+    auto cell_box = [&](int j, int k, sim::Box& b) {
+        b = {1e300, 1e300, -1e300, -1e300};
+        double e = -1.0;
+        const int rows = H > 1 ? 2 : 1;
+        for (int dj = 0; dj < rows; ++dj)
+            for (int dk = 0; dk <= 1; ++dk) {
+                const Sample& s = at(j + dj, k + dk);
+                if (s.near) e = std::max(e, s.ext);
+                double x = s.x, y = s.y;
+                const int other = j + (rows - 1 - dj);
+                if (!s.kept && other != j + dj && at(other, k + dk).kept)
+                    boundary(k + dk, other, j + dj, x, y);
+                else if (!s.hit)
+                    continue;
+                b.x0 = std::min(b.x0, x), b.x1 = std::max(b.x1, x);
+                b.y0 = std::min(b.y0, y), b.y1 = std::max(b.y1, y);
+            }
+        if (!(e >= 0.0) || !(b.x1 >= b.x0)) return false;
+        b = b.expanded(e);
+        return true;
+    };
+    // Merge: first along each row of cells, then down the rows, while a merged box wastes at
+    // most kWaste of its area: the covered area of a merged box is tracked as the sum of its
+    // parts less their overlaps with the part merged before them (the union of a wedge's row
+    // boxes is the wedge; its bounding box would be about twice as large).
+    constexpr double kWaste = 0.1;
+    struct Merged {
+        sim::Box box, last;
+        double covered = 0.0;
+    };
+    auto overlap = [](const sim::Box& a, const sim::Box& b) {
+        const double w = std::min(a.x1, b.x1) - std::max(a.x0, b.x0);
+        const double h = std::min(a.y1, b.y1) - std::max(a.y0, b.y0);
+        return w > 0.0 && h > 0.0 ? w * h : 0.0;
+    };
+    auto try_merge = [&](Merged& m, const sim::Box& b) {
+        const sim::Box u{std::min(m.box.x0, b.x0), std::min(m.box.y0, b.y0),
+                         std::max(m.box.x1, b.x1), std::max(m.box.y1, b.y1)};
+        const double covered = m.covered + b.area() - overlap(m.last, b);
+        if (u.area() > (1.0 + kWaste) * covered) return false;
+        m.box = u, m.last = b, m.covered = covered;
+        return true;
+    };
+    const int cell_rows = std::max(1, H - 1);
+    std::vector<std::vector<Merged>> rows(static_cast<size_t>(cell_rows));
+    tbb::parallel_for(0, cell_rows, [&](int j) {
+        auto& out = rows[size_t(j)];
+        for (int k = 0; k < kSamples; ++k) {
+            sim::Box b;
+            if (!cell_box(j, k, b)) continue;
+            if (out.empty() || !try_merge(out.back(), b)) out.push_back({b, b, b.area()});
+        }
+    });
+    std::vector<Merged> all;
+    for (int j = cell_rows - 1; j >= 0; --j) {
+        auto& r = rows[size_t(j)];
+        if (r.size() == 1 && !all.empty() && try_merge(all.back(), r.front().box)) continue;
+        all.insert(all.end(), r.begin(), r.end());
     }
-    if (!(box.x0 <= box.x1)) return {0, 0, -1, -1};
-    return box;
+    sim::Region region;
+    region.boxes.reserve(all.size());
+    for (const Merged& m : all) region.boxes.push_back(m.box);
+    return region;
 }
 
 void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impulses& imp,

@@ -136,6 +136,12 @@ public:
     /// Image row of the horizon (may lie outside the image); rows beyond it miss the plane.
     double horizon_row() const;
 
+    /// The texture points of the pixel centres (i + 0.5, py), i in [0, n), minus (ox, oy), as
+    /// floats: the arithmetic of texture_point, one division per row. Points that miss the plane
+    /// (or lie beyond 1e15) get hit 0 and a far coordinate.
+    void texture_row(double py, int n, double ox, double oy, float* x, float* y,
+                     uint8_t* hit) const;
+
 private:
     PerspectiveCamera m_cam;
     double m_f = 0, m_cx = 0, m_cy = 0;
@@ -154,12 +160,13 @@ struct PixelCoords {
 /// Computes the pixel coordinates (origin: the camera's foot). Deterministic; parallel by rows.
 PixelCoords pixel_coords(const PerspectiveView& view);
 
-/// The texture-space box that must hold the impulses for a frame: every visible point whose
+/// The texture region that must hold the impulses for a frame: every visible point whose
 /// impulses are not faded out (nor beyond aa.max_distance), expanded by the support they would
-/// have there. Pass it to sim::LayerSimulator::impulses_at. Empty (x1 < x0) when nothing is
+/// have there, as a union of boxes that follows the visible wedge of the plane (its bounding box
+/// is about twice its area). Pass it to sim::LayerSimulator::impulses_at. Empty when nothing is
 /// visible.
-sim::Box perspective_region(const kernels::KernelPyramid& pyramid, const PerspectiveView& view,
-                            const AntiAlias& aa);
+sim::Region perspective_region(const kernels::KernelPyramid& pyramid, const PerspectiveView& view,
+                               const AntiAlias& aa);
 
 /// Counts of the last perspective evaluation (for benchmarks and tests).
 struct PerspectiveStats {

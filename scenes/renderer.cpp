@@ -109,7 +109,7 @@ double Renderer::estimated_impulses() const {
         render::View v = S.scene.camera.view(S.scene.output.width, S.scene.output.height, 0.0);
         v.scale = 1.0 / min_zoom;
         n += sim::expected_impulses(S.sims[i].config(),
-                                    S.sims[i].birth_region(S.camera->estimate_box(i, v)));
+                                    S.sims[i].birth_region(S.camera->estimate_region(i, v)));
     }
     return n;
 }
@@ -139,7 +139,7 @@ void Renderer::render(int64_t frame, render::Frame& out, const render::EvalOptio
     double mean = 0.0;
     for (size_t i = 0; i < S.sims.size(); ++i) {
         sim::Impulses& imp = S.impulses[i];
-        S.sims[i].impulses_at(frame, S.camera->box(i, view, t), imp);
+        S.sims[i].impulses_at(frame, S.camera->region(i, view, t), imp);
         const auto& layer = S.scene.layers[i];
         if (layer.gain != 1.0)
             for (auto& w : imp.weight) w = static_cast<float>(w * layer.gain);

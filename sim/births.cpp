@@ -2,7 +2,6 @@
 // Cell-seeded Poisson births (Lewis 1986 §3.1 "numbered cells", here in space and time).
 
 #include <cmath>
-#include <numbers>
 
 #include "sim/layout.h"
 #include "sim/rng.h"
@@ -35,41 +34,20 @@ void generate_cell(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t 
 
     // The key uses the wrapped cell (periodic domain, looped time); positions and birth times
     // use the unwrapped ones, so copies are the same impulses shifted by a period.
-    const int64_t kx = L.period_cells_x ? floor_mod(cx, L.period_cells_x) : cx;
-    const int64_t ky = L.period_cells_y ? floor_mod(cy, L.period_cells_y) : cy;
-    const int64_t kt = L.loop_cells ? floor_mod(ct, L.loop_cells) : ct;
-    const int64_t loop_index = L.loop_cells ? floor_div(ct, L.loop_cells) : 0;
+    const CellKey key(L, cx, cy, ct);
     const CounterRng rng(c.seed, c.layer);
-
-    // Large means are split into independent Poisson parts (the sum of Poissons is Poisson)
-    // so the inversion stays accurate (exp(-mean) does not underflow).
-    const int parts = static_cast<int>(std::ceil(L.mean_per_cell / 200.0));
-    int count = 0;
-    for (int p = 0; p < std::max(parts, 1); ++p) {
-        const auto u = rng.uniforms(kx, ky, kt, 0xFFFFFFFFu - static_cast<uint32_t>(p));
-        count += poisson_inverse(L.mean_per_cell / std::max(parts, 1), u[0]);
-    }
-
+    const int count = cell_count(rng, L, key);
     for (int k = 0; k < count; ++k) {
-        const auto r0 = rng.uniforms(kx, ky, kt, 2u * k);
-        const auto r1 = rng.uniforms(kx, ky, kt, 2u * k + 1u);
-        out.x.push_back((static_cast<double>(cx) + r0[0]) * L.cell_x);
-        out.y.push_back((static_cast<double>(cy) + r0[1]) * L.cell_y);
+        const ImpulseDraw d = draw_impulse(c, L, rng, key, cx, cy, k);
+        out.x.push_back(d.x);
+        out.y.push_back(d.y);
         BirthTime b;
-        if (L.time_cell_s > 0) b = {(static_cast<double>(kt) + r0[2]) * L.time_cell_s, loop_index};
+        if (L.time_cell_s > 0)
+            b = {(static_cast<double>(key.kt) + d.birth_u) * L.time_cell_s, key.loop_index};
         out.birth_s.push_back(b.phase_s + static_cast<double>(b.loop_index) * c.loop_s);
         if (births) births->push_back(b);
-        float a = 0.0f;
-        switch (c.amplitude) {
-            case Amplitude::Normal:  // Box–Muller; u in (0, 1] so the log is finite
-                a = static_cast<float>(std::sqrt(-2.0 * std::log(r0[3])) *
-                                       std::cos(2.0 * std::numbers::pi * r1[0]));
-                break;
-            case Amplitude::Uniform: a = static_cast<float>(2.0 * r0[3] - 1.0); break;
-            case Amplitude::Sign: a = r0[3] < 0.5 ? -1.0f : 1.0f; break;
-        }
-        out.amplitude.push_back(a);
-        out.theta0.push_back(static_cast<float>(2.0 * std::numbers::pi * r1[1]));
+        out.amplitude.push_back(d.amplitude);
+        out.theta0.push_back(d.theta0);
     }
 }
 
@@ -80,7 +58,7 @@ void cell_impulses(const ProcessConfig& config, int64_t cx, int64_t cy, int64_t 
     detail::generate_cell(config, detail::Layout(config), cx, cy, ct, out, nullptr);
 }
 
-double expected_impulses(const ProcessConfig& config, const Box& region) {
+double expected_impulses(const ProcessConfig& config, const Region& region) {
     // Live impulses in the region, plus the not-yet-dead part of the time cells kept around
     // them (the simulator holds about (T + 3 dt_cell) / T of the live count).
     double n = config.intensity * region.area();

@@ -2,9 +2,14 @@
 #pragma once
 // How a process is cut into seeding cells in space and time (internal to impulse::sim).
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <numbers>
+#include <utility>
+#include <vector>
 
+#include "sim/rng.h"
 #include "sim/sim.h"
 
 namespace impulse::sim::detail {
@@ -53,8 +58,88 @@ struct BirthTime {
     int64_t loop_index = 0;
 };
 
+/// The generator keys of cell (cx, cy, ct): wrapped for a periodic domain and a looped time
+/// axis, so copies one period apart draw the same numbers.
+struct CellKey {
+    int64_t kx, ky, kt, loop_index;
+    CellKey(const Layout& L, int64_t cx, int64_t cy, int64_t ct)
+        : kx(L.period_cells_x ? floor_mod(cx, L.period_cells_x) : cx),
+          ky(L.period_cells_y ? floor_mod(cy, L.period_cells_y) : cy),
+          kt(L.loop_cells ? floor_mod(ct, L.loop_cells) : ct),
+          loop_index(L.loop_cells ? floor_div(ct, L.loop_cells) : 0) {}
+};
+
+/// Number of impulses born in a cell (Lewis 1986 §3.1: a Poisson count per numbered cell).
+inline int cell_count(const CounterRng& rng, const Layout& L, const CellKey& key) {
+    // Large means are split into independent Poisson parts (the sum of Poissons is Poisson)
+    // so the inversion stays accurate (exp(-mean) does not underflow).
+    const int parts = std::max(static_cast<int>(std::ceil(L.mean_per_cell / 200.0)), 1);
+    int count = 0;
+    for (int p = 0; p < parts; ++p) {
+        const auto u = rng.uniforms(key.kx, key.ky, key.kt, 0xFFFFFFFFu - static_cast<uint32_t>(p));
+        count += poisson_inverse(L.mean_per_cell / parts, u[0]);
+    }
+    return count;
+}
+
+/// Impulse k of cell (cx, cy): position (unwrapped cell, so periodic copies are shifted by the
+/// period), the uniform that places its birth in the time cell, amplitude and random angle.
+struct ImpulseDraw {
+    double x, y, birth_u;
+    float amplitude, theta0;
+};
+inline ImpulseDraw draw_impulse(const ProcessConfig& c, const Layout& L, const CounterRng& rng,
+                                const CellKey& key, int64_t cx, int64_t cy, int k) {
+    const auto r0 = rng.uniforms(key.kx, key.ky, key.kt, 2u * static_cast<uint32_t>(k));
+    const auto r1 = rng.uniforms(key.kx, key.ky, key.kt, 2u * static_cast<uint32_t>(k) + 1u);
+    ImpulseDraw d;
+    d.x = (static_cast<double>(cx) + r0[0]) * L.cell_x;
+    d.y = (static_cast<double>(cy) + r0[1]) * L.cell_y;
+    d.birth_u = r0[2];
+    d.amplitude = 0.0f;
+    switch (c.amplitude) {
+        case Amplitude::Normal:  // Box–Muller; u in (0, 1] so the log is finite
+            d.amplitude = static_cast<float>(std::sqrt(-2.0 * std::log(r0[3])) *
+                                             std::cos(2.0 * std::numbers::pi * r1[0]));
+            break;
+        case Amplitude::Uniform: d.amplitude = static_cast<float>(2.0 * r0[3] - 1.0); break;
+        case Amplitude::Sign: d.amplitude = r0[3] < 0.5 ? -1.0f : 1.0f; break;
+    }
+    d.theta0 = static_cast<float>(2.0 * std::numbers::pi * r1[1]);
+    return d;
+}
+
 /// cell_impulses with the birth times in reduced form (used by the simulator).
 void generate_cell(const ProcessConfig& config, const Layout& layout, int64_t cx, int64_t cy,
                    int64_t ct, CellImpulses& out, std::vector<BirthTime>* births);
+
+/// The cells to generate for a region: per row of cells cy in [cy0, cy1], the merged ranges
+/// [cx_first, cx_last] of cells that meet a box, in increasing order (canonical order).
+struct CellCover {
+    int64_t cy0 = 0, cy1 = -1;
+    std::vector<std::vector<std::pair<int64_t, int64_t>>> rows;  ///< rows[cy - cy0]
+};
+CellCover cell_cover(const Region& region, const Layout& layout);
+
+/// Whether a point lies in a union of boxes (closed boxes), indexed by horizontal bands.
+class BoxIndex {
+public:
+    explicit BoxIndex(const Region& region);
+    bool contains(double x, double y) const {
+        if (!(y >= m_y0 && y <= m_y1)) return false;
+        const size_t band =
+            std::min(m_bands.size() - 1, static_cast<size_t>((y - m_y0) * m_inv_band));
+        for (const uint32_t b : m_bands[band]) {
+            const Box& r = m_boxes[b];
+            if (x >= r.x0 && x <= r.x1 && y >= r.y0 && y <= r.y1) return true;
+        }
+        return false;
+    }
+
+private:
+    std::vector<Box> m_boxes;
+    double m_y0 = 0, m_y1 = -1, m_inv_band = 1;
+    std::vector<std::vector<uint32_t>> m_bands;
+};
 
 }  // namespace impulse::sim::detail

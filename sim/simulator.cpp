@@ -138,6 +138,18 @@ struct LayerSimulator::State {
     }
 
     void integrate(Particles& p, const std::vector<size_t>& order, int64_t target);
+    /// The impulses of a still process for `view` (see still_impulses in the .cpp).
+    void still_impulses(const Region& view, int64_t target, Impulses& out);
+    /// OrientationMode::Field: the field's angle at each impulse plus its jitter (from th0).
+    void orient_by_field(int64_t target, const std::vector<float>& th0, Impulses& out) const;
+
+    /// One row of cells of a still process (buffers reused between frames).
+    struct StillRow {
+        std::vector<double> x, y;
+        std::vector<float> weight, theta, th0;
+        void clear() { x.clear(), y.clear(), weight.clear(), theta.clear(), th0.clear(); }
+    };
+    std::vector<StillRow> still_rows;
 };
 
 LayerSimulator::LayerSimulator(ProcessConfig config, std::shared_ptr<Flow> flow, Timing timing,
@@ -152,6 +164,12 @@ void LayerSimulator::reset() { m_state->valid = false; }
 double LayerSimulator::travel_bound(const Box& view) const { return m_state->travel(view); }
 Box LayerSimulator::birth_region(const Box& view) const {
     return m_state->birth_region(view);
+}
+Region LayerSimulator::birth_region(const Region& view) const {
+    Region r;
+    for (const Box& b : view.boxes)
+        if (b.x1 >= b.x0 && b.y1 >= b.y0) r.boxes.push_back(m_state->birth_region(b));
+    return r;
 }
 
 void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& order,
@@ -238,73 +256,76 @@ void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& o
     });
 }
 
-void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) {
+void LayerSimulator::impulses_at(int64_t frame, const Region& view, Impulses& out) {
     State& S = *m_state;
     const ProcessConfig& c = S.config;
     const Layout& L = S.layout;
     const bool still = c.lifetime_s <= 0;
     const int64_t target = (S.timing.start_frame + frame) * S.substeps;
-    const double travel = S.travel(view);
-    const Box region = S.birth_region(view);
-    if (S.flow && !still) S.flow->prepare(region.expanded(travel + 1.0));
+    if (view.empty()) {
+        out.clear();
+        S.valid = false;
+        return;
+    }
+    if (still) return S.still_impulses(view, target, out);
+    const double travel = S.travel(view.bounds());
+    const Region region = birth_region(view);
+    if (S.flow) S.flow->prepare(region.bounds().expanded(travel + 1.0));
 
     // Reuse the previous frame's particles only when moving forward in time.
-    const bool reuse = S.valid && !still && S.last_step <= target;
+    const bool reuse = S.valid && S.last_step <= target;
     size_t cursor = 0;  // both block lists are in canonical order: merge instead of search
-    const int64_t cx0 = static_cast<int64_t>(std::floor(region.x0 / L.cell_x));
-    const int64_t cx1 = static_cast<int64_t>(std::floor(region.x1 / L.cell_x));
-    const int64_t cy0 = static_cast<int64_t>(std::floor(region.y0 / L.cell_y));
-    const int64_t cy1 = static_cast<int64_t>(std::floor(region.y1 / L.cell_y));
-    int64_t ct0 = 0, ct1 = 0;
+    const detail::CellCover cover = detail::cell_cover(region, L);
     const double t_frame = static_cast<double>(target) * S.dt;
-    if (!still) {
-        ct0 = static_cast<int64_t>(std::floor((t_frame - c.lifetime_s) / L.time_cell_s)) - 1;
-        ct1 = static_cast<int64_t>(std::floor(t_frame / L.time_cell_s)) + 1;
-    }
+    const int64_t ct0 = static_cast<int64_t>(std::floor((t_frame - c.lifetime_s) / L.time_cell_s)) - 1;
+    const int64_t ct1 = static_cast<int64_t>(std::floor(t_frame / L.time_cell_s)) + 1;
 
     Particles& P = S.next;
     P.clear();
     S.next_blocks.clear();
     for (int64_t ct = ct0; ct <= ct1; ++ct)
-        for (int64_t cy = cy0; cy <= cy1; ++cy)
-            for (int64_t cx = cx0; cx <= cx1; ++cx) {
-                const BlockKey key{ct, cy, cx};
-                const size_t start = P.size();
-                while (reuse && cursor < S.blocks.size() && S.blocks[cursor].key < key) ++cursor;
-                if (reuse && cursor < S.blocks.size() && S.blocks[cursor].key == key) {
-                    const Block& b = S.blocks[cursor];
-                    for (size_t i = b.start; i < b.start + b.count; ++i) P.copy_from(S.live, i);
-                } else {
-                    detail::generate_cell(c, L, cx, cy, ct, S.cell, &S.births);
-                    for (size_t k = 0; k < S.cell.x.size(); ++k) {
-                        P.x.push_back(S.cell.x[k]);
-                        P.y.push_back(S.cell.y[k]);
-                        P.lnj.push_back(0.0);
-                        P.th.push_back(c.orientation == OrientationMode::Random ? S.cell.theta0[k]
-                                                                                 : 0.0);
-                        const auto [bs, bf] = S.birth_grid(S.births[k]);
-                        P.birth_step.push_back(bs);
-                        P.birth_frac.push_back(bf);
-                        P.step.push_back(bs);
-                        P.stepped.push_back(0);
-                        P.amp.push_back(S.cell.amplitude[k]);
-                        P.th0.push_back(S.cell.theta0[k]);
+        for (int64_t cy = cover.cy0; cy <= cover.cy1; ++cy)
+            for (const auto& [cx0, cx1] : cover.rows[size_t(cy - cover.cy0)])
+                for (int64_t cx = cx0; cx <= cx1; ++cx) {
+                    const BlockKey key{ct, cy, cx};
+                    const size_t start = P.size();
+                    while (reuse && cursor < S.blocks.size() && S.blocks[cursor].key < key)
+                        ++cursor;
+                    if (reuse && cursor < S.blocks.size() && S.blocks[cursor].key == key) {
+                        const Block& b = S.blocks[cursor];
+                        for (size_t i = b.start; i < b.start + b.count; ++i)
+                            P.copy_from(S.live, i);
+                    } else {
+                        detail::generate_cell(c, L, cx, cy, ct, S.cell, &S.births);
+                        for (size_t k = 0; k < S.cell.x.size(); ++k) {
+                            P.x.push_back(S.cell.x[k]);
+                            P.y.push_back(S.cell.y[k]);
+                            P.lnj.push_back(0.0);
+                            P.th.push_back(c.orientation == OrientationMode::Random
+                                               ? S.cell.theta0[k]
+                                               : 0.0);
+                            const auto [bs, bf] = S.birth_grid(S.births[k]);
+                            P.birth_step.push_back(bs);
+                            P.birth_frac.push_back(bf);
+                            P.step.push_back(bs);
+                            P.stepped.push_back(0);
+                            P.amp.push_back(S.cell.amplitude[k]);
+                            P.th0.push_back(S.cell.theta0[k]);
+                        }
                     }
+                    S.next_blocks.push_back({key, start, P.size() - start});
                 }
-                S.next_blocks.push_back({key, start, P.size() - start});
-            }
 
     // Age in grid steps (exact integer part) so looped copies agree bit for bit.
     auto age_s = [&](size_t i) {
         return (static_cast<double>(target - P.birth_step[i]) - P.birth_frac[i]) * S.dt;
     };
     auto alive = [&](size_t i) {
-        if (still) return true;
         const double a = age_s(i);
         return a >= 0.0 && a < c.lifetime_s;
     };
 
-    if (!still && S.flow) {
+    if (S.flow) {
         std::vector<std::pair<int64_t, size_t>> todo;
         for (size_t i = 0; i < P.size(); ++i) {
             if (!alive(i)) continue;
@@ -319,21 +340,20 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
 
     // Emit the live impulses whose support can touch the view, in canonical order.
     out.clear();
-    const Box keep = view.expanded(S.support_radius);
-    std::vector<size_t> emitted;
+    const detail::BoxIndex keep(view.expanded(S.support_radius));
+    std::vector<float> th0;
     for (size_t i = 0; i < P.size(); ++i) {
         if (!alive(i)) continue;
-        if (P.x[i] < keep.x0 || P.x[i] > keep.x1 || P.y[i] < keep.y0 || P.y[i] > keep.y1) continue;
-        double w = P.amp[i];
-        if (!still) w *= envelope_weight(c.envelope, age_s(i), c.lifetime_s);
-        if (!still && c.jacobian) w *= std::exp(0.5 * P.lnj[i]);  // s_k = sqrt(J_k)
+        if (!keep.contains(P.x[i], P.y[i])) continue;
+        double w = P.amp[i] * envelope_weight(c.envelope, age_s(i), c.lifetime_s);
+        if (c.jacobian) w *= std::exp(0.5 * P.lnj[i]);  // s_k = sqrt(J_k)
         out.x.push_back(P.x[i]);
         out.y.push_back(P.y[i]);
         out.weight.push_back(static_cast<float>(w));
         out.theta.push_back(static_cast<float>(P.th[i]));
-        emitted.push_back(i);
+        th0.push_back(P.th0[i]);
     }
-    if (c.orientation == OrientationMode::Flow && S.flow && !still) {
+    if (c.orientation == OrientationMode::Flow && S.flow) {
         // Kernels aligned with the local flow direction at the frame time.
         const size_t n = out.size();
         std::vector<double> vx(n, 0.0), vy(n, 0.0), dv(n, 0.0), cu(n, 0.0);
@@ -342,23 +362,75 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
         for (size_t j = 0; j < n; ++j)
             out.theta[j] = static_cast<float>(std::atan2(vy[j], vx[j]));
     }
-    if (c.orientation == OrientationMode::Field && c.orientation_field) {
-        // theta(x, t) at the particle's current position at the frame time (loop-wrapped like
-        // the flow, so a looped layer repeats), plus the per-particle jitter drawn at birth.
-        c.orientation_field->angles(S.time_of_step(target), out.size(), out.x.data(),
-                                    out.y.data(), out.theta.data());
-        if (c.orientation_jitter != 0.0) {
-            constexpr double kInvPi = 1.0 / 3.14159265358979323846;
-            for (size_t j = 0; j < out.size(); ++j)
-                out.theta[j] = static_cast<float>(
-                    out.theta[j] + c.orientation_jitter * (P.th0[emitted[j]] * kInvPi - 1.0));
-        }
-    }
+    S.orient_by_field(target, th0, out);
 
     std::swap(S.live, S.next);
     std::swap(S.blocks, S.next_blocks);
     S.last_step = target;
-    S.valid = !still;
+    S.valid = true;
+}
+
+void LayerSimulator::State::orient_by_field(int64_t target, const std::vector<float>& th0,
+                                            Impulses& out) const {
+    if (config.orientation != OrientationMode::Field || !config.orientation_field) return;
+    // theta(x, t) at the particle's current position at the frame time (loop-wrapped like the
+    // flow, so a looped layer repeats), plus the per-particle jitter drawn at birth.
+    config.orientation_field->angles(time_of_step(target), out.size(), out.x.data(),
+                                     out.y.data(), out.theta.data());
+    if (config.orientation_jitter != 0.0) {
+        constexpr double kInvPi = 1.0 / 3.14159265358979323846;
+        for (size_t j = 0; j < out.size(); ++j)
+            out.theta[j] = static_cast<float>(
+                out.theta[j] + config.orientation_jitter * (th0[j] * kInvPi - 1.0));
+    }
+}
+
+void LayerSimulator::State::still_impulses(const Region& view, int64_t target, Impulses& out) {
+    // A still process: no birth times, no motion, nothing kept between frames. Rows of cells
+    // are generated in parallel into their own buffers and joined in row order, so the result
+    // is the canonical order (cell row, cell, index) whatever the threads.
+    valid = false;
+    const ProcessConfig& c = config;
+    const detail::CellCover cover = detail::cell_cover(view.expanded(support_radius), layout);
+    const detail::BoxIndex keep(view.expanded(support_radius));
+    const size_t nrows = cover.rows.size();
+    if (still_rows.size() < nrows) still_rows.resize(nrows);
+    const bool random = c.orientation == OrientationMode::Random;
+    const bool field = c.orientation == OrientationMode::Field && c.orientation_field;
+    const detail::CounterRng rng(c.seed, c.layer);
+    tbb::parallel_for(size_t(0), nrows, [&](size_t r) {
+        StillRow& row = still_rows[r];
+        row.clear();
+        const int64_t cy = cover.cy0 + static_cast<int64_t>(r);
+        for (const auto& [cx0, cx1] : cover.rows[r])
+            for (int64_t cx = cx0; cx <= cx1; ++cx) {
+                const detail::CellKey key(layout, cx, cy, 0);
+                const int count = detail::cell_count(rng, layout, key);
+                for (int k = 0; k < count; ++k) {
+                    const detail::ImpulseDraw d = detail::draw_impulse(c, layout, rng, key, cx, cy, k);
+                    if (!keep.contains(d.x, d.y)) continue;
+                    row.x.push_back(d.x);
+                    row.y.push_back(d.y);
+                    row.weight.push_back(d.amplitude);
+                    row.theta.push_back(random ? d.theta0 : 0.0f);
+                    if (field) row.th0.push_back(d.theta0);
+                }
+            }
+    });
+    std::vector<size_t> start(nrows + 1, 0);
+    for (size_t r = 0; r < nrows; ++r) start[r + 1] = start[r] + still_rows[r].x.size();
+    const size_t n = start[nrows];
+    out.x.resize(n), out.y.resize(n), out.weight.resize(n), out.theta.resize(n);
+    std::vector<float> th0(field ? n : 0);
+    tbb::parallel_for(size_t(0), nrows, [&](size_t r) {
+        const StillRow& row = still_rows[r];
+        std::copy(row.x.begin(), row.x.end(), out.x.begin() + ptrdiff_t(start[r]));
+        std::copy(row.y.begin(), row.y.end(), out.y.begin() + ptrdiff_t(start[r]));
+        std::copy(row.weight.begin(), row.weight.end(), out.weight.begin() + ptrdiff_t(start[r]));
+        std::copy(row.theta.begin(), row.theta.end(), out.theta.begin() + ptrdiff_t(start[r]));
+        if (field) std::copy(row.th0.begin(), row.th0.end(), th0.begin() + ptrdiff_t(start[r]));
+    });
+    orient_by_field(target, th0, out);
 }
 
 }  // namespace impulse::sim

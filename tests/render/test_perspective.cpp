@@ -78,7 +78,7 @@ Frame render_frame(const KernelPyramid& pyr, sim::LayerSimulator& s, const Persp
                    const AntiAlias& aa, render::PerspectiveStats* stats = nullptr,
                    const render::EvalOptions& eo = {}) {
     const PerspectiveView v(cam);
-    const sim::Box box = render::perspective_region(pyr, v, aa);
+    const sim::Region box = render::perspective_region(pyr, v, aa);
     sim::Impulses imp;
     s.impulses_at(0, box, imp);
     const auto pc = render::pixel_coords(v);
@@ -206,7 +206,7 @@ std::vector<float> reference_frame(const PerspectiveCase& pc, sim::LayerSimulato
         const int rows = std::min(S, H - r0);
         const PerspectiveCamera wc = cam.window(-m, r0 - m, W + 2 * m, rows + 2 * m, n);
         const PerspectiveView wv(wc);
-        const sim::Box box = render::perspective_region(pc.pyramid, wv, raw);
+        const sim::Region box = render::perspective_region(pc.pyramid, wv, raw);
         sim::Impulses imp;
         s.impulses_at(0, box, imp);
         const auto coords = render::pixel_coords(wv);
@@ -239,7 +239,7 @@ std::vector<float> reference_frame(const PerspectiveCase& pc, sim::LayerSimulato
         const PerspectiveCamera wc =
             cam.window(-m, far0 - m, W + 2 * m, first_near - far0 + 2 * m, 1);
         const PerspectiveView wv(wc);
-        const sim::Box box = render::perspective_region(pc.pyramid, wv, raw);
+        const sim::Region box = render::perspective_region(pc.pyramid, wv, raw);
         sim::Impulses imp;
         s.impulses_at(0, box, imp);
         const PointField field(pc.kernel, imp, max_distance, cam.x, cam.y);
@@ -846,7 +846,7 @@ TEST_CASE("perspective frames stay bounded however close the horizon", "[render]
         PerspectiveCamera c = pc.camera;
         c.pitch_deg = pitch;
         const PerspectiveView v(c);
-        const sim::Box b = render::perspective_region(pc.pyramid, v, AntiAlias{});
+        const sim::Region b = render::perspective_region(pc.pyramid, v, AntiAlias{});
         const double n = sim::expected_impulses(pc.process, b);
         most = std::max(most, size_t(n)), least = std::min(least, size_t(n));
         INFO("pitch " << pitch << ": " << n << " impulses expected");
