@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "render/persp_detail.h"
+#include "render/persp_far.h"
 #include "util/errors.h"
 
 namespace impulse::render {
@@ -30,8 +31,6 @@ constexpr int kMaxProbeHalf = 8;  // at most 2 * 8 + 1 probes per impulse
 // whose texture-space Gaussian ignores the perspective bend of the footprint).
 constexpr double kLineFrom = 0.25;
 
-/// The pixel filter's standard deviation in (possibly supersampled) pixels.
-double filter_sigma_px(const AntiAlias& aa) { return aa.filter_px * aa.footprint_scale; }
 
 bool cpu_has_avx2() {
     static const bool has = __builtin_cpu_supports("avx2");
@@ -42,22 +41,48 @@ void require(bool ok, const std::string& what) {
     if (!ok) throw ValueError(what);
 }
 
-/// How one impulse is filtered: the plan for a footprint (texture units per pixel).
-struct Plan {
-    bool keep = false;
-    double fade = 1.0;
-    uint8_t mode = detail::kPerspSingle;
-    kernels::KernelPyramid::Blend blend;
-    double var_lo = 0, var_hi = 0;  // line: extra variance along the major axis, texture units^2
-    int m = 0;                      // probes: 2m + 1
-    double sigma_e = 0, step = 0;   // probes: Gaussian sd along the axis, spacing
-    double along = 0, across = 0;   // texture half-extents of the support (region, boxes)
-};
-
 /// Variance of the Gaussian blur level l actually carries (level 0, the kernel itself, none).
 double blur2(const kernels::KernelPyramid& pyr, int l) {
     return l == 0 ? 0.0 : pyr.sigma(l) * pyr.sigma(l);
 }
+
+/// Probe offsets (units of the axis) and weights for a plan: Gaussian weights at (j - m) step,
+/// positions rescaled so the discrete variance is exactly sigma_e^2.
+void probe_weights(const detail::Plan& p, std::array<double, 2 * kMaxProbeHalf + 1>& t,
+                   std::array<double, 2 * kMaxProbeHalf + 1>& w) {
+    const int n = 2 * p.m + 1;
+    double sw = 0.0;
+    for (int j = 0; j < n; ++j) {
+        t[size_t(j)] = (j - p.m) * p.step;
+        w[size_t(j)] = std::exp(-0.5 * t[size_t(j)] * t[size_t(j)] / (p.sigma_e * p.sigma_e));
+        sw += w[size_t(j)];
+    }
+    double var = 0.0;
+    for (int j = 0; j < n; ++j) {
+        w[size_t(j)] /= sw;
+        var += w[size_t(j)] * t[size_t(j)] * t[size_t(j)];
+    }
+    const double scale = var > 0.0 ? p.sigma_e / std::sqrt(var) : 1.0;
+    for (int j = 0; j < n; ++j) t[size_t(j)] *= scale;
+}
+
+/// Pixel box (inclusive, clipped to the image) of continuous image rectangle [xa, xb] x [ya, yb]
+/// with one pixel of margin.
+void pixel_box(double xa, double xb, double ya, double yb, int W, int H, int& x0, int& y0, int& x1,
+               int& y1) {
+    auto cl = [](double v, int lo, int hi) {
+        return static_cast<int>(std::clamp(v, static_cast<double>(lo), static_cast<double>(hi)));
+    };
+    x0 = cl(std::floor(xa) - 1.0, -1, W), x1 = cl(std::floor(xb) + 1.0, -1, W);
+    y0 = cl(std::floor(ya) - 1.0, -1, H), y1 = cl(std::floor(yb) + 1.0, -1, H);
+    x0 = std::max(x0, 0), y0 = std::max(y0, 0), x1 = std::min(x1, W - 1), y1 = std::min(y1, H - 1);
+}
+
+}  // namespace
+
+namespace detail {
+
+double filter_sigma_px(const AntiAlias& aa) { return aa.filter_px * aa.footprint_scale; }
 
 Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_major,
               double s_minor) {
@@ -122,39 +147,7 @@ Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_m
     return p;
 }
 
-/// Probe offsets (units of the axis) and weights for a plan: Gaussian weights at (j - m) step,
-/// positions rescaled so the discrete variance is exactly sigma_e^2.
-void probe_weights(const Plan& p, std::array<double, 2 * kMaxProbeHalf + 1>& t,
-                   std::array<double, 2 * kMaxProbeHalf + 1>& w) {
-    const int n = 2 * p.m + 1;
-    double sw = 0.0;
-    for (int j = 0; j < n; ++j) {
-        t[size_t(j)] = (j - p.m) * p.step;
-        w[size_t(j)] = std::exp(-0.5 * t[size_t(j)] * t[size_t(j)] / (p.sigma_e * p.sigma_e));
-        sw += w[size_t(j)];
-    }
-    double var = 0.0;
-    for (int j = 0; j < n; ++j) {
-        w[size_t(j)] /= sw;
-        var += w[size_t(j)] * t[size_t(j)] * t[size_t(j)];
-    }
-    const double scale = var > 0.0 ? p.sigma_e / std::sqrt(var) : 1.0;
-    for (int j = 0; j < n; ++j) t[size_t(j)] *= scale;
-}
-
-/// Pixel box (inclusive, clipped to the image) of continuous image rectangle [xa, xb] x [ya, yb]
-/// with one pixel of margin.
-void pixel_box(double xa, double xb, double ya, double yb, int W, int H, int& x0, int& y0, int& x1,
-               int& y1) {
-    auto cl = [](double v, int lo, int hi) {
-        return static_cast<int>(std::clamp(v, static_cast<double>(lo), static_cast<double>(hi)));
-    };
-    x0 = cl(std::floor(xa) - 1.0, -1, W), x1 = cl(std::floor(xb) + 1.0, -1, W);
-    y0 = cl(std::floor(ya) - 1.0, -1, H), y1 = cl(std::floor(yb) + 1.0, -1, H);
-    x0 = std::max(x0, 0), y0 = std::max(y0, 0), x1 = std::min(x1, W - 1), y1 = std::min(y1, H - 1);
-}
-
-}  // namespace
+}  // namespace detail
 
 double fade_weight(double sd, double cutoff) {
     if (!(sd > cutoff)) return 0.0;
@@ -168,12 +161,12 @@ double fade_weight(double sd, double cutoff) {
 
 double filtered_fade(const kernels::KernelPyramid& pyr, const View& view, const AntiAlias& aa) {
     if (!aa.enabled || !aa.fade) return 1.0;
-    return fade_weight(pyr.sd_fraction(filter_sigma_px(aa) * view.scale), aa.cutoff);
+    return fade_weight(pyr.sd_fraction(detail::filter_sigma_px(aa) * view.scale), aa.cutoff);
 }
 
 double filtered_support(const kernels::KernelPyramid& pyr, const View& view, const AntiAlias& aa) {
     if (!aa.enabled) return pyr.radius(0);
-    const auto b = pyr.select(filter_sigma_px(aa) * view.scale, aa.blend);
+    const auto b = pyr.select(detail::filter_sigma_px(aa) * view.scale, aa.blend);
     return pyr.radius(std::max(b.lo, b.hi));
 }
 
@@ -184,7 +177,7 @@ void accumulate_filtered(const kernels::KernelPyramid& pyr, const sim::Impulses&
     if (!aa.enabled) return accumulate(pyr.base(), impulses, view, out, options);
     const double fade = filtered_fade(pyr, view, aa);
     if (!(fade > 0.0)) return;
-    const auto b = pyr.select(filter_sigma_px(aa) * view.scale, aa.blend);
+    const auto b = pyr.select(detail::filter_sigma_px(aa) * view.scale, aa.blend);
     const bool two = b.lo != b.hi && b.weight > 0.0;
     if (!two && fade == 1.0) return accumulate(pyr.level(b.lo), impulses, view, out, options);
     // Two passes in a fixed order (every pixel: all of level lo, then all of level hi).
@@ -320,6 +313,15 @@ double PerspectiveView::horizon_row() const {
     return m_cy - s * m_f * std::tan(p);
 }
 
+void PerspectiveView::range_row(double& a, double& b, double& c, double& d) const {
+    // image_point of (x, y) = foot + rho (sin h, -cos h): q = F . v, b = U . v, py = cy - f b / q.
+    const double h = m_cam.heading_deg * kDeg;
+    const double dx = std::sin(h), dy = -std::cos(h);
+    const double qf = m_F[0] * dx + m_F[1] * dy, q0 = m_F[2] * m_z;
+    const double uf = m_U[0] * dx + m_U[1] * dy, u0 = m_U[2] * m_z;
+    a = m_cy * qf - m_f * uf, b = m_cy * q0 - m_f * u0, c = qf, d = q0;
+}
+
 void PerspectiveView::texture_row(double py, int n, double ox, double oy, float* x, float* y,
                                   uint8_t* hit) const {
     // The same arithmetic as texture_point: the ray's z component does not depend on the column
@@ -448,7 +450,7 @@ sim::Region perspective_region(const kernels::KernelPyramid& pyr, const Perspect
         if (aa.max_distance > 0.0 && std::hypot(s.x - cam.x, s.y - cam.y) > aa.max_distance)
             return;
         const auto f = view.footprint(s.x, s.y);
-        const Plan p = plan_for(pyr, aa, f.s_major, f.s_minor);
+        const detail::Plan p = detail::plan_for(pyr, aa, f.s_major, f.s_minor);
         s.kept = p.keep;
         // The line form's long axis points along the depth, where the neighbouring rows are
         // (the region spans the rows between samples): only its across extent widens it.
@@ -566,6 +568,7 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
     const std::vector<detail::PerspLevel> levels = loop_levels(pyr);
     const detail::PerspKernel lk{pyr.radial(), levels.data()};
     const double orient = pyr.base().params().orientation;
+    const detail::FarField far(pyr, view, coords, aa);
 
     // Prepare the impulses in chunks (each writes its own items; probes go to per-chunk lists
     // joined in chunk order, so the layout does not depend on scheduling).
@@ -573,7 +576,8 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
     constexpr size_t kChunk = 1024;
     const size_t chunks = (n + kChunk - 1) / kChunk;
     std::vector<detail::PerspItem> items(n);
-    std::vector<uint8_t> live(n, 0);
+    std::vector<uint8_t> live(n, 0), is_far(far.active() ? n : 0, 0);
+    std::vector<detail::FarItem> far_items(far.active() ? n : 0);
     std::vector<std::vector<detail::PerspProbe>> chunk_probes(chunks);
     std::vector<std::array<size_t, 5>> chunk_counts(chunks);
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
@@ -588,9 +592,13 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
             const double x = imp.x[i], y = imp.y[i];
             if (aa.max_distance > 0.0 && std::hypot(x - cam.x, y - cam.y) > aa.max_distance)
                 continue;
+            if (far.contains(x - cam.x, y - cam.y)) {
+                is_far[i] = far.item(view, x, y, x - cam.x, y - cam.y, imp.weight[i], far_items[i]);
+                continue;
+            }
             if (!(view.depth(x, y) > 0.0)) continue;
             const auto f = view.footprint(x, y);
-            const Plan p = plan_for(pyr, aa, f.s_major, f.s_minor);
+            const detail::Plan p = detail::plan_for(pyr, aa, f.s_major, f.s_minor);
             if (!p.keep) continue;
             detail::PerspItem& it = items[i];
             it.px = static_cast<float>(x - coords.origin_x);
@@ -700,6 +708,7 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
         }
         size_t kept = 0;
         for (uint8_t l : live) kept += l;
+        for (uint8_t l : is_far) stats->far += l, kept += l;
         stats->culled = n - kept;
     }
 
@@ -724,7 +733,8 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
                 bins[fill[size_t(b) * ntx + a]++] = uint32_t(i);
     }
 
-    const bool avx2 = options.use_avx2 && cpu_has_avx2();
+    const detail::PerspLoops& loops =
+        options.use_avx2 && cpu_has_avx2() ? detail::kPerspLoopsAvx2 : detail::kPerspLoopsBase;
     auto do_tile = [&](int t) {
         const int a = t % ntx, b = t / ntx;
         const int x0 = a * T, y0 = b * T;
@@ -732,12 +742,8 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
         std::vector<float> acc(size_t(tw) * th, 0.0f);
         const uint32_t* idx = bins.data() + count[size_t(t)];
         const size_t m = count[size_t(t) + 1] - count[size_t(t)];
-        if (avx2)
-            detail::persp_tile_avx2(lk, items.data(), probes.data(), idx, m, coords.x.data(),
-                                    coords.y.data(), W, x0, y0, tw, th, acc.data());
-        else
-            detail::persp_tile_base(lk, items.data(), probes.data(), idx, m, coords.x.data(),
-                                    coords.y.data(), W, x0, y0, tw, th, acc.data());
+        loops.tile(lk, items.data(), probes.data(), idx, m, coords.x.data(), coords.y.data(), W,
+                   x0, y0, tw, th, acc.data());
         for (int y = 0; y < th; ++y) {
             float* dst = out.data.data() + size_t(y0 + y) * W + x0;
             const float* src = acc.data() + size_t(y) * tw;
@@ -749,6 +755,7 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
         tbb::parallel_for(0, ntiles, do_tile);
     else
         for (int t = 0; t < ntiles; ++t) do_tile(t);
+    if (far.active()) far.render(far_items, is_far, out, loops, options.parallel);
 }
 
 }  // namespace impulse::render

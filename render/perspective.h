@@ -55,6 +55,8 @@ struct AntiAlias {
     /// Pixel footprints are multiplied by this (tests): a render at k times the resolution with
     /// footprint_scale k applies the 1x filter, sampled k times finer. >= 1.
     double footprint_scale = 1.0;
+    /// false: no far field; the line form draws every impulse it applies to (tests, benchmarks).
+    bool far_field = true;
 };
 
 /// Fade factor in [0, 1] for a remaining standard deviation fraction `sd` (0 at or below
@@ -117,6 +119,8 @@ public:
     /// [-90, 90], a visible part of the plane).
     explicit PerspectiveView(const PerspectiveCamera& camera);
     const PerspectiveCamera& camera() const { return m_cam; }
+    /// Focal length in pixels.
+    double focal_px() const { return m_f; }
 
     /// The texture point seen at image point (px, py); false when the ray misses the plane.
     bool texture_point(double px, double py, double& x, double& y) const;
@@ -135,6 +139,11 @@ public:
 
     /// Image row of the horizon (may lie outside the image); rows beyond it miss the plane.
     double horizon_row() const;
+
+    /// The image row of the point at distance rho straight ahead of the camera's foot (along
+    /// the heading): Y(rho) = (a rho + b) / (c rho + d). The far field labels the circles
+    /// around the foot by it.
+    void range_row(double& a, double& b, double& c, double& d) const;
 
     /// The texture points of the pixel centres (i + 0.5, py), i in [0, n), minus (ox, oy), as
     /// floats: the arithmetic of texture_point, one division per row. Points that miss the plane
@@ -173,6 +182,7 @@ struct PerspectiveStats {
     size_t impulses = 0;  ///< impulses given
     size_t culled = 0;    ///< faded out, behind the camera, beyond max_distance or off-image
     size_t single = 0, probes = 0, line = 0;  ///< impulses per filter form
+    size_t far = 0;                           ///< impulses drawn by the far field
     size_t probe_count = 0;                   ///< probes evaluated
     size_t pixels = 0;  ///< pixel evaluations (sum of the impulses' and probes' boxes)
 };

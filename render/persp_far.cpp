@@ -1,0 +1,561 @@
+// SPDX-License-Identifier: Apache-2.0
+// The far field of a perspective view: impulses deposited on sub-rows along the circles around
+// the camera's foot, convolved across with the line-form profiles, filtered along per pixel
+// (render/persp_far.h, render/perspective.h).
+
+#include "render/persp_far.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+
+namespace impulse::render::detail {
+namespace {
+
+/// Far form from where the kernel's half-length along the major axis, R / s_major pixels, is at
+/// most this many pixel-filter deviations: the along profile of the chord is then expanded to
+/// fourth order around a Gaussian of the mean chord variance (see far_tables); the expansion's
+/// first omitted term is below 1 % of the kernel's peak there (empirical, against the line form).
+constexpr double kFarChord = 2.5;
+// The filter is refreshed every 0.05 focal lengths along a sub-row (0.05 rad at the centre of
+// the image): with 0.2 against the supersampled reference of test (a) the far rows erred by up to
+// twice as much as the line form (whose filter is each impulse's own); with 0.05 they are on a
+// par with it.
+constexpr double kSegmentRad = 0.05;
+constexpr int kAcrossNodes = 16;    // nodes across the narrowest profile of a sub-row
+constexpr int kBand = 16;           // sub-rows per deposit task
+constexpr double kAlongReach = 4.75;  // the along Gaussian is summed to 4.75 sd
+
+/// Linear interpolation in a line table over t in [0, 1].
+double table_at(const std::vector<float>& t, double x) {
+    const double p = std::clamp(x, 0.0, 1.0) * static_cast<double>(t.size() - 1);
+    const size_t i = std::min(static_cast<size_t>(p), t.size() - 2);
+    const double f = p - static_cast<double>(i);
+    return t[i] + f * (t[i + 1] - t[i]);
+}
+
+/// Mean chord variance of a radial level, int P q dv / int P dv = E_h[s^2] = R^2 / 2 E[q] with
+/// q = r^2 / R^2 distributed as h(q) dq (the area element of the plane is pi R^2 dq).
+double mean_chord_variance(const kernels::KernelPyramid& pyr, int l) {
+    const auto& t = pyr.tables(l).table;
+    double m0 = 0.0, m1 = 0.0;
+    for (size_t i = 0; i < t.size(); ++i) {
+        const double q = static_cast<double>(i) / static_cast<double>(t.size() - 1);
+        const double w = (i == 0 || i + 1 == t.size()) ? 0.5 : 1.0;
+        m0 += w * t[i], m1 += w * q * t[i];
+    }
+    const double R = pyr.radius(l);
+    return m0 != 0.0 ? 0.5 * R * R * m1 / m0 : 0.0;
+}
+
+/// The straight line of the plane that an image column sees: base point and direction away
+/// from the camera, relative to the foot.
+struct ColumnLine {
+    double bx = 0, by = 0, dx = 0, dy = 0;
+    bool ok = false;
+};
+
+/// The footprint filter of one place: what the tables and weights need.
+struct Place {
+    bool ok = false;
+    Plan plan;
+    double s_major = 1, s_minor = 1;
+};
+
+}  // namespace
+
+FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& view,
+                   const PixelCoords& coords, const AntiAlias& aa) {
+    if (!(aa.far_field && aa.enabled && aa.anisotropic && aa.fade && pyr.radial())) return;
+    const auto& cam = view.camera();
+    const int W = cam.width, H = cam.height;
+    m_width = W, m_height = H;
+    const double c = filter_sigma_px(aa);
+    const double hz = view.horizon_row();
+    if (!std::isfinite(hz) || std::abs(hz) > 1e7) return;
+    const double toward = cam.plane == Plane::Ground ? 1.0 : -1.0;  // image rows nearer the camera
+    view.range_row(m_ya, m_yb, m_yc, m_yd);
+    m_segments = std::max(
+        1, static_cast<int>(std::ceil(W / std::max(4.0, kSegmentRad * view.focal_px()))));
+    m_segment_px = static_cast<double>(W) / m_segments;
+    const int G = m_segments;
+
+    // Column lines of the segment centres.
+    std::vector<ColumnLine> lines(static_cast<size_t>(G));
+    for (int g = 0; g < G; ++g) {
+        const double px = (g + 0.5) * m_segment_px;
+        double ax, ay, bx, by;
+        auto& L = lines[size_t(g)];
+        if (!view.texture_point(px, hz + toward * 1.0, ax, ay) ||
+            !view.texture_point(px, hz + toward * 2.0, bx, by))
+            continue;
+        L.bx = bx - cam.x, L.by = by - cam.y, L.dx = ax - bx, L.dy = ay - by;
+        L.ok = true;
+    }
+    // The place at distance rho from the foot on column line g.
+    auto place = [&](int g, double rho) {
+        Place p;
+        const ColumnLine& L = lines[size_t(g)];
+        if (!L.ok) return p;
+        const double dd = L.dx * L.dx + L.dy * L.dy, bd = L.bx * L.dx + L.by * L.dy;
+        const double disc = bd * bd - dd * (L.bx * L.bx + L.by * L.by - rho * rho);
+        if (!(disc >= 0.0) || !(dd > 0.0)) return p;
+        const double t = (-bd + std::sqrt(disc)) / dd;
+        const double x = cam.x + L.bx + t * L.dx, y = cam.y + L.by + t * L.dy;
+        if (!(view.depth(x, y) > 0.0)) return p;
+        const auto f = view.footprint(x, y);
+        p.plan = plan_for(pyr, aa, f.s_major, f.s_minor);
+        p.s_major = f.s_major, p.s_minor = f.s_minor;
+        p.ok = true;
+        return p;
+    };
+    // A place is far when it is faded out or drawn by the line form with a short chord.
+    auto far_at = [&](int g, double rho) {
+        const Place p = place(g, rho);
+        if (!p.ok) return false;
+        if (!p.plan.keep) return true;
+        if (p.plan.mode != kPerspLine) return false;
+        const double R = pyr.radius(std::max(p.plan.blend.lo, p.plan.blend.hi));
+        return R / p.s_major <= kFarChord * c;
+    };
+    auto kept_at = [&](int g, double rho) {
+        const Place p = place(g, rho);
+        return p.ok && p.plan.keep;
+    };
+    // Per column: the distance beyond which everything is far, and the cut-off (both
+    // monotone in rho: footprints only grow with the distance). Bisection in log rho.
+    double rho_far = 0.0, rho_cut = 0.0;
+    for (int g = 0; g < G; ++g) {
+        if (!lines[size_t(g)].ok) continue;
+        double near_rho = -1.0;
+        for (double py : {H - 0.5, 0.5}) {  // the image row nearest the camera
+            const double row = toward > 0 ? py : H - py;
+            double x, y;
+            if (view.texture_point((g + 0.5) * m_segment_px, row, x, y)) {
+                near_rho = std::hypot(x - cam.x, y - cam.y);
+                break;
+            }
+        }
+        if (!(near_rho > 0.0)) continue;
+        double hi = near_rho;
+        while (kept_at(g, hi) && hi < 1e15) hi *= 2.0;
+        if (!kept_at(g, near_rho)) continue;  // nothing drawn in this column
+        double a = near_rho, b = hi;  // kept, not kept
+        for (int it = 0; it < 40 && b / a > 1.0 + 1e-6; ++it) {
+            const double m = std::sqrt(a * b);
+            (kept_at(g, m) ? a : b) = m;
+        }
+        rho_cut = std::max(rho_cut, b);
+        if (far_at(g, near_rho)) {
+            rho_far = std::max(rho_far, near_rho);
+            continue;
+        }
+        double fa = near_rho, fb = b;  // not far, far
+        for (int it = 0; it < 40 && fb / fa > 1.0 + 1e-6; ++it) {
+            const double m = std::sqrt(fa * fb);
+            (far_at(g, m) ? fb : fa) = m;
+        }
+        rho_far = std::max(rho_far, fb);
+    }
+    if (!(rho_far > 0.0) || !(rho_far < rho_cut)) return;
+    m_rho_far2 = rho_far * rho_far;
+
+    // Sub-rows over the far zone, a quarter of ... half the pixel filter apart (plus one each side).
+    m_dy = 0.5 * c;
+    const double ya = y_of(rho_far), yb = y_of(rho_cut);
+    if (!std::isfinite(ya) || !std::isfinite(yb)) return;
+    m_y0 = std::min(ya, yb) - m_dy;
+    const double span = std::abs(ya - yb) + 2.0 * m_dy;
+    const int rows = static_cast<int>(std::ceil(span / m_dy)) + 2;
+    if (rows > 64 * H + 64) return;
+    m_rows.resize(static_cast<size_t>(rows));
+    std::vector<double> qbar(size_t(pyr.levels()));
+    for (int l = 0; l < pyr.levels(); ++l) qbar[size_t(l)] = mean_chord_variance(pyr, l);
+
+    tbb::parallel_for(0, rows, [&](int r) {
+        Row& row = m_rows[size_t(r)];
+        row.y = m_y0 + r * m_dy;
+        // rho of the circle (inverse of the Moebius map), held inside the far zone
+        double rho = (m_yb - m_yd * row.y) / (m_yc * row.y - m_ya);
+        if (!(rho >= rho_far)) rho = rho_far;
+        if (!(rho <= rho_cut)) rho = rho_cut;
+        std::vector<Place> places(static_cast<size_t>(G));
+        double narrow = 1e300, wide = 0.0, sm_min = 1e300;
+        for (int g = 0; g < G; ++g) {
+            Place& p = places[size_t(g)] = place(g, rho);
+            if (!p.ok || !p.plan.keep || p.plan.mode != kPerspLine) {
+                p.ok = false;
+                continue;
+            }
+            const auto& b = p.plan.blend;
+            narrow = std::min(narrow, 2.0 * pyr.radius(b.lo));
+            wide = std::max(wide, pyr.radius(std::max(b.lo, b.hi)));
+            sm_min = std::min(sm_min, p.s_minor);
+            row.margin = std::max(row.margin, pyr.radius(std::max(b.lo, b.hi)) / p.s_minor + 2.0);
+        }
+        row.weight.assign(size_t(G), 0.0f);
+        row.sbar.assign(size_t(G), static_cast<float>(c * c));
+        if (!(wide > 0.0)) return;  // nothing drawn on this circle
+        // The across coordinate: arc length along the circle, d xi / dx = s_minor (linear
+        // between segment centres, held beyond). The kernel's profile across is then the same
+        // function of xi wherever it lies on the circle; only the blend and the along filter
+        // change from segment to segment.
+        std::vector<double> sm(static_cast<size_t>(G), 0.0);
+        for (int g = 0; g < G; ++g) {
+            int k = g;  // nearest valid place
+            for (int d = 1; !places[size_t(k)].ok && d < G; ++d)
+                k = g - d >= 0 && places[size_t(g - d)].ok ? g - d
+                    : g + d < G && places[size_t(g + d)].ok ? g + d
+                                                              : k;
+            sm[size_t(g)] = places[size_t(k)].s_minor;
+        }
+        auto sm_at = [&](double x) {
+            const double gf = x / m_segment_px - 0.5;
+            if (!(gf > 0.0)) return sm.front();
+            const int g = static_cast<int>(gf);
+            if (g >= G - 1) return sm.back();
+            return sm[size_t(g)] + (gf - g) * (sm[size_t(g) + 1] - sm[size_t(g)]);
+        };
+        row.xi.assign(size_t(W) + 1, 0.0);
+        for (int x = 0; x < W; ++x) row.xi[size_t(x) + 1] = row.xi[size_t(x)] + sm_at(x + 0.5);
+        row.dxi = std::max(narrow / kAcrossNodes, 0.25 * c * sm_min);
+        row.taps = static_cast<int>(std::ceil(wide / row.dxi)) + 1;
+        row.xi0 = xi_at(row, -row.margin) - (row.taps + 1) * row.dxi;
+        row.nodes =
+            static_cast<int>(std::ceil((xi_at(row, W + row.margin) - row.xi0) / row.dxi)) +
+            row.taps + 2;
+        row.segment_node.assign(size_t(G) + 1, 0);
+        for (int g = 1; g < G; ++g)
+            row.segment_node[size_t(g)] = std::clamp(
+                static_cast<int>(std::ceil((xi_at(row, g * m_segment_px) - row.xi0) / row.dxi)),
+                0, row.nodes);
+        row.segment_node[size_t(G)] = row.nodes;
+        const int T = row.taps + 1;
+        row.tables.assign(size_t(G) * 3 * T, 0.0f);
+        double peak0 = 0.0, peak2 = 0.0, peak4 = 0.0;
+        for (int g = 0; g < G; ++g) {
+            const Place& p = places[size_t(g)];
+            if (!p.ok) continue;
+            const auto& b = p.plan.blend;
+            const double ism2 = 1.0 / (p.s_major * p.s_major), ism4 = ism2 * ism2;
+            const std::array<int, 2> lv = {b.lo, b.hi};
+            const std::array<double, 2> bw = {b.lo == b.hi ? 1.0 : 1.0 - b.weight,
+                                              b.lo == b.hi ? 0.0 : b.weight};
+            const std::array<double, 2> var = {p.plan.var_lo * ism2, p.plan.var_hi * ism2};
+            double sbar = 0.0;
+            for (int k = 0; k < 2; ++k) sbar += bw[size_t(k)] * (var[size_t(k)] + qbar[size_t(lv[size_t(k)])] * ism2);
+            row.sbar[size_t(g)] = static_cast<float>(sbar);
+            row.weight[size_t(g)] = static_cast<float>(
+                p.plan.fade / (std::sqrt(2.0 * std::numbers::pi) * p.s_major));
+            float* t0 = row.tables.data() + size_t(g) * 3 * T;
+            float* t2 = t0 + T;
+            float* t4 = t2 + T;
+            for (int k = 0; k < T; ++k) {
+                const double v = k * row.dxi;
+                double a0 = 0.0, a2 = 0.0, a4 = 0.0;
+                for (int q = 0; q < 2; ++q) {
+                    if (bw[size_t(q)] == 0.0) continue;
+                    const int l = lv[size_t(q)];
+                    const double R = pyr.radius(l), tt = v * v / (R * R);
+                    if (!(tt < 1.0)) continue;
+                    const auto& tab = pyr.tables(l);
+                    const double P = table_at(tab.line_mass, tt);
+                    const double qv = table_at(tab.line_var, tt);
+                    const double k4 = table_at(tab.line_k4, tt);
+                    // The chord convolved with the remaining Gaussian: a Gaussian of variance
+                    // var + q / s_major^2 with the Edgeworth term of its kurtosis (the line
+                    // form), expanded around the mean variance sbar:
+                    // N(u; sbar + d) = N + d/2 N'' + d^2/8 N'''' + ...
+                    const double d = var[size_t(q)] + qv * ism2 - sbar;
+                    a0 += bw[size_t(q)] * P;
+                    a2 += bw[size_t(q)] * P * 0.5 * d;
+                    a4 += bw[size_t(q)] * P * (0.125 * d * d + k4 * ism4 / 24.0);
+                }
+                t0[k] = static_cast<float>(a0), t2[k] = static_cast<float>(a2);
+                t4[k] = static_cast<float>(a4);
+                peak0 = std::max(peak0, std::abs(a0));
+                peak2 = std::max(peak2, std::abs(a2) / sbar);
+                peak4 = std::max(peak4, std::abs(a4) / (sbar * sbar));
+            }
+            // The linear deposit and the linear interpolation back to the pixels each blur the
+            // profile by a tent of half-width dx: together about (1 + dx^2 / 6 d^2/dx^2); the
+            // tables are sharpened by the inverse, T - dx^2 / 6 T'' (second differences).
+            for (float* t : {t0, t2, t4}) {
+                std::vector<float> sharp(static_cast<size_t>(T));
+                for (int k = 0; k < T; ++k) {
+                    const float left = t[k == 0 ? 1 : k - 1], right = k + 1 < T ? t[k + 1] : 0.0f;
+                    sharp[size_t(k)] = t[k] - (left - 2.0f * t[k] + right) / 6.0f;
+                }
+                std::copy(sharp.begin(), sharp.end(), t);
+            }
+        }
+        // Profiles whose term stays below 1e-4 of the main one's peak are left out.
+        row.fourth = peak4 > 1e-4 * peak0;
+        row.second = row.fourth || peak2 > 1e-4 * peak0;
+    });
+
+    // The pixels the far field reaches: rows whose y' range meets the sub-rows' (plus the
+    // along filter's reach), per pixel y', its scale kappa = dy'/dy and the along variance.
+    double smax = c * c;
+    for (const Row& row : m_rows)
+        for (float s : row.sbar) smax = std::max(smax, static_cast<double>(s));
+    const double y_lo = m_y0, y_hi = m_y0 + (rows - 1) * m_dy;
+    std::vector<double> rho_edge(size_t(W) * (H + 1), -1.0);
+    auto edge_rho = [&](int e) {  // rho at the pixel edges of row boundary e (y = e)
+        std::vector<float> ex(static_cast<size_t>(W)), ey(static_cast<size_t>(W));
+        std::vector<uint8_t> hit(static_cast<size_t>(W));
+        view.texture_row(e, W, cam.x, cam.y, ex.data(), ey.data(), hit.data());
+        for (int i = 0; i < W; ++i)
+            rho_edge[size_t(e) * W + i] =
+                hit[size_t(i)] ? std::hypot(double(ex[size_t(i)]), double(ey[size_t(i)])) : -1.0;
+    };
+    tbb::parallel_for(0, H + 1, edge_rho);
+    std::vector<uint8_t> use(static_cast<size_t>(H), 0);
+    tbb::parallel_for(0, H, [&](int j) {
+        double lo = 1e300, hi = -1e300, kmax = 0.0;
+        for (int i = 0; i < W; ++i) {
+            const double r0 = rho_edge[size_t(j) * W + i], r1 = rho_edge[size_t(j + 1) * W + i];
+            if (r0 < 0.0 && r1 < 0.0) continue;
+            const double y0 = r0 >= 0.0 ? y_of(r0) : y_of(r1), y1 = r1 >= 0.0 ? y_of(r1) : y0;
+            lo = std::min(lo, std::min(y0, y1)), hi = std::max(hi, std::max(y0, y1));
+            kmax = std::max(kmax, std::abs(y1 - y0));
+        }
+        const double reach = kAlongReach * std::sqrt(smax) * std::max(kmax, 1.0) + m_dy;
+        use[size_t(j)] = hi >= y_lo - reach && lo <= y_hi + reach;
+    });
+    m_j0 = H, m_j1 = 0;
+    for (int j = 0; j < H; ++j)
+        if (use[size_t(j)]) m_j0 = std::min(m_j0, j), m_j1 = j + 1;
+    if (m_j0 >= m_j1) return;
+    const size_t np = size_t(m_j1 - m_j0) * W;
+    m_yp.assign(np, 0.0f), m_ik.assign(np, 0.0f), m_is.assign(np, 0.0f), m_rs.assign(np, 0.0f);
+    tbb::parallel_for(m_j0, m_j1, [&](int j) {
+        for (int i = 0; i < W; ++i) {
+            const size_t p = size_t(j - m_j0) * W + i, q = size_t(j) * W + i;
+            if (!coords.hit[q]) continue;
+            const double rho = std::hypot(double(coords.x[q]), double(coords.y[q]));
+            const double yc = y_of(rho);
+            const double r0 = rho_edge[size_t(j) * W + i], r1 = rho_edge[size_t(j + 1) * W + i];
+            double kappa = r0 >= 0.0 && r1 >= 0.0 ? std::abs(y_of(r1) - y_of(r0))
+                           : r0 >= 0.0             ? 2.0 * std::abs(yc - y_of(r0))
+                           : r1 >= 0.0             ? 2.0 * std::abs(y_of(r1) - yc)
+                                                   : 0.0;
+            if (!(kappa > 0.0)) continue;
+            const int r = std::clamp(static_cast<int>(std::lround((yc - m_y0) / m_dy)), 0, rows - 1);
+            const int g = std::clamp(static_cast<int>((i + 0.5) / m_segment_px), 0, G - 1);
+            // The linear deposit spreads an impulse over two sub-rows: variance dy^2 / 6 on
+            // average (in y'), taken off the along Gaussian.
+            const double sbar = m_rows[size_t(r)].sbar[size_t(g)];
+            const double s = std::max(0.5 * sbar, sbar - m_dy * m_dy / (6.0 * kappa * kappa));
+            m_yp[p] = static_cast<float>(yc);
+            m_ik[p] = static_cast<float>(1.0 / kappa);
+            m_is[p] = static_cast<float>(1.0 / s);
+            m_rs[p] = static_cast<float>(1.0 / std::sqrt(s));
+        }
+    });
+    m_active = true;
+}
+
+double FarField::xi_at(const Row& row, double x) const {
+    const int W = m_width;
+    if (x <= 0.0) return row.xi[0] + x * (row.xi[1] - row.xi[0]);
+    if (x >= W) return row.xi[size_t(W)] + (x - W) * (row.xi[size_t(W)] - row.xi[size_t(W) - 1]);
+    const int i = std::min(static_cast<int>(x), W - 1);
+    return row.xi[size_t(i)] + (x - i) * (row.xi[size_t(i) + 1] - row.xi[size_t(i)]);
+}
+
+float FarField::row_weight(const Row& row, double sx) const {
+    // Linear between segment centres (held beyond the first and last).
+    const double gf = sx / m_segment_px - 0.5;
+    if (!(gf > 0.0)) return row.weight.front();
+    const int g = static_cast<int>(gf);
+    if (g >= m_segments - 1) return row.weight.back();
+    const double t = gf - g;
+    return static_cast<float>((1.0 - t) * row.weight[size_t(g)] + t * row.weight[size_t(g) + 1]);
+}
+
+bool FarField::item(const PerspectiveView& view, double x, double y, double rx, double ry,
+                    float weight, FarItem& it) const {
+    if (!(view.depth(x, y) > 0.0)) return false;
+    const double yc = y_of(std::sqrt(rx * rx + ry * ry));
+    const double q = (yc - m_y0) / m_dy;
+    if (!(q >= 0.0 && q < static_cast<double>(m_rows.size() - 1))) return false;
+    const int r = static_cast<int>(q);
+    double sx, sy;
+    if (!view.image_point(x, y, sx, sy)) return false;
+    const Row& a = m_rows[size_t(r)];
+    const Row& b = m_rows[size_t(r) + 1];
+    const double margin = std::max(a.nodes ? a.margin : 0.0, b.nodes ? b.margin : 0.0);
+    if (!(a.nodes || b.nodes) || !(sx > -margin && sx < m_width + margin)) return false;
+    it.row = r;
+    it.fy = static_cast<float>(q - r);
+    it.sx = static_cast<float>(sx);
+    it.w = weight;
+    return true;
+}
+
+void FarField::render(const std::vector<FarItem>& items, const std::vector<uint8_t>& far,
+                      Frame& out, const PerspLoops& loops, bool parallel) const {
+    const int rows = static_cast<int>(m_rows.size());
+    const int W = m_width;
+    auto run = [&](int n, auto&& f) {
+        if (parallel)
+            tbb::parallel_for(0, n, f);
+        else
+            for (int i = 0; i < n; ++i) f(i);
+    };
+    // Node grids (with `taps` zeros each side for the convolution).
+    std::vector<size_t> off(static_cast<size_t>(rows) + 1, 0);
+    for (int r = 0; r < rows; ++r) {
+        const Row& row = m_rows[size_t(r)];
+        off[size_t(r) + 1] = off[size_t(r)] + (row.nodes ? size_t(row.nodes + 2 * row.taps) : 0);
+    }
+    std::vector<float> D(off.back(), 0.0f);
+
+    // Deposit by bands of sub-rows: items binned in canonical order, each band summed by one
+    // task into its rows, the row after the band into a halo added afterwards.
+    const int bands = (rows + kBand - 1) / kBand;
+    const size_t n = items.size();
+    constexpr size_t kChunk = 1 << 14;
+    const int chunks = static_cast<int>((n + kChunk - 1) / kChunk);
+    std::vector<uint32_t> count(size_t(chunks) * bands, 0);
+    run(chunks, [&](int c) {
+        for (size_t i = size_t(c) * kChunk; i < std::min(n, size_t(c + 1) * kChunk); ++i)
+            if (far[i]) ++count[size_t(c) * bands + size_t(items[i].row / kBand)];
+    });
+    std::vector<size_t> start(size_t(chunks) * bands + 1, 0);
+    std::vector<size_t> band_start(static_cast<size_t>(bands) + 1, 0);
+    {
+        size_t total = 0;
+        for (int b = 0; b < bands; ++b) {
+            band_start[size_t(b)] = total;
+            for (int c = 0; c < chunks; ++c) {
+                start[size_t(c) * bands + b] = total;
+                total += count[size_t(c) * bands + b];
+            }
+        }
+        band_start[size_t(bands)] = total;
+    }
+    std::vector<uint32_t> order(band_start.back());
+    run(chunks, [&](int c) {
+        std::vector<size_t> fill(start.begin() + ptrdiff_t(c) * bands,
+                                 start.begin() + ptrdiff_t(c + 1) * bands);
+        for (size_t i = size_t(c) * kChunk; i < std::min(n, size_t(c + 1) * kChunk); ++i)
+            if (far[i]) order[fill[size_t(items[i].row / kBand)]++] = static_cast<uint32_t>(i);
+    });
+    std::vector<std::vector<float>> halo(static_cast<size_t>(bands));
+    run(bands, [&](int b) {
+        const int last = std::min(rows, (b + 1) * kBand);  // first row after the band
+        if (last < rows && m_rows[size_t(last)].nodes)
+            halo[size_t(b)].assign(size_t(m_rows[size_t(last)].nodes), 0.0f);
+        for (size_t k = band_start[size_t(b)]; k < band_start[size_t(b) + 1]; ++k) {
+            const FarItem& it = items[order[k]];
+            for (int e = 0; e < 2; ++e) {
+                const int r = it.row + e;
+                const Row& row = m_rows[size_t(r)];
+                if (!row.nodes) continue;
+                const double wy = e ? it.fy : 1.0 - it.fy;
+                const double w = it.w * wy * row_weight(row, it.sx);
+                if (w == 0.0) continue;
+                const double p = (xi_at(row, it.sx) - row.xi0) / row.dxi;
+                const int nd = static_cast<int>(p);
+                if (nd < 0 || nd + 1 >= row.nodes) continue;
+                const double fx = p - nd;
+                float* d = r == last ? halo[size_t(b)].data() : D.data() + off[size_t(r)] + row.taps;
+                d[nd] += static_cast<float>(w * (1.0 - fx));
+                d[nd + 1] += static_cast<float>(w * fx);
+            }
+        }
+    });
+    run(bands, [&](int b) {
+        const int r = (b + 1) * kBand;
+        if (r >= rows || halo[size_t(b)].empty()) return;
+        float* d = D.data() + off[size_t(r)] + m_rows[size_t(r)].taps;
+        for (size_t k = 0; k < halo[size_t(b)].size(); ++k) d[k] += halo[size_t(b)][k];
+    });
+
+    // Across: each sub-row convolved with its segments' profiles, then sampled at the pixel
+    // centres (linear between nodes).
+    std::vector<std::vector<float>> X0(static_cast<size_t>(rows)), X2(X0.size()), X4(X0.size());
+    run(rows, [&](int r) {
+        const Row& row = m_rows[size_t(r)];
+        if (!row.nodes) return;
+        const int T = row.taps + 1;
+        const float* d = D.data() + off[size_t(r)] + row.taps;
+        std::vector<float> x(static_cast<size_t>(row.nodes));
+        auto convolve = [&](int profile, std::vector<float>& px) {
+            std::fill(x.begin(), x.end(), 0.0f);
+            for (int g = 0; g < m_segments; ++g) {
+                const int n0 = row.segment_node[size_t(g)], n1 = row.segment_node[size_t(g) + 1];
+                if (n0 >= n1) continue;
+                const float* t = row.tables.data() + (size_t(g) * 3 + size_t(profile)) * T;
+                loops.far_across(d, t, row.taps, n0, n1, x.data());
+            }
+            px.resize(size_t(W));
+            for (int i = 0; i < W; ++i) {
+                const double p = (xi_at(row, i + 0.5) - row.xi0) / row.dxi;
+                const int nd = static_cast<int>(p);
+                const float f = static_cast<float>(p - nd);
+                px[size_t(i)] = x[size_t(nd)] + f * (x[size_t(nd) + 1] - x[size_t(nd)]);
+            }
+        };
+        convolve(0, X0[size_t(r)]);
+        if (row.second) convolve(1, X2[size_t(r)]);
+        if (row.fourth) convolve(2, X4[size_t(r)]);
+    });
+
+    // Along: per pixel, the sub-rows within reach of its circle.
+    std::vector<float> yr(static_cast<size_t>(rows));
+    for (int r = 0; r < rows; ++r) yr[size_t(r)] = static_cast<float>(m_rows[size_t(r)].y);
+    constexpr int kChunkPx = 64;
+    run(m_j1 - m_j0, [&](int jj) {
+        const int j = m_j0 + jj;
+        std::vector<const float*> p0(static_cast<size_t>(rows), nullptr), p2(static_cast<size_t>(rows), nullptr),
+            p4(size_t(rows), nullptr);
+        std::vector<float> acc(static_cast<size_t>(kChunkPx));
+        for (int i0 = 0; i0 < W; i0 += kChunkPx) {
+            const int m = std::min(kChunkPx, W - i0);
+            const size_t p = size_t(jj) * W + i0;
+            double lo = 1e300, hi = -1e300;
+            for (int i = 0; i < m; ++i) {
+                if (m_is[p + i] == 0.0f) continue;
+                const double reach = kAlongReach / (std::sqrt(double(m_is[p + i])) * m_ik[p + i]);
+                lo = std::min(lo, m_yp[p + i] - reach), hi = std::max(hi, m_yp[p + i] + reach);
+            }
+            if (!(lo <= hi)) continue;
+            const int r0 = std::max(0, static_cast<int>(std::floor((lo - m_y0) / m_dy)));
+            const int r1 = std::min(rows, static_cast<int>(std::ceil((hi - m_y0) / m_dy)) + 1);
+            if (r0 >= r1) continue;
+            int used = 0;
+            for (int r = r0; r < r1; ++r) {
+                p0[size_t(r)] = X0[size_t(r)].empty() ? nullptr : X0[size_t(r)].data() + i0;
+                p2[size_t(r)] = X2[size_t(r)].empty() ? nullptr : X2[size_t(r)].data() + i0;
+                p4[size_t(r)] = X4[size_t(r)].empty() ? nullptr : X4[size_t(r)].data() + i0;
+                used += p0[size_t(r)] != nullptr;
+            }
+            if (!used) continue;
+            std::fill(acc.begin(), acc.end(), 0.0f);
+            // Sub-rows without nodes are skipped in runs.
+            int r = r0;
+            while (r < r1) {
+                if (!p0[size_t(r)]) {
+                    ++r;
+                    continue;
+                }
+                int e = r;
+                while (e < r1 && p0[size_t(e)]) ++e;
+                loops.far_along(m_yp.data() + p, m_ik.data() + p, m_is.data() + p,
+                                m_rs.data() + p, m, yr.data(), p0.data(), p2.data(), p4.data(), r,
+                                e, acc.data());
+                r = e;
+            }
+            float* dst = out.data.data() + size_t(j) * W + i0;
+            for (int i = 0; i < m; ++i) dst[i] += acc[size_t(i)];
+        }
+    });
+}
+
+}  // namespace impulse::render::detail

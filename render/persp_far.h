@@ -1,0 +1,82 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// The far field of a perspective view (internal to impulse::render; render/perspective.h says
+// what it computes). Far from the camera a grazing footprint is hundreds of texture units long
+// and a few wide, so each kernel is a thin sliver of the pixel filter along the depth: its
+// contribution separates into a profile across (the level's line integral, as in the line
+// form) and the pixel filter along. Impulses are deposited (linear weights) onto sub-rows of
+// the image that follow the circles around the camera's foot (the major axis of every
+// footprint points at the foot), each sub-row is convolved across with its profiles, and each
+// pixel filters the sub-rows along: a few additions per impulse, a bounded amount of work per
+// pixel.
+
+#include <cstdint>
+#include <vector>
+
+#include "render/persp_detail.h"
+
+namespace impulse::render::detail {
+
+/// A far impulse, ready to deposit.
+struct FarItem {
+    int32_t row = 0;  ///< the sub-row at or before its circle (shared with row + 1)
+    float fy = 0;     ///< its position between row and row + 1, in [0, 1)
+    float sx = 0;     ///< image column (continuous pixels)
+    float w = 0;      ///< the impulse's weight
+};
+
+class FarField {
+public:
+    /// Sets the far zone of a frame up: inactive when the form does not apply (filtering off,
+    /// isotropic rule, no fade, non-radial or signed kernels, or no footprint long enough).
+    FarField(const kernels::KernelPyramid& pyramid, const PerspectiveView& view,
+             const PixelCoords& coords, const AntiAlias& aa);
+    bool active() const { return m_active; }
+    /// Whether the impulse at (rx, ry) from the camera's foot belongs to the far field.
+    bool contains(double rx, double ry) const {
+        return m_active && rx * rx + ry * ry >= m_rho_far2;
+    }
+    /// The item of a far impulse at texture point (x, y), (rx, ry) from the foot; false when it
+    /// adds nothing (behind the camera, faded out, too far off the image).
+    bool item(const PerspectiveView& view, double x, double y, double rx, double ry,
+              float weight, FarItem& it) const;
+    /// Adds the far field of the items flagged in `far` (canonical order) to `out`.
+    void render(const std::vector<FarItem>& items, const std::vector<uint8_t>& far, Frame& out,
+                const PerspLoops& loops, bool parallel) const;
+
+private:
+    /// A sub-row: its circle, the across coordinate, node grid and, per segment of columns,
+    /// the filter.
+    struct Row {
+        double y = 0;  ///< y' of the circle
+        /// Across coordinate xi: texture units along the circle, at image columns 0 .. W
+        /// (linear between, extended with the end slopes beyond).
+        std::vector<double> xi;
+        double margin = 0;            ///< pixels beyond the image edges that still reach it
+        double xi0 = 0, dxi = 1;      ///< node n at xi0 + n dxi
+        int nodes = 0, taps = 0;      ///< node count, half-width of the profiles in nodes
+        bool second = false, fourth = false;  ///< profiles 2 and 4 matter
+        std::vector<int> segment_node;  ///< first node of each segment (segments + 1 entries)
+        std::vector<float> weight;    ///< per segment: fade / (sqrt(2 pi) s_major)
+        std::vector<float> sbar;      ///< per segment: variance of the along Gaussian, px^2
+        std::vector<float> tables;    ///< per segment, profile 0, 2, 4: taps + 1 values each
+    };
+    bool m_active = false;
+    int m_width = 0, m_height = 0, m_segments = 1;
+    double m_segment_px = 1;
+    double m_ya = 0, m_yb = 0, m_yc = 0, m_yd = 0;  ///< Y(rho) = (a rho + b) / (c rho + d)
+    double m_rho_far2 = 0;
+    double m_y0 = 0, m_dy = 1;  ///< sub-row r at y' = y0 + r dy
+    std::vector<Row> m_rows;
+    /// Pixels that receive the far field: rows [m_j0, m_j1), per pixel y', 1 / kappa, 1 / s,
+    /// 1 / sqrt(s).
+    int m_j0 = 0, m_j1 = 0;
+    std::vector<float> m_yp, m_ik, m_is, m_rs;
+
+    double y_of(double rho) const { return (m_ya * rho + m_yb) / (m_yc * rho + m_yd); }
+    float row_weight(const Row& row, double sx) const;
+    /// xi of image column x on a sub-row.
+    double xi_at(const Row& row, double x) const;
+};
+
+}  // namespace impulse::render::detail
