@@ -29,6 +29,9 @@ struct PerspLevel {
 struct PerspKernel {
     bool radial = true;
     const PerspLevel* levels = nullptr;
+    /// Per image row j: rows[4 j .. 4 j + 3] = (x0, y0, dx, dy), the texture point of pixel
+    /// (i, j) being (x0 + i dx, y0 + i dy) relative to the origin (NaN: the row misses the plane).
+    const double* rows = nullptr;
 };
 
 enum PerspMode : uint8_t { kPerspSingle = 0, kPerspProbes = 1, kPerspLine = 2 };

@@ -19,7 +19,7 @@ namespace {
 /// most this many pixel-filter deviations: the along profile of the chord is then expanded to
 /// fourth order around a Gaussian of the mean chord variance (see far_tables); the expansion's
 /// first omitted term is below 1 % of the kernel's peak there (empirical, against the line form).
-constexpr double kFarChord = 2.5;
+constexpr double kFarChord = 3.0;
 // The filter is refreshed every 0.05 focal lengths along a sub-row (0.05 rad at the centre of
 // the image): with 0.2 against the supersampled reference of test (a) the far rows erred by up to
 // twice as much as the line form (whose filter is each impulse's own); with 0.05 they are on a
@@ -28,6 +28,8 @@ constexpr double kSegmentRad = 0.05;
 constexpr int kAcrossNodes = 16;    // nodes across the narrowest profile of a sub-row
 constexpr int kBand = 16;           // sub-rows per deposit task
 constexpr double kAlongReach = 4.75;  // the along Gaussian is summed to 4.75 sd
+
+double sq(double v) { return v * v; }
 
 /// Linear interpolation in a line table over t in [0, 1].
 double table_at(const std::vector<float>& t, double x) {
@@ -81,6 +83,8 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
     m_segments = std::max(
         1, static_cast<int>(std::ceil(W / std::max(4.0, kSegmentRad * view.focal_px()))));
     m_segment_px = static_cast<double>(W) / m_segments;
+    m_inv_segment_px = 1.0 / m_segment_px;
+    view.homography(m_P);
     const int G = m_segments;
 
     // Column lines of the segment centres.
@@ -135,7 +139,7 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
             const double row = toward > 0 ? py : H - py;
             double x, y;
             if (view.texture_point((g + 0.5) * m_segment_px, row, x, y)) {
-                near_rho = std::hypot(x - cam.x, y - cam.y);
+                near_rho = std::sqrt(sq(x - cam.x) + sq(y - cam.y));
                 break;
             }
         }
@@ -303,42 +307,51 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
     for (const Row& row : m_rows)
         for (float s : row.sbar) smax = std::max(smax, static_cast<double>(s));
     const double y_lo = m_y0, y_hi = m_y0 + (rows - 1) * m_dy;
-    std::vector<double> rho_edge(size_t(W) * (H + 1), -1.0);
-    auto edge_rho = [&](int e) {  // rho at the pixel edges of row boundary e (y = e)
-        std::vector<float> ex(static_cast<size_t>(W)), ey(static_cast<size_t>(W));
-        std::vector<uint8_t> hit(static_cast<size_t>(W));
-        view.texture_row(e, W, cam.x, cam.y, ex.data(), ey.data(), hit.data());
-        for (int i = 0; i < W; ++i)
-            rho_edge[size_t(e) * W + i] =
-                hit[size_t(i)] ? std::hypot(double(ex[size_t(i)]), double(ey[size_t(i)])) : -1.0;
-    };
-    tbb::parallel_for(0, H + 1, edge_rho);
+    // Which rows: y' at 33 columns of both pixel edges of each row (along a row rho is
+    // smallest at one column and grows away from it, so the samples bound the row's range).
     std::vector<uint8_t> use(static_cast<size_t>(H), 0);
     tbb::parallel_for(0, H, [&](int j) {
+        constexpr int kCols = 33;
         double lo = 1e300, hi = -1e300, kmax = 0.0;
-        for (int i = 0; i < W; ++i) {
-            const double r0 = rho_edge[size_t(j) * W + i], r1 = rho_edge[size_t(j + 1) * W + i];
-            if (r0 < 0.0 && r1 < 0.0) continue;
-            const double y0 = r0 >= 0.0 ? y_of(r0) : y_of(r1), y1 = r1 >= 0.0 ? y_of(r1) : y0;
-            lo = std::min(lo, std::min(y0, y1)), hi = std::max(hi, std::max(y0, y1));
-            kmax = std::max(kmax, std::abs(y1 - y0));
+        for (int k = 0; k < kCols; ++k) {
+            const double px = W * (k + 0.5) / kCols;
+            double x0, y0, x1, y1;
+            const bool h0 = view.texture_point(px, j, x0, y0);
+            const bool h1 = view.texture_point(px, j + 1.0, x1, y1);
+            if (!h0 && !h1) continue;
+            const double e0 = h0 ? y_of(std::sqrt(sq(x0 - cam.x) + sq(y0 - cam.y)))
+                                 : y_of(std::sqrt(sq(x1 - cam.x) + sq(y1 - cam.y)));
+            const double e1 = h1 ? y_of(std::sqrt(sq(x1 - cam.x) + sq(y1 - cam.y))) : e0;
+            lo = std::min(lo, std::min(e0, e1)), hi = std::max(hi, std::max(e0, e1));
+            kmax = std::max(kmax, std::abs(e1 - e0));
         }
-        const double reach = kAlongReach * std::sqrt(smax) * std::max(kmax, 1.0) + m_dy;
+        const double reach = kAlongReach * std::sqrt(smax) * std::max(kmax, 1.0) + 2.0 * m_dy;
         use[size_t(j)] = hi >= y_lo - reach && lo <= y_hi + reach;
     });
     m_j0 = H, m_j1 = 0;
     for (int j = 0; j < H; ++j)
         if (use[size_t(j)]) m_j0 = std::min(m_j0, j), m_j1 = j + 1;
     if (m_j0 >= m_j1) return;
+    // rho at the pixel edges (row boundaries e = m_j0 .. m_j1) of those rows.
+    std::vector<double> rho_edge(size_t(W) * (m_j1 - m_j0 + 1), -1.0);
+    tbb::parallel_for(m_j0, m_j1 + 1, [&](int e) {
+        std::vector<float> ex(static_cast<size_t>(W)), ey(static_cast<size_t>(W));
+        std::vector<uint8_t> hit(static_cast<size_t>(W));
+        view.texture_row(e, W, cam.x, cam.y, ex.data(), ey.data(), hit.data());
+        for (int i = 0; i < W; ++i)
+            rho_edge[size_t(e - m_j0) * W + i] =
+                hit[size_t(i)] ? std::sqrt(sq(double(ex[size_t(i)])) + sq(double(ey[size_t(i)]))) : -1.0;
+    });
     const size_t np = size_t(m_j1 - m_j0) * W;
     m_yp.assign(np, 0.0f), m_ik.assign(np, 0.0f), m_is.assign(np, 0.0f), m_rs.assign(np, 0.0f);
     tbb::parallel_for(m_j0, m_j1, [&](int j) {
         for (int i = 0; i < W; ++i) {
             const size_t p = size_t(j - m_j0) * W + i, q = size_t(j) * W + i;
             if (!coords.hit[q]) continue;
-            const double rho = std::hypot(double(coords.x[q]), double(coords.y[q]));
+            const double rho = std::sqrt(sq(double(coords.x[q])) + sq(double(coords.y[q])));
             const double yc = y_of(rho);
-            const double r0 = rho_edge[size_t(j) * W + i], r1 = rho_edge[size_t(j + 1) * W + i];
+            const double r0 = rho_edge[size_t(j - m_j0) * W + i];
+            const double r1 = rho_edge[size_t(j + 1 - m_j0) * W + i];
             double kappa = r0 >= 0.0 && r1 >= 0.0 ? std::abs(y_of(r1) - y_of(r0))
                            : r0 >= 0.0             ? 2.0 * std::abs(yc - y_of(r0))
                            : r1 >= 0.0             ? 2.0 * std::abs(y_of(r1) - yc)
@@ -369,7 +382,7 @@ double FarField::xi_at(const Row& row, double x) const {
 
 float FarField::row_weight(const Row& row, double sx) const {
     // Linear between segment centres (held beyond the first and last).
-    const double gf = sx / m_segment_px - 0.5;
+    const double gf = sx * m_inv_segment_px - 0.5;
     if (!(gf > 0.0)) return row.weight.front();
     const int g = static_cast<int>(gf);
     if (g >= m_segments - 1) return row.weight.back();
@@ -377,28 +390,40 @@ float FarField::row_weight(const Row& row, double sx) const {
     return static_cast<float>((1.0 - t) * row.weight[size_t(g)] + t * row.weight[size_t(g) + 1]);
 }
 
-bool FarField::item(const PerspectiveView& view, double x, double y, double rx, double ry,
-                    float weight, FarItem& it) const {
-    if (!(view.depth(x, y) > 0.0)) return false;
+bool FarField::item(double rx, double ry, float weight, FarItem& it) const {
+    const double depth = m_P[6] * rx + m_P[7] * ry + m_P[8];
+    if (!(depth > 0.0)) return false;
     const double yc = y_of(std::sqrt(rx * rx + ry * ry));
     const double q = (yc - m_y0) / m_dy;
     if (!(q >= 0.0 && q < static_cast<double>(m_rows.size() - 1))) return false;
     const int r = static_cast<int>(q);
-    double sx, sy;
-    if (!view.image_point(x, y, sx, sy)) return false;
+    const double sx = (m_P[0] * rx + m_P[1] * ry + m_P[2]) / depth;
     const Row& a = m_rows[size_t(r)];
     const Row& b = m_rows[size_t(r) + 1];
     const double margin = std::max(a.nodes ? a.margin : 0.0, b.nodes ? b.margin : 0.0);
     if (!(a.nodes || b.nodes) || !(sx > -margin && sx < m_width + margin)) return false;
     it.row = r;
-    it.fy = static_cast<float>(q - r);
-    it.sx = static_cast<float>(sx);
-    it.w = weight;
-    return true;
+    const double fy = q - r;
+    bool any = false;
+    for (int e = 0; e < 2; ++e) {
+        const Row& row = e ? b : a;
+        it.node[e] = -1;
+        if (!row.nodes) continue;
+        const double w = weight * (e ? fy : 1.0 - fy) * row_weight(row, sx);
+        const double p = (xi_at(row, sx) - row.xi0) / row.dxi;
+        const int nd = static_cast<int>(p);
+        if (w == 0.0 || nd < 0 || nd + 1 >= row.nodes) continue;
+        const double fx = p - nd;
+        it.node[e] = nd;
+        it.w[e][0] = static_cast<float>(w * (1.0 - fx));
+        it.w[e][1] = static_cast<float>(w * fx);
+        any = true;
+    }
+    return any;
 }
 
-void FarField::render(const std::vector<FarItem>& items, const std::vector<uint8_t>& far,
-                      Frame& out, const PerspLoops& loops, bool parallel) const {
+void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out,
+                      const PerspLoops& loops, bool parallel) const {
     const int rows = static_cast<int>(m_rows.size());
     const int W = m_width;
     auto run = [&](int n, auto&& f) {
@@ -418,13 +443,11 @@ void FarField::render(const std::vector<FarItem>& items, const std::vector<uint8
     // Deposit by bands of sub-rows: items binned in canonical order, each band summed by one
     // task into its rows, the row after the band into a halo added afterwards.
     const int bands = (rows + kBand - 1) / kBand;
-    const size_t n = items.size();
-    constexpr size_t kChunk = 1 << 14;
-    const int chunks = static_cast<int>((n + kChunk - 1) / kChunk);
+    const int chunks = static_cast<int>(items.size());
     std::vector<uint32_t> count(size_t(chunks) * bands, 0);
     run(chunks, [&](int c) {
-        for (size_t i = size_t(c) * kChunk; i < std::min(n, size_t(c + 1) * kChunk); ++i)
-            if (far[i]) ++count[size_t(c) * bands + size_t(items[i].row / kBand)];
+        for (const FarItem& it : items[size_t(c)])
+            ++count[size_t(c) * bands + size_t(it.row / kBand)];
     });
     std::vector<size_t> start(size_t(chunks) * bands + 1, 0);
     std::vector<size_t> band_start(static_cast<size_t>(bands) + 1, 0);
@@ -439,12 +462,11 @@ void FarField::render(const std::vector<FarItem>& items, const std::vector<uint8
         }
         band_start[size_t(bands)] = total;
     }
-    std::vector<uint32_t> order(band_start.back());
+    std::vector<const FarItem*> order(band_start.back());
     run(chunks, [&](int c) {
         std::vector<size_t> fill(start.begin() + ptrdiff_t(c) * bands,
                                  start.begin() + ptrdiff_t(c + 1) * bands);
-        for (size_t i = size_t(c) * kChunk; i < std::min(n, size_t(c + 1) * kChunk); ++i)
-            if (far[i]) order[fill[size_t(items[i].row / kBand)]++] = static_cast<uint32_t>(i);
+        for (const FarItem& it : items[size_t(c)]) order[fill[size_t(it.row / kBand)]++] = &it;
     });
     std::vector<std::vector<float>> halo(static_cast<size_t>(bands));
     run(bands, [&](int b) {
@@ -452,21 +474,14 @@ void FarField::render(const std::vector<FarItem>& items, const std::vector<uint8
         if (last < rows && m_rows[size_t(last)].nodes)
             halo[size_t(b)].assign(size_t(m_rows[size_t(last)].nodes), 0.0f);
         for (size_t k = band_start[size_t(b)]; k < band_start[size_t(b) + 1]; ++k) {
-            const FarItem& it = items[order[k]];
+            const FarItem& it = *order[k];
             for (int e = 0; e < 2; ++e) {
-                const int r = it.row + e;
-                const Row& row = m_rows[size_t(r)];
-                if (!row.nodes) continue;
-                const double wy = e ? it.fy : 1.0 - it.fy;
-                const double w = it.w * wy * row_weight(row, it.sx);
-                if (w == 0.0) continue;
-                const double p = (xi_at(row, it.sx) - row.xi0) / row.dxi;
-                const int nd = static_cast<int>(p);
-                if (nd < 0 || nd + 1 >= row.nodes) continue;
-                const double fx = p - nd;
-                float* d = r == last ? halo[size_t(b)].data() : D.data() + off[size_t(r)] + row.taps;
-                d[nd] += static_cast<float>(w * (1.0 - fx));
-                d[nd + 1] += static_cast<float>(w * fx);
+                const int r = it.row + e, nd = it.node[e];
+                if (nd < 0) continue;
+                float* d = r == last ? halo[size_t(b)].data()
+                                     : D.data() + off[size_t(r)] + m_rows[size_t(r)].taps;
+                d[nd] += it.w[e][0];
+                d[nd + 1] += it.w[e][1];
             }
         }
     });

@@ -17,12 +17,12 @@
 
 namespace impulse::render::detail {
 
-/// A far impulse, ready to deposit.
+/// A far impulse, ready to deposit: on sub-rows row and row + 1, at nodes node[e] and
+/// node[e] + 1 with weights w[e][0], w[e][1] (node -1: nothing on that sub-row).
 struct FarItem {
-    int32_t row = 0;  ///< the sub-row at or before its circle (shared with row + 1)
-    float fy = 0;     ///< its position between row and row + 1, in [0, 1)
-    float sx = 0;     ///< image column (continuous pixels)
-    float w = 0;      ///< the impulse's weight
+    int32_t row = 0;
+    int32_t node[2] = {-1, -1};
+    float w[2][2] = {{0, 0}, {0, 0}};
 };
 
 class FarField {
@@ -36,12 +36,12 @@ public:
     bool contains(double rx, double ry) const {
         return m_active && rx * rx + ry * ry >= m_rho_far2;
     }
-    /// The item of a far impulse at texture point (x, y), (rx, ry) from the foot; false when it
-    /// adds nothing (behind the camera, faded out, too far off the image).
-    bool item(const PerspectiveView& view, double x, double y, double rx, double ry,
-              float weight, FarItem& it) const;
-    /// Adds the far field of the items flagged in `far` (canonical order) to `out`.
-    void render(const std::vector<FarItem>& items, const std::vector<uint8_t>& far, Frame& out,
+    /// The item of a far impulse at (rx, ry) from the foot; false when it adds nothing (behind
+    /// the camera, faded out, too far off the image).
+    bool item(double rx, double ry, float weight, FarItem& it) const;
+    /// Adds the far field of the items to `out`: lists joined in order hold them in
+    /// canonical order.
+    void render(const std::vector<std::vector<FarItem>>& items, Frame& out,
                 const PerspLoops& loops, bool parallel) const;
 
 private:
@@ -66,6 +66,8 @@ private:
     double m_segment_px = 1;
     double m_ya = 0, m_yb = 0, m_yc = 0, m_yd = 0;  ///< Y(rho) = (a rho + b) / (c rho + d)
     double m_rho_far2 = 0;
+    double m_P[9] = {};  ///< the view's homography (PerspectiveView::homography)
+    double m_inv_segment_px = 1;
     double m_y0 = 0, m_dy = 1;  ///< sub-row r at y' = y0 + r dy
     std::vector<Row> m_rows;
     /// Pixels that receive the far field: rows [m_j0, m_j1), per pixel y', 1 / kappa, 1 / s,

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -286,7 +287,7 @@ PerspectiveView::Footprint PerspectiveView::footprint(double x, double y) const 
     const double C = -k * (m_U[0] * q - b * m_F[0]), D = -k * (m_U[1] * q - b * m_F[1]);
     // Eigen-decomposition of J^T J: the smaller eigenvalue's vector is the footprint's major axis.
     const double a11 = A * A + C * C, a22 = B * B + D * D, a12 = A * B + C * D;
-    const double mid = 0.5 * (a11 + a22), half = std::hypot(0.5 * (a11 - a22), a12);
+    const double mid = 0.5 * (a11 + a22), half = std::sqrt(0.25 * (a11 - a22) * (a11 - a22) + a12 * a12);
     const double l1 = mid + half, l2 = std::max(mid - half, 1e-300);
     Footprint f;
     f.s_minor = 1.0 / std::sqrt(l1);
@@ -296,11 +297,11 @@ PerspectiveView::Footprint PerspectiveView::footprint(double x, double y) const 
         ex = -a12, ey = a11 - l2;
     else
         ex = a22 - l2, ey = -a12;
-    double n = std::hypot(ex, ey);
+    double n = std::sqrt(ex * ex + ey * ey);
     if (!(n > 0.0)) ex = 1.0, ey = 0.0, n = 1.0;
     f.ex = ex / n, f.ey = ey / n;
     const double ix = A * f.ex + B * f.ey, iy = C * f.ex + D * f.ey;
-    const double in = std::hypot(ix, iy);
+    const double in = std::sqrt(ix * ix + iy * iy);
     f.ix = in > 0.0 ? ix / in : 0.0;
     f.iy = in > 0.0 ? iy / in : 1.0;
     return f;
@@ -311,6 +312,18 @@ double PerspectiveView::horizon_row() const {
     const double p = m_cam.pitch_deg * kDeg;
     if (std::abs(std::cos(p)) < 1e-12) return -s * 1e300;
     return m_cy - s * m_f * std::tan(p);
+}
+
+void PerspectiveView::homography(double P[9]) const {
+    // image_point: q = F . v, a = R . v, b = U . v with v = (rx, ry, m_z);
+    // px = (cx q + f a) / q, py = (cy q - f b) / q.
+    for (int k = 0; k < 3; ++k) {
+        const double z = k == 2 ? m_z : 1.0;
+        const int i = k == 2 ? 2 : k;
+        P[k] = (m_cx * m_F[i] + m_f * m_R[i]) * z;
+        P[3 + k] = (m_cy * m_F[i] - m_f * m_U[i]) * z;
+        P[6 + k] = m_F[i] * z;
+    }
 }
 
 void PerspectiveView::range_row(double& a, double& b, double& c, double& d) const {
@@ -342,17 +355,33 @@ void PerspectiveView::texture_row(double py, int n, double ox, double oy, float*
     }
 }
 
+bool PerspectiveView::row_line(double py, double ox, double oy, double line[4]) const {
+    const double b = py - m_cy;
+    const double d2 = m_f * m_F[2] + 0.0 * m_R[2] - b * m_U[2];
+    const double t = m_z / d2;
+    if (!(t > 0.0) || !std::isfinite(t)) {
+        line[0] = line[1] = line[2] = line[3] = std::numeric_limits<double>::quiet_NaN();
+        return false;
+    }
+    const double a = 0.5 - m_cx;
+    line[0] = (m_cam.x + t * (m_f * m_F[0] + a * m_R[0] - b * m_U[0])) - ox;
+    line[1] = (m_cam.y + t * (m_f * m_F[1] + a * m_R[1] - b * m_U[1])) - oy;
+    line[2] = t * m_R[0], line[3] = t * m_R[1];
+    return true;
+}
+
 PixelCoords pixel_coords(const PerspectiveView& view) {
     const auto& cam = view.camera();
     PixelCoords pc;
     pc.width = cam.width, pc.height = cam.height;
     pc.origin_x = cam.x, pc.origin_y = cam.y;
     const size_t n = size_t(cam.width) * cam.height;
-    pc.x.resize(n), pc.y.resize(n), pc.hit.resize(n);
+    pc.x.resize(n), pc.y.resize(n), pc.hit.resize(n), pc.rows.resize(4 * size_t(cam.height));
     tbb::parallel_for(0, cam.height, [&](int j) {
         const size_t p = size_t(j) * cam.width;
         view.texture_row(j + 0.5, cam.width, pc.origin_x, pc.origin_y, pc.x.data() + p,
                          pc.y.data() + p, pc.hit.data() + p);
+        view.row_line(j + 0.5, pc.origin_x, pc.origin_y, pc.rows.data() + 4 * size_t(j));
     });
     return pc;
 }
@@ -566,23 +595,31 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
     if (coords.width != W || coords.height != H)
         throw ValueError("accumulate_perspective: pixel coordinates of another view size");
     const std::vector<detail::PerspLevel> levels = loop_levels(pyr);
-    const detail::PerspKernel lk{pyr.radial(), levels.data()};
+    const detail::PerspKernel lk{pyr.radial(), levels.data(), coords.rows.data()};
     const double orient = pyr.base().params().orientation;
+    using Clock = std::chrono::steady_clock;
+    auto ms = [](Clock::time_point a, Clock::time_point b) {
+        return std::chrono::duration<double, std::milli>(b - a).count();
+    };
+    const auto t0 = Clock::now();
     const detail::FarField far(pyr, view, coords, aa);
+    const auto t1 = Clock::now();
 
     // Prepare the impulses in chunks (each writes its own items; probes go to per-chunk lists
     // joined in chunk order, so the layout does not depend on scheduling).
     const size_t n = imp.size();
     constexpr size_t kChunk = 1024;
     const size_t chunks = (n + kChunk - 1) / kChunk;
-    std::vector<detail::PerspItem> items(n);
-    std::vector<uint8_t> live(n, 0), is_far(far.active() ? n : 0, 0);
-    std::vector<detail::FarItem> far_items(far.active() ? n : 0);
+    std::vector<std::vector<detail::PerspItem>> chunk_items(chunks);
+    std::vector<std::vector<detail::FarItem>> chunk_far(chunks);
     std::vector<std::vector<detail::PerspProbe>> chunk_probes(chunks);
     std::vector<std::array<size_t, 5>> chunk_counts(chunks);
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
         auto& probes = chunk_probes[c];
+        auto& live_items = chunk_items[c];
+        auto& far_items = chunk_far[c];
         auto& counts = chunk_counts[c];
+        if (far.active()) far_items.reserve(std::min(n - c * kChunk, kChunk));
         counts = {0, 0, 0, 0, 0};
         auto area = [](int x0, int y0, int x1, int y1) {
             return x1 >= x0 && y1 >= y0 ? size_t(x1 - x0 + 1) * size_t(y1 - y0 + 1) : size_t(0);
@@ -593,14 +630,16 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
             if (aa.max_distance > 0.0 && std::hypot(x - cam.x, y - cam.y) > aa.max_distance)
                 continue;
             if (far.contains(x - cam.x, y - cam.y)) {
-                is_far[i] = far.item(view, x, y, x - cam.x, y - cam.y, imp.weight[i], far_items[i]);
+                detail::FarItem fi;
+                if (far.item(x - cam.x, y - cam.y, imp.weight[i], fi))
+                    far_items.push_back(fi);
                 continue;
             }
             if (!(view.depth(x, y) > 0.0)) continue;
             const auto f = view.footprint(x, y);
             const detail::Plan p = detail::plan_for(pyr, aa, f.s_major, f.s_minor);
             if (!p.keep) continue;
-            detail::PerspItem& it = items[i];
+            detail::PerspItem it;
             it.px = static_cast<float>(x - coords.origin_x);
             it.py = static_cast<float>(y - coords.origin_y);
             double sx = 0, sy = 0;
@@ -680,22 +719,28 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
                 ++counts[1];
                 counts[3] += it.nprobe;
             }
-            live[i] = any ? 1 : 0;
-            if (any && p.mode != detail::kPerspProbes)
-                counts[4] += area(it.x0, it.y0, it.x1, it.y1);
+            if (!any) continue;
+            if (p.mode != detail::kPerspProbes) counts[4] += area(it.x0, it.y0, it.x1, it.y1);
+            live_items.push_back(it);
         }
     });
+    // Join the chunks in order (the canonical order of the impulses).
     std::vector<detail::PerspProbe> probes;
+    std::vector<detail::PerspItem> items;
+    size_t far_count = 0;
     {
-        std::vector<size_t> base(chunks, 0);
-        size_t total = 0;
-        for (size_t c = 0; c < chunks; ++c) base[c] = total, total += chunk_probes[c].size();
-        probes.reserve(total);
+        size_t np = 0, ni = 0;
+        for (size_t c = 0; c < chunks; ++c)
+            np += chunk_probes[c].size(), ni += chunk_items[c].size(),
+                far_count += chunk_far[c].size();
+        probes.reserve(np), items.reserve(ni);
         for (size_t c = 0; c < chunks; ++c) {
+            const auto base = static_cast<uint32_t>(probes.size());
             probes.insert(probes.end(), chunk_probes[c].begin(), chunk_probes[c].end());
-            for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i)
-                if (live[i] && items[i].mode == detail::kPerspProbes)
-                    items[i].probe0 += static_cast<uint32_t>(base[c]);
+            for (detail::PerspItem& it : chunk_items[c]) {
+                if (it.mode == detail::kPerspProbes) it.probe0 += base;
+                items.push_back(it);
+            }
         }
     }
     if (stats) {
@@ -706,27 +751,22 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
                 stats->probe_count += c[3];
             stats->pixels += c[4];
         }
-        size_t kept = 0;
-        for (uint8_t l : live) kept += l;
-        for (uint8_t l : is_far) stats->far += l, kept += l;
-        stats->culled = n - kept;
+        stats->far = far_count;
+        stats->culled = n - items.size() - far_count;
     }
 
+    const auto t2 = Clock::now();
     // Bin into tiles by image box (counting sort keeps each tile's list in canonical order).
     const int T = std::max(8, options.tile_size);
     const int ntx = (W + T - 1) / T, nty = (H + T - 1) / T;
     std::vector<uint32_t> count(size_t(ntx) * nty + 1, 0);
-    for (size_t i = 0; i < n; ++i) {
-        if (!live[i]) continue;
-        const auto& it = items[i];
+    for (const auto& it : items)
         for (int b = it.y0 / T; b <= it.y1 / T; ++b)
             for (int a = it.x0 / T; a <= it.x1 / T; ++a) ++count[size_t(b) * ntx + a + 1];
-    }
     for (size_t t = 1; t < count.size(); ++t) count[t] += count[t - 1];
     std::vector<uint32_t> bins(count.back());
     std::vector<uint32_t> fill(count.begin(), count.end() - 1);
-    for (size_t i = 0; i < n; ++i) {
-        if (!live[i]) continue;
+    for (size_t i = 0; i < items.size(); ++i) {
         const auto& it = items[i];
         for (int b = it.y0 / T; b <= it.y1 / T; ++b)
             for (int a = it.x0 / T; a <= it.x1 / T; ++a)
@@ -755,7 +795,13 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
         tbb::parallel_for(0, ntiles, do_tile);
     else
         for (int t = 0; t < ntiles; ++t) do_tile(t);
-    if (far.active()) far.render(far_items, is_far, out, loops, options.parallel);
+    const auto t3 = Clock::now();
+    if (far.active()) far.render(chunk_far, out, loops, options.parallel);
+    if (stats) {
+        const auto t4 = Clock::now();
+        stats->setup_ms = ms(t0, t1), stats->prepare_ms = ms(t1, t2), stats->tiles_ms = ms(t2, t3);
+        stats->far_ms = ms(t3, t4);
+    }
 }
 
 }  // namespace impulse::render

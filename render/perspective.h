@@ -140,6 +140,11 @@ public:
     /// Image row of the horizon (may lie outside the image); rows beyond it miss the plane.
     double horizon_row() const;
 
+    /// The projection as a homography of the texture point relative to the camera's foot:
+    /// with (u, v, w) = P (x - foot_x, y - foot_y, 1), the image point is (u / w, v / w) and
+    /// w > 0 in front of the camera (w is the depth). Row-major 3x3.
+    void homography(double P[9]) const;
+
     /// The image row of the point at distance rho straight ahead of the camera's foot (along
     /// the heading): Y(rho) = (a rho + b) / (c rho + d). The far field labels the circles
     /// around the foot by it.
@@ -150,6 +155,9 @@ public:
     /// (or lie beyond 1e15) get hit 0 and a far coordinate.
     void texture_row(double py, int n, double ox, double oy, float* x, float* y,
                      uint8_t* hit) const;
+    /// The same row as a line: the texture point of pixel centre (i + 0.5, py) is
+    /// (x0 + i dx, y0 + i dy) - (ox, oy); false (NaNs) when the row misses the plane.
+    bool row_line(double py, double ox, double oy, double line[4]) const;
 
 private:
     PerspectiveCamera m_cam;
@@ -165,6 +173,9 @@ struct PixelCoords {
     double origin_x = 0, origin_y = 0;
     std::vector<float> x, y;
     std::vector<uint8_t> hit;
+    /// Per row j, (x0, y0, dx, dy): the texture point of pixel (i, j) is (x0 + i dx, y0 + i dy)
+    /// relative to the origin, in double (NaN for rows that miss the plane).
+    std::vector<double> rows;
 };
 /// Computes the pixel coordinates (origin: the camera's foot). Deterministic; parallel by rows.
 PixelCoords pixel_coords(const PerspectiveView& view);
@@ -183,6 +194,9 @@ struct PerspectiveStats {
     size_t culled = 0;    ///< faded out, behind the camera, beyond max_distance or off-image
     size_t single = 0, probes = 0, line = 0;  ///< impulses per filter form
     size_t far = 0;                           ///< impulses drawn by the far field
+    /// Wall time of the parts (ms): far-field set-up, per-impulse preparation, tiled
+    /// evaluation (binning included), far field (deposit, across, along).
+    double setup_ms = 0, prepare_ms = 0, tiles_ms = 0, far_ms = 0;
     size_t probe_count = 0;                   ///< probes evaluated
     size_t pixels = 0;  ///< pixel evaluations (sum of the impulses' and probes' boxes)
 };
