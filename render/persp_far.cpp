@@ -140,6 +140,11 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
             double x, y;
             if (view.texture_point((g + 0.5) * m_segment_px, row, x, y)) {
                 near_rho = std::sqrt(sq(x - cam.x) + sq(y - cam.y));
+                // The circles label the far zone only where the distance from the foot grows
+                // up the column from its nearest visible point on (a column line meets a
+                // circle twice, on either side of its closest approach to the foot).
+                const ColumnLine& L = lines[size_t(g)];
+                if (!((x - cam.x) * L.dx + (y - cam.y) * L.dy > 0.0)) return;
                 break;
             }
         }
@@ -166,6 +171,21 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
     }
     if (!(rho_far > 0.0) || !(rho_far < rho_cut)) return;
     m_rho_far2 = rho_far * rho_far;
+    // ... and an impulse belongs to it only on that side: at least the smallest depth of the
+    // far zone's near edge (an impulse as far from the foot but nearer the camera lies below
+    // the image, on the other side of the closest approach).
+    m_depth_min = 1e300;
+    for (int g = 0; g < G; ++g) {
+        const ColumnLine& L = lines[size_t(g)];
+        if (!L.ok) continue;
+        const double dd = L.dx * L.dx + L.dy * L.dy, bd = L.bx * L.dx + L.by * L.dy;
+        const double disc = bd * bd - dd * (L.bx * L.bx + L.by * L.by - m_rho_far2);
+        if (!(disc >= 0.0)) continue;
+        const double t = (-bd + std::sqrt(disc)) / dd;
+        m_depth_min = std::min(
+            m_depth_min, view.depth(cam.x + L.bx + t * L.dx, cam.y + L.by + t * L.dy));
+    }
+    m_depth_min *= 0.999;
 
     // Sub-rows over the far zone, a quarter of ... half the pixel filter apart (plus one each side).
     m_dy = 0.5 * c;

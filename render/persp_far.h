@@ -34,7 +34,8 @@ public:
     bool active() const { return m_active; }
     /// Whether the impulse at (rx, ry) from the camera's foot belongs to the far field.
     bool contains(double rx, double ry) const {
-        return m_active && rx * rx + ry * ry >= m_rho_far2;
+        return m_active && rx * rx + ry * ry >= m_rho_far2 &&
+               m_P[6] * rx + m_P[7] * ry + m_P[8] >= m_depth_min;
     }
     /// The item of a far impulse at (rx, ry) from the foot; false when it adds nothing (behind
     /// the camera, faded out, too far off the image).
@@ -65,7 +66,7 @@ private:
     int m_width = 0, m_height = 0, m_segments = 1;
     double m_segment_px = 1;
     double m_ya = 0, m_yb = 0, m_yc = 0, m_yd = 0;  ///< Y(rho) = (a rho + b) / (c rho + d)
-    double m_rho_far2 = 0;
+    double m_rho_far2 = 0, m_depth_min = 0;
     double m_P[9] = {};  ///< the view's homography (PerspectiveView::homography)
     double m_inv_segment_px = 1;
     double m_y0 = 0, m_dy = 1;  ///< sub-row r at y' = y0 + r dy
