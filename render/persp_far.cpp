@@ -15,11 +15,18 @@
 namespace impulse::render::detail {
 namespace {
 
-/// Far form from where the kernel's half-length along the major axis, R / s_major pixels, is at
-/// most this many pixel-filter deviations: the along profile of the chord is then expanded to
-/// fourth order around a Gaussian of the mean chord variance (see far_tables); the expansion's
-/// first omitted term is below 1 % of the kernel's peak there (empirical, against the line form).
-constexpr double kFarChord = 3.0;
+/// The far form expands each chord's profile along the major axis (a Gaussian of the chord's
+/// mean mu and variance var + q / s_major^2, pixels) to fourth order around the Gaussian of the
+/// mean variance sbar. It applies where that converges: the chords' departures, weighted by
+/// their mass, have rms(var + q / s_major^2 - sbar) <= kFarVariance sbar and
+/// rms(mu) <= kFarMean sqrt(sbar). kFarVariance is set against the supersampled reference of
+/// test (a) (cosine kernels, chord variances from 0 to 0.13 R^2): there the far rows err no more
+/// than with the line form up to R / s_major = 1.5 px, where the rms is 0.077 (at 2 px, 0.098,
+/// the nearest far rows err twice as much). kFarMean: for the sheared chords of elliptical
+/// kernels (their centroid moves across the kernel), checked against a supersampled reference
+/// of the `clouds` sky (errors below 1.5 % of the texture's sd in windows at the boundary).
+constexpr double kFarVariance = 0.077;
+constexpr double kFarMean = 0.7;
 // The filter is refreshed every 0.05 focal lengths along a sub-row (0.05 rad at the centre of
 // the image): with 0.2 against the supersampled reference of test (a) the far rows erred by up to
 // twice as much as the line form (whose filter is each impulse's own); with 0.05 they are on a
@@ -27,6 +34,7 @@ constexpr double kFarChord = 3.0;
 constexpr double kSegmentRad = 0.05;
 constexpr int kAcrossNodes = 16;    // nodes across the narrowest profile of a sub-row
 constexpr int kBand = 16;           // sub-rows per deposit task
+constexpr int kProfiles = kFarProfiles;
 constexpr double kAlongReach = 4.75;  // the along Gaussian is summed to 4.75 sd
 
 double sq(double v) { return v * v; }
@@ -60,18 +68,49 @@ struct ColumnLine {
     bool ok = false;
 };
 
-/// The footprint filter of one place: what the tables and weights need.
+/// The footprint filter of one place: what the tables and weights need. The level pair is the
+/// line form's: the isotropic level for the minor axis, the rest of the major axis's filter
+/// (var, px^2) along it.
 struct Place {
     bool ok = false;
     Plan plan;
+    kernels::KernelPyramid::Blend blend;
+    double var_lo = 0, var_hi = 0;
     double s_major = 1, s_minor = 1;
 };
+
+/// Variance of the Gaussian blur level l carries (level 0, the kernel itself, none).
+double level_blur2(const kernels::KernelPyramid& pyr, int l) {
+    return l == 0 ? 0.0 : pyr.sigma(l) * pyr.sigma(l);
+}
+
+/// Mean chord variance of a non-radial level, over its directions (mass-weighted).
+double mean_chord_variance_dir(const kernels::KernelPyramid& pyr, int l) {
+    double m0 = 0.0, m1 = 0.0;
+    for (int b = 0; b < pyr.direction_bins(); ++b) {
+        const auto& t = pyr.direction_tables(l, b);
+        for (size_t i = 0; i < t.mass.size(); ++i) m0 += t.mass[i], m1 += t.mass[i] * t.var[i];
+    }
+    return m0 != 0.0 ? m1 / m0 : 0.0;
+}
+
+/// Linear interpolation in a table over v in [-R, R]; 0 outside.
+double signed_table_at(const std::vector<float>& t, double v, double R) {
+    const double p = (v / R + 1.0) * 0.5 * static_cast<double>(t.size() - 1);
+    if (!(p >= 0.0 && p <= static_cast<double>(t.size() - 1))) return 0.0;
+    const size_t i = std::min(static_cast<size_t>(p), t.size() - 2);
+    const double f = p - static_cast<double>(i);
+    return t[i] + f * (t[i + 1] - t[i]);
+}
 
 }  // namespace
 
 FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& view,
                    const PixelCoords& coords, const AntiAlias& aa) {
-    if (!(aa.far_field && aa.enabled && aa.anisotropic && aa.fade && pyr.radial())) return;
+    if (!(aa.far_field && aa.enabled && aa.anisotropic && aa.fade)) return;
+    if (!pyr.radial() && pyr.direction_bins() == 0) return;
+    m_bins = pyr.radial() ? 1 : pyr.direction_bins();
+    m_period = pyr.radial() ? 1.0 : pyr.direction_period();
     const auto& cam = view.camera();
     const int W = cam.width, H = cam.height;
     m_width = W, m_height = H;
@@ -113,17 +152,67 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
         const auto f = view.footprint(x, y);
         p.plan = plan_for(pyr, aa, f.s_major, f.s_minor);
         p.s_major = f.s_major, p.s_minor = f.s_minor;
+        p.blend = pyr.select(std::max(c * f.s_minor, pyr.sigma(0)), aa.blend);
+        const double sM2 = c * c * f.s_major * f.s_major;
+        p.var_lo = std::max(0.0, sM2 - level_blur2(pyr, p.blend.lo)) / (f.s_major * f.s_major);
+        p.var_hi = std::max(0.0, sM2 - level_blur2(pyr, p.blend.hi)) / (f.s_major * f.s_major);
         p.ok = true;
         return p;
     };
-    // A place is far when it is faded out or drawn by the line form with a short chord.
+    // Whether the expansion converges at a place (see kFarVariance).
+    std::vector<double> qbar(size_t(pyr.levels()));
+    for (int l = 0; l < pyr.levels(); ++l)
+        qbar[size_t(l)] =
+            pyr.radial() ? mean_chord_variance(pyr, l) : mean_chord_variance_dir(pyr, l);
+    auto converges = [&](const Place& p) {
+        const auto& b = p.blend;
+        const double ism2 = 1.0 / (p.s_major * p.s_major);
+        const std::array<int, 2> lv = {b.lo, b.hi};
+        const std::array<double, 2> bw = {b.lo == b.hi ? 1.0 : 1.0 - b.weight,
+                                          b.lo == b.hi ? 0.0 : b.weight};
+        const std::array<double, 2> var = {p.var_lo, p.var_hi};
+        double sbar = 0.0;
+        for (int k = 0; k < 2; ++k)
+            sbar += bw[size_t(k)] * (var[size_t(k)] + qbar[size_t(lv[size_t(k)])] * ism2);
+        // Mass-weighted mean squares of the chords' departures (radial tables are sampled
+        // uniformly in t = v^2 / R^2, so their weight per sample is P dv ~ P / sqrt(t)).
+        double m0 = 0.0, mvar = 0.0, mmean = 0.0;
+        auto scan = [&](const std::vector<float>& mass, const std::vector<float>& q,
+                        const std::vector<float>* mean, double v, double w, bool radial) {
+            const size_t n = mass.size();
+            for (size_t i = 0; i < n; ++i) {
+                const double t = (i + 0.5) / static_cast<double>(n);
+                const double pw = w * mass[i] * (radial ? 0.5 / std::sqrt(t) : 1.0);
+                const double d = v + q[i] * ism2 - sbar;
+                m0 += pw, mvar += pw * d * d;
+                if (mean) mmean += pw * sq((*mean)[i] / p.s_major);
+            }
+        };
+        for (int k = 0; k < 2; ++k) {
+            if (bw[size_t(k)] == 0.0) continue;
+            const int l = lv[size_t(k)];
+            if (pyr.radial())
+                scan(pyr.tables(l).line_mass, pyr.tables(l).line_var, nullptr, var[size_t(k)],
+                     bw[size_t(k)], true);
+            else
+                for (int bin = 0; bin < pyr.direction_bins(); ++bin) {
+                    const auto& t = pyr.direction_tables(l, bin);
+                    scan(t.mass, t.var, &t.mean, var[size_t(k)], bw[size_t(k)], false);
+                }
+        }
+        if (!(m0 > 0.0)) return false;
+        return std::sqrt(mvar / m0) <= kFarVariance * sbar &&
+               std::sqrt(mmean / m0) <= kFarMean * std::sqrt(sbar);
+    };
+    // A place is far when it is faded out, or its footprint is elongated (not the single form),
+    // the levels are of one sign and the chord is short.
     auto far_at = [&](int g, double rho) {
         const Place p = place(g, rho);
         if (!p.ok) return false;
         if (!p.plan.keep) return true;
-        if (p.plan.mode != kPerspLine) return false;
-        const double R = pyr.radius(std::max(p.plan.blend.lo, p.plan.blend.hi));
-        return R / p.s_major <= kFarChord * c;
+        if (p.plan.mode == kPerspSingle) return false;
+        if (!pyr.nonnegative(p.blend.lo) || !pyr.nonnegative(p.blend.hi)) return false;
+        return converges(p);
     };
     auto kept_at = [&](int g, double rho) {
         const Place p = place(g, rho);
@@ -196,8 +285,18 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
     const int rows = static_cast<int>(std::ceil(span / m_dy)) + 2;
     if (rows > 64 * H + 64) return;
     m_rows.resize(static_cast<size_t>(rows));
-    std::vector<double> qbar(size_t(pyr.levels()));
-    for (int l = 0; l < pyr.levels(); ++l) qbar[size_t(l)] = mean_chord_variance(pyr, l);
+    // Orientation of the tables: v grows with xi (image x) when the image's x axis points left
+    // of the outward direction e (turned a quarter counter-clockwise); the chord's centroid
+    // (along e) moves the image row by sign(dY/drho) per unit.
+    {
+        double x0, y0, x1, y1;
+        const double pc = 0.5 * W, pr = toward > 0 ? H - 0.5 : 0.5;
+        if (view.texture_point(pc - 0.5, pr, x0, y0) && view.texture_point(pc + 0.5, pr, x1, y1)) {
+            const double ex = 0.5 * (x0 + x1) - cam.x, ey = 0.5 * (y0 + y1) - cam.y;
+            m_v_sign = (x1 - x0) * -ey + (y1 - y0) * ex >= 0.0 ? 1.0 : -1.0;
+        }
+        m_u_sign = m_ya * m_yd - m_yb * m_yc >= 0.0 ? 1.0 : -1.0;
+    }
 
     tbb::parallel_for(0, rows, [&](int r) {
         Row& row = m_rows[size_t(r)];
@@ -210,11 +309,11 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
         double narrow = 1e300, wide = 0.0, sm_min = 1e300;
         for (int g = 0; g < G; ++g) {
             Place& p = places[size_t(g)] = place(g, rho);
-            if (!p.ok || !p.plan.keep || p.plan.mode != kPerspLine) {
+            if (!p.ok || !p.plan.keep || p.plan.mode == kPerspSingle) {
                 p.ok = false;
                 continue;
             }
-            const auto& b = p.plan.blend;
+            const auto& b = p.blend;
             narrow = std::min(narrow, 2.0 * pyr.radius(b.lo));
             wide = std::max(wide, pyr.radius(std::max(b.lo, b.hi)));
             sm_min = std::min(sm_min, p.s_minor);
@@ -257,68 +356,84 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
                 static_cast<int>(std::ceil((xi_at(row, g * m_segment_px) - row.xi0) / row.dxi)),
                 0, row.nodes);
         row.segment_node[size_t(G)] = row.nodes;
-        const int T = row.taps + 1;
-        row.tables.assign(size_t(G) * 3 * T, 0.0f);
-        double peak0 = 0.0, peak2 = 0.0, peak4 = 0.0;
+        const int T = 2 * row.taps + 1;
+        const int B = m_bins;
+        row.tables.assign(size_t(G) * B * kProfiles * T, 0.0f);
+        std::array<double, kProfiles> peak{};
         for (int g = 0; g < G; ++g) {
             const Place& p = places[size_t(g)];
             if (!p.ok) continue;
-            const auto& b = p.plan.blend;
+            const auto& b = p.blend;
             const double ism2 = 1.0 / (p.s_major * p.s_major), ism4 = ism2 * ism2;
             const std::array<int, 2> lv = {b.lo, b.hi};
             const std::array<double, 2> bw = {b.lo == b.hi ? 1.0 : 1.0 - b.weight,
                                               b.lo == b.hi ? 0.0 : b.weight};
-            const std::array<double, 2> var = {p.plan.var_lo * ism2, p.plan.var_hi * ism2};
+            const std::array<double, 2> var = {p.var_lo, p.var_hi};
             double sbar = 0.0;
-            for (int k = 0; k < 2; ++k) sbar += bw[size_t(k)] * (var[size_t(k)] + qbar[size_t(lv[size_t(k)])] * ism2);
+            for (int k = 0; k < 2; ++k)
+                sbar += bw[size_t(k)] * (var[size_t(k)] + qbar[size_t(lv[size_t(k)])] * ism2);
             row.sbar[size_t(g)] = static_cast<float>(sbar);
             row.weight[size_t(g)] = static_cast<float>(
                 p.plan.fade / (std::sqrt(2.0 * std::numbers::pi) * p.s_major));
-            float* t0 = row.tables.data() + size_t(g) * 3 * T;
-            float* t2 = t0 + T;
-            float* t4 = t2 + T;
-            for (int k = 0; k < T; ++k) {
-                const double v = k * row.dxi;
-                double a0 = 0.0, a2 = 0.0, a4 = 0.0;
-                for (int q = 0; q < 2; ++q) {
-                    if (bw[size_t(q)] == 0.0) continue;
-                    const int l = lv[size_t(q)];
-                    const double R = pyr.radius(l), tt = v * v / (R * R);
-                    if (!(tt < 1.0)) continue;
-                    const auto& tab = pyr.tables(l);
-                    const double P = table_at(tab.line_mass, tt);
-                    const double qv = table_at(tab.line_var, tt);
-                    const double k4 = table_at(tab.line_k4, tt);
-                    // The chord convolved with the remaining Gaussian: a Gaussian of variance
-                    // var + q / s_major^2 with the Edgeworth term of its kurtosis (the line
-                    // form), expanded around the mean variance sbar:
-                    // N(u; sbar + d) = N + d/2 N'' + d^2/8 N'''' + ...
-                    const double d = var[size_t(q)] + qv * ism2 - sbar;
-                    a0 += bw[size_t(q)] * P;
-                    a2 += bw[size_t(q)] * P * 0.5 * d;
-                    a4 += bw[size_t(q)] * P * (0.125 * d * d + k4 * ism4 / 24.0);
+            for (int bin = 0; bin < B; ++bin) {
+                float* t0 = row.tables.data() + (size_t(g) * B + size_t(bin)) * kProfiles * T;
+                for (int k = -row.taps; k <= row.taps; ++k) {
+                    const double v = m_v_sign * k * row.dxi;
+                    std::array<double, kProfiles> a{};
+                    for (int q = 0; q < 2; ++q) {
+                        if (bw[size_t(q)] == 0.0) continue;
+                        const int l = lv[size_t(q)];
+                        const double R = pyr.radius(l);
+                        double P = 0.0, mu = 0.0, qv = 0.0, k4 = 0.0;
+                        if (pyr.radial()) {
+                            const double tt = v * v / (R * R);
+                            if (!(tt < 1.0)) continue;
+                            const auto& tab = pyr.tables(l);
+                            P = table_at(tab.line_mass, tt), qv = table_at(tab.line_var, tt);
+                            k4 = table_at(tab.line_k4, tt);
+                        } else {
+                            const auto& tab = pyr.direction_tables(l, bin);
+                            P = signed_table_at(tab.mass, v, R);
+                            if (P == 0.0) continue;
+                            mu = m_u_sign * signed_table_at(tab.mean, v, R) / p.s_major;
+                            qv = signed_table_at(tab.var, v, R);
+                            k4 = signed_table_at(tab.k4, v, R);
+                        }
+                        // The chord convolved with the remaining Gaussian: a Gaussian of mean
+                        // mu and variance var + q / s_major^2 with the Edgeworth term of its
+                        // kurtosis (the line form), expanded around N(u; sbar):
+                        // N(u - mu; sbar + d) = sum (-mu)^i / i! (d/2)^j / j! N^(i + 2j)(u).
+                        const double d = var[size_t(q)] + qv * ism2 - sbar;
+                        const double w = bw[size_t(q)] * P;
+                        a[0] += w;
+                        a[1] += w * -mu;
+                        a[2] += w * (0.5 * d + 0.5 * mu * mu);
+                        a[3] += w * (-0.5 * mu * d - mu * mu * mu / 6.0);
+                        a[4] += w * (0.125 * d * d + 0.25 * mu * mu * d +
+                                     mu * mu * mu * mu / 24.0 + k4 * ism4 / 24.0);
+                    }
+                    for (int m = 0; m < kProfiles; ++m) {
+                        t0[size_t(m) * T + size_t(k + row.taps)] = static_cast<float>(a[size_t(m)]);
+                        peak[size_t(m)] =
+                            std::max(peak[size_t(m)], std::abs(a[size_t(m)]) / std::pow(sbar, 0.5 * m));
+                    }
                 }
-                t0[k] = static_cast<float>(a0), t2[k] = static_cast<float>(a2);
-                t4[k] = static_cast<float>(a4);
-                peak0 = std::max(peak0, std::abs(a0));
-                peak2 = std::max(peak2, std::abs(a2) / sbar);
-                peak4 = std::max(peak4, std::abs(a4) / (sbar * sbar));
-            }
-            // The linear deposit and the linear interpolation back to the pixels each blur the
-            // profile by a tent of half-width dx: together about (1 + dx^2 / 6 d^2/dx^2); the
-            // tables are sharpened by the inverse, T - dx^2 / 6 T'' (second differences).
-            for (float* t : {t0, t2, t4}) {
+                // The linear deposit and the linear interpolation back to the pixels each blur
+                // the profile by a tent of half-width dxi: together about (1 + dxi^2 / 6
+                // d^2/dxi^2); the tables are sharpened by the inverse, T - dxi^2 / 6 T''.
                 std::vector<float> sharp(static_cast<size_t>(T));
-                for (int k = 0; k < T; ++k) {
-                    const float left = t[k == 0 ? 1 : k - 1], right = k + 1 < T ? t[k + 1] : 0.0f;
-                    sharp[size_t(k)] = t[k] - (left - 2.0f * t[k] + right) / 6.0f;
+                for (int m = 0; m < kProfiles; ++m) {
+                    float* t = t0 + size_t(m) * T;
+                    for (int k = 0; k < T; ++k) {
+                        const float left = k > 0 ? t[k - 1] : 0.0f, right = k + 1 < T ? t[k + 1] : 0.0f;
+                        sharp[size_t(k)] = t[k] - (left - 2.0f * t[k] + right) / 6.0f;
+                    }
+                    std::copy(sharp.begin(), sharp.end(), t);
                 }
-                std::copy(sharp.begin(), sharp.end(), t);
             }
         }
         // Profiles whose term stays below 1e-4 of the main one's peak are left out.
-        row.fourth = peak4 > 1e-4 * peak0;
-        row.second = row.fourth || peak2 > 1e-4 * peak0;
+        for (int m = 0; m < kProfiles; ++m) row.used[size_t(m)] = m == 0 || peak[size_t(m)] > 1e-4 * peak[0];
     });
 
     // The pixels the far field reaches: rows whose y' range meets the sub-rows' (plus the
@@ -410,7 +525,7 @@ float FarField::row_weight(const Row& row, double sx) const {
     return static_cast<float>((1.0 - t) * row.weight[size_t(g)] + t * row.weight[size_t(g) + 1]);
 }
 
-bool FarField::item(double rx, double ry, float weight, FarItem& it) const {
+bool FarField::item(double rx, double ry, float weight, double theta, FarItem& it) const {
     const double depth = m_P[6] * rx + m_P[7] * ry + m_P[8];
     if (!(depth > 0.0)) return false;
     const double yc = y_of(std::sqrt(rx * rx + ry * ry));
@@ -423,6 +538,17 @@ bool FarField::item(double rx, double ry, float weight, FarItem& it) const {
     const double margin = std::max(a.nodes ? a.margin : 0.0, b.nodes ? b.margin : 0.0);
     if (!(a.nodes || b.nodes) || !(sx > -margin && sx < m_width + margin)) return false;
     it.row = r;
+    it.bin = 0, it.wb[0] = 1.0f, it.wb[1] = 0.0f;
+    if (m_bins > 1) {
+        // The direction of the footprint's major axis (away from the foot) in the kernel's
+        // frame, in bins (linear weights between the two nearest).
+        double gamma = std::atan2(ry, rx) - theta;
+        gamma -= m_period * std::floor(gamma / m_period);
+        const double pb = gamma / m_period * m_bins;
+        const int b0 = std::min(static_cast<int>(pb), m_bins - 1);
+        it.bin = b0;
+        it.wb[1] = static_cast<float>(pb - b0), it.wb[0] = 1.0f - it.wb[1];
+    }
     const double fy = q - r;
     bool any = false;
     for (int e = 0; e < 2; ++e) {
@@ -452,13 +578,19 @@ void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out
         else
             for (int i = 0; i < n; ++i) f(i);
     };
-    // Node grids (with `taps` zeros each side for the convolution).
+    // Node grids, one per direction bin (with `taps` zeros each side for the convolution).
+    const int B = m_bins;
     std::vector<size_t> off(static_cast<size_t>(rows) + 1, 0);
+    auto stride = [&](const Row& row) { return size_t(row.nodes + 2 * row.taps); };
     for (int r = 0; r < rows; ++r) {
         const Row& row = m_rows[size_t(r)];
-        off[size_t(r) + 1] = off[size_t(r)] + (row.nodes ? size_t(row.nodes + 2 * row.taps) : 0);
+        off[size_t(r) + 1] = off[size_t(r)] + (row.nodes ? size_t(B) * stride(row) : 0);
     }
     std::vector<float> D(off.back(), 0.0f);
+    auto grid = [&](int r, int bin) {
+        const Row& row = m_rows[size_t(r)];
+        return D.data() + off[size_t(r)] + size_t(bin) * stride(row) + size_t(row.taps);
+    };
 
     // Deposit by bands of sub-rows: items binned in canonical order, each band summed by one
     // task into its rows, the row after the band into a halo added afterwards.
@@ -491,44 +623,55 @@ void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out
     std::vector<std::vector<float>> halo(static_cast<size_t>(bands));
     run(bands, [&](int b) {
         const int last = std::min(rows, (b + 1) * kBand);  // first row after the band
-        if (last < rows && m_rows[size_t(last)].nodes)
-            halo[size_t(b)].assign(size_t(m_rows[size_t(last)].nodes), 0.0f);
+        const size_t hn = last < rows ? size_t(m_rows[size_t(last)].nodes) : 0;
+        if (hn) halo[size_t(b)].assign(size_t(B) * hn, 0.0f);
         for (size_t k = band_start[size_t(b)]; k < band_start[size_t(b) + 1]; ++k) {
             const FarItem& it = *order[k];
             for (int e = 0; e < 2; ++e) {
                 const int r = it.row + e, nd = it.node[e];
                 if (nd < 0) continue;
-                float* d = r == last ? halo[size_t(b)].data()
-                                     : D.data() + off[size_t(r)] + m_rows[size_t(r)].taps;
-                d[nd] += it.w[e][0];
-                d[nd + 1] += it.w[e][1];
+                for (int q = 0; q < (B > 1 ? 2 : 1); ++q) {
+                    const int bin = (it.bin + q) % B;
+                    float* d = r == last ? halo[size_t(b)].data() + size_t(bin) * hn : grid(r, bin);
+                    d[nd] += it.wb[q] * it.w[e][0];
+                    d[nd + 1] += it.wb[q] * it.w[e][1];
+                }
             }
         }
     });
     run(bands, [&](int b) {
         const int r = (b + 1) * kBand;
         if (r >= rows || halo[size_t(b)].empty()) return;
-        float* d = D.data() + off[size_t(r)] + m_rows[size_t(r)].taps;
-        for (size_t k = 0; k < halo[size_t(b)].size(); ++k) d[k] += halo[size_t(b)][k];
+        const size_t hn = size_t(m_rows[size_t(r)].nodes);
+        for (int bin = 0; bin < B; ++bin) {
+            float* d = grid(r, bin);
+            const float* h = halo[size_t(b)].data() + size_t(bin) * hn;
+            for (size_t k = 0; k < hn; ++k) d[k] += h[k];
+        }
     });
 
-    // Across: each sub-row convolved with its segments' profiles, then sampled at the pixel
-    // centres (linear between nodes).
-    std::vector<std::vector<float>> X0(static_cast<size_t>(rows)), X2(X0.size()), X4(X0.size());
+    // Across: each sub-row convolved with its segments' profiles (summed over the direction
+    // bins), then sampled at the pixel centres (linear between nodes).
+    std::vector<std::array<std::vector<float>, kProfiles>> X(static_cast<size_t>(rows));
     run(rows, [&](int r) {
         const Row& row = m_rows[size_t(r)];
         if (!row.nodes) return;
-        const int T = row.taps + 1;
-        const float* d = D.data() + off[size_t(r)] + row.taps;
-        std::vector<float> x(static_cast<size_t>(row.nodes));
-        auto convolve = [&](int profile, std::vector<float>& px) {
+        const int T = 2 * row.taps + 1;
+        std::vector<float> x(size_t(row.nodes));
+        for (int m = 0; m < kProfiles; ++m) {
+            if (!row.used[size_t(m)]) continue;
             std::fill(x.begin(), x.end(), 0.0f);
-            for (int g = 0; g < m_segments; ++g) {
-                const int n0 = row.segment_node[size_t(g)], n1 = row.segment_node[size_t(g) + 1];
-                if (n0 >= n1) continue;
-                const float* t = row.tables.data() + (size_t(g) * 3 + size_t(profile)) * T;
-                loops.far_across(d, t, row.taps, n0, n1, x.data());
+            for (int bin = 0; bin < B; ++bin) {
+                const float* d = grid(r, bin);
+                for (int g = 0; g < m_segments; ++g) {
+                    const int n0 = row.segment_node[size_t(g)], n1 = row.segment_node[size_t(g) + 1];
+                    if (n0 >= n1) continue;
+                    const float* t = row.tables.data() +
+                                     ((size_t(g) * B + size_t(bin)) * kProfiles + size_t(m)) * T;
+                    loops.far_across(d, t + row.taps, row.taps, n0, n1, x.data());
+                }
             }
+            auto& px = X[size_t(r)][size_t(m)];
             px.resize(size_t(W));
             for (int i = 0; i < W; ++i) {
                 const double p = (xi_at(row, i + 0.5) - row.xi0) / row.dxi;
@@ -536,20 +679,18 @@ void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out
                 const float f = static_cast<float>(p - nd);
                 px[size_t(i)] = x[size_t(nd)] + f * (x[size_t(nd) + 1] - x[size_t(nd)]);
             }
-        };
-        convolve(0, X0[size_t(r)]);
-        if (row.second) convolve(1, X2[size_t(r)]);
-        if (row.fourth) convolve(2, X4[size_t(r)]);
+        }
     });
 
     // Along: per pixel, the sub-rows within reach of its circle.
     std::vector<float> yr(static_cast<size_t>(rows));
     for (int r = 0; r < rows; ++r) yr[size_t(r)] = static_cast<float>(m_rows[size_t(r)].y);
     constexpr int kChunkPx = 64;
+    const std::vector<float> zeros(size_t(kChunkPx), 0.0f);
     run(m_j1 - m_j0, [&](int jj) {
         const int j = m_j0 + jj;
-        std::vector<const float*> p0(static_cast<size_t>(rows), nullptr), p2(static_cast<size_t>(rows), nullptr),
-            p4(size_t(rows), nullptr);
+        std::array<std::vector<const float*>, kProfiles> ptr;
+        for (auto& v : ptr) v.assign(static_cast<size_t>(rows), nullptr);
         std::vector<float> acc(static_cast<size_t>(kChunkPx));
         for (int i0 = 0; i0 < W; i0 += kChunkPx) {
             const int m = std::min(kChunkPx, W - i0);
@@ -564,28 +705,21 @@ void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out
             const int r0 = std::max(0, static_cast<int>(std::floor((lo - m_y0) / m_dy)));
             const int r1 = std::min(rows, static_cast<int>(std::ceil((hi - m_y0) / m_dy)) + 1);
             if (r0 >= r1) continue;
-            int used = 0;
-            for (int r = r0; r < r1; ++r) {
-                p0[size_t(r)] = X0[size_t(r)].empty() ? nullptr : X0[size_t(r)].data() + i0;
-                p2[size_t(r)] = X2[size_t(r)].empty() ? nullptr : X2[size_t(r)].data() + i0;
-                p4[size_t(r)] = X4[size_t(r)].empty() ? nullptr : X4[size_t(r)].data() + i0;
-                used += p0[size_t(r)] != nullptr;
-            }
-            if (!used) continue;
             std::fill(acc.begin(), acc.end(), 0.0f);
-            // Sub-rows without nodes are skipped in runs.
-            int r = r0;
-            while (r < r1) {
-                if (!p0[size_t(r)]) {
-                    ++r;
-                    continue;
+            for (int r = r0; r < r1; ++r) {
+                const auto& x = X[size_t(r)];
+                if (x[0].empty()) continue;
+                int terms = 0;
+                for (int q = 0; q < kProfiles; ++q) {
+                    const bool here = !x[size_t(q)].empty();
+                    ptr[size_t(q)][size_t(r)] = here ? x[size_t(q)].data() + i0 : zeros.data();
+                    if (here) terms |= q == 1 || q == 3 ? 2 : q ? 1 : 0;
                 }
-                int e = r;
-                while (e < r1 && p0[size_t(e)]) ++e;
+                const std::array<const float* const*, kProfiles> rowptr = {
+                    ptr[0].data(), ptr[1].data(), ptr[2].data(), ptr[3].data(), ptr[4].data()};
                 loops.far_along(m_yp.data() + p, m_ik.data() + p, m_is.data() + p,
-                                m_rs.data() + p, m, yr.data(), p0.data(), p2.data(), p4.data(), r,
-                                e, acc.data());
-                r = e;
+                                m_rs.data() + p, m, yr.data(), rowptr.data(), terms, r, r + 1,
+                                acc.data());
             }
             float* dst = out.data.data() + size_t(j) * W + i0;
             for (int i = 0; i < m; ++i) dst[i] += acc[size_t(i)];

@@ -10,6 +10,7 @@
 // pixel filters the sub-rows along: a few additions per impulse, a bounded amount of work per
 // pixel.
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -17,13 +18,18 @@
 
 namespace impulse::render::detail {
 
-/// A far impulse, ready to deposit: on sub-rows row and row + 1, at nodes node[e] and
+/// A far impulse, ready to deposit: in direction bins bin and bin + 1 (mod the bins; radial
+/// kernels: one bin) with weights wb[0], wb[1], on sub-rows row and row + 1 at nodes node[e] and
 /// node[e] + 1 with weights w[e][0], w[e][1] (node -1: nothing on that sub-row).
 struct FarItem {
-    int32_t row = 0;
+    int32_t row = 0, bin = 0;
     int32_t node[2] = {-1, -1};
     float w[2][2] = {{0, 0}, {0, 0}};
+    float wb[2] = {1, 0};
 };
+
+/// Profiles of the far field: the derivatives 0 .. 4 of the along Gaussian.
+constexpr int kFarProfiles = 5;
 
 class FarField {
 public:
@@ -37,9 +43,10 @@ public:
         return m_active && rx * rx + ry * ry >= m_rho_far2 &&
                m_P[6] * rx + m_P[7] * ry + m_P[8] >= m_depth_min;
     }
-    /// The item of a far impulse at (rx, ry) from the foot; false when it adds nothing (behind
-    /// the camera, faded out, too far off the image).
-    bool item(double rx, double ry, float weight, FarItem& it) const;
+    /// The item of a far impulse at (rx, ry) from the foot, turned by theta (radians, the
+    /// kernel's own orientation included; unused for radial kernels); false when it adds
+    /// nothing (behind the camera, faded out, too far off the image).
+    bool item(double rx, double ry, float weight, double theta, FarItem& it) const;
     /// Adds the far field of the items to `out`: lists joined in order hold them in
     /// canonical order.
     void render(const std::vector<std::vector<FarItem>>& items, Frame& out,
@@ -56,11 +63,12 @@ private:
         double margin = 0;            ///< pixels beyond the image edges that still reach it
         double xi0 = 0, dxi = 1;      ///< node n at xi0 + n dxi
         int nodes = 0, taps = 0;      ///< node count, half-width of the profiles in nodes
-        bool second = false, fourth = false;  ///< profiles 2 and 4 matter
+        std::array<bool, kFarProfiles> used{};  ///< which profiles matter (0 always)
         std::vector<int> segment_node;  ///< first node of each segment (segments + 1 entries)
         std::vector<float> weight;    ///< per segment: fade / (sqrt(2 pi) s_major)
         std::vector<float> sbar;      ///< per segment: variance of the along Gaussian, px^2
-        std::vector<float> tables;    ///< per segment, profile 0, 2, 4: taps + 1 values each
+        /// per segment, direction bin and profile: 2 taps + 1 values (offsets -taps .. taps)
+        std::vector<float> tables;
     };
     bool m_active = false;
     int m_width = 0, m_height = 0, m_segments = 1;
@@ -69,6 +77,9 @@ private:
     double m_rho_far2 = 0, m_depth_min = 0;
     double m_P[9] = {};  ///< the view's homography (PerspectiveView::homography)
     double m_inv_segment_px = 1;
+    int m_bins = 1;          ///< direction bins (1: radial kernel)
+    double m_period = 1;     ///< the bins' period, radians
+    double m_v_sign = 1, m_u_sign = 1;  ///< orientation of the tables (see the constructor)
     double m_y0 = 0, m_dy = 1;  ///< sub-row r at y' = y0 + r dy
     std::vector<Row> m_rows;
     /// Pixels that receive the far field: rows [m_j0, m_j1), per pixel y', 1 / kappa, 1 / s,

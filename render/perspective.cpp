@@ -631,7 +631,8 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
                 continue;
             if (far.contains(x - cam.x, y - cam.y)) {
                 detail::FarItem fi;
-                if (far.item(x - cam.x, y - cam.y, imp.weight[i], fi))
+                if (far.item(x - cam.x, y - cam.y, imp.weight[i],
+                             orient + static_cast<double>(imp.theta[i]), fi))
                     far_items.push_back(fi);
                 continue;
             }
