@@ -93,14 +93,13 @@ struct PerspLoops {
     /// Far field, across: X[n] += sum_{k = -m..m} D[n - k] T[k] for n in [n0, n1) (D readable
     /// on [n0 - m, n1 + m), T on [-m, m]), summed in order of k.
     void (*far_across)(const float* D, const float* T, int m, int n0, int n1, float* X);
-    /// Far field, along: for pixels i in [0, n) of a row, acc[i] += the sum over sub-rows r in
-    /// [r0, r1) of sum_q g_q(u) X[q][r][i], g_q the q-th derivative (q = 0 .. 4) of
-    /// g(u) = exp(-u^2 / (2 s)) / sqrt(s), u = (yp[i] - yr[r]) * inv_kappa[i], s = 1 / inv_s[i],
-    /// rsqrt_s[i] = 1 / sqrt(s). terms: bit 0: the even derivatives 2, 4 are present; bit 1: the
-    /// odd ones 1, 3 (the others are read, whatever they hold, only when present).
+    /// Far field, along: for pixels i in [0, n) of a row, from the sub-row at y' = yr,
+    /// acc[i] += sum_q g_q(u) x[q][i], g_q the q-th derivative (q = 0 .. 4) of
+    /// g(u) = exp(-u^2 / (2 s)) / sqrt(s), u = (yp[i] - yr) * inv_kappa[i], s = 1 / inv_s[i],
+    /// rsqrt_s[i] = 1 / sqrt(s). terms: bit 0: x[2], x[4] are used; bit 1: x[1], x[3].
     void (*far_along)(const float* yp, const float* inv_kappa, const float* inv_s,
-                      const float* rsqrt_s, int n, const float* yr,
-                      const float* const* const* X, int terms, int r0, int r1, float* acc);
+                      const float* rsqrt_s, int n, float yr, const float* const* x, int terms,
+                      float* acc);
 };
 extern const PerspLoops kPerspLoopsBase, kPerspLoopsAvx2;
 

@@ -17,14 +17,15 @@ namespace {
 
 /// The far form expands each chord's profile along the major axis (a Gaussian of the chord's
 /// mean mu and variance var + q / s_major^2, pixels) to fourth order around the Gaussian of the
-/// mean variance sbar. It applies where that converges: the chords' departures, weighted by
-/// their mass, have rms(var + q / s_major^2 - sbar) <= kFarVariance sbar and
-/// rms(mu) <= kFarMean sqrt(sbar). kFarVariance is set against the supersampled reference of
-/// test (a) (cosine kernels, chord variances from 0 to 0.13 R^2): there the far rows err no more
-/// than with the line form up to R / s_major = 1.5 px, where the rms is 0.077 (at 2 px, 0.098,
-/// the nearest far rows err twice as much). kFarMean: for the sheared chords of elliptical
-/// kernels (their centroid moves across the kernel), checked against a supersampled reference
-/// of the `clouds` sky (errors below 1.5 % of the texture's sd in windows at the boundary).
+/// mean variance sbar of its direction bin. It applies where that converges: the chords'
+/// departures, weighted by their mass, have rms((var + q / s_major^2 - sbar) / sbar) <=
+/// kFarVariance and rms(mu / sqrt(sbar)) <= kFarMean. kFarVariance is set against the
+/// supersampled reference of test (a) (cosine kernels, chord variances from 0 to 0.13 R^2):
+/// there the far rows err no more than with the line form up to R / s_major = 1.5 px, where the
+/// rms is 0.077 (at 2 px, 0.098, the nearest far rows err twice as much). kFarMean bounds the
+/// expansion in the centroid of sheared chords (elliptical kernels); against a supersampled
+/// reference of the `clouds` sky the far field errs by 1-2 % of the texture's sd where it
+/// begins (probes: 0.6 %) and 0.7 % near the horizon (probes, over their budget: 5-10 %).
 constexpr double kFarVariance = 0.077;
 constexpr double kFarMean = 0.7;
 // The filter is refreshed every 0.05 focal lengths along a sub-row (0.05 rad at the centre of
@@ -84,13 +85,11 @@ double level_blur2(const kernels::KernelPyramid& pyr, int l) {
     return l == 0 ? 0.0 : pyr.sigma(l) * pyr.sigma(l);
 }
 
-/// Mean chord variance of a non-radial level, over its directions (mass-weighted).
-double mean_chord_variance_dir(const kernels::KernelPyramid& pyr, int l) {
+/// Mean chord variance of a non-radial level across direction bin b (mass-weighted).
+double mean_chord_variance_dir(const kernels::KernelPyramid& pyr, int l, int b) {
     double m0 = 0.0, m1 = 0.0;
-    for (int b = 0; b < pyr.direction_bins(); ++b) {
-        const auto& t = pyr.direction_tables(l, b);
-        for (size_t i = 0; i < t.mass.size(); ++i) m0 += t.mass[i], m1 += t.mass[i] * t.var[i];
-    }
+    const auto& t = pyr.direction_tables(l, b);
+    for (size_t i = 0; i < t.mass.size(); ++i) m0 += t.mass[i], m1 += t.mass[i] * t.var[i];
     return m0 != 0.0 ? m1 / m0 : 0.0;
 }
 
@@ -160,10 +159,21 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
         return p;
     };
     // Whether the expansion converges at a place (see kFarVariance).
-    std::vector<double> qbar(size_t(pyr.levels()));
+    // Mean chord variance per level and direction bin: each bin has its own along Gaussian.
+    const int NB = m_bins;
+    std::vector<double> qbar(size_t(pyr.levels()) * NB);
     for (int l = 0; l < pyr.levels(); ++l)
-        qbar[size_t(l)] =
-            pyr.radial() ? mean_chord_variance(pyr, l) : mean_chord_variance_dir(pyr, l);
+        for (int b = 0; b < NB; ++b)
+            qbar[size_t(l) * NB + b] =
+                pyr.radial() ? mean_chord_variance(pyr, l) : mean_chord_variance_dir(pyr, l, b);
+    // The variance of the along Gaussian of a place and bin.
+    auto sbar_of = [&](const Place& p, int bin) {
+        const auto& b = p.blend;
+        const double ism2 = 1.0 / (p.s_major * p.s_major);
+        const double wl = b.lo == b.hi ? 1.0 : 1.0 - b.weight, wh = b.lo == b.hi ? 0.0 : b.weight;
+        return wl * (p.var_lo + qbar[size_t(b.lo) * NB + bin] * ism2) +
+               wh * (p.var_hi + qbar[size_t(b.hi) * NB + bin] * ism2);
+    };
     auto converges = [&](const Place& p) {
         const auto& b = p.blend;
         const double ism2 = 1.0 / (p.s_major * p.s_major);
@@ -171,21 +181,20 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
         const std::array<double, 2> bw = {b.lo == b.hi ? 1.0 : 1.0 - b.weight,
                                           b.lo == b.hi ? 0.0 : b.weight};
         const std::array<double, 2> var = {p.var_lo, p.var_hi};
-        double sbar = 0.0;
-        for (int k = 0; k < 2; ++k)
-            sbar += bw[size_t(k)] * (var[size_t(k)] + qbar[size_t(lv[size_t(k)])] * ism2);
         // Mass-weighted mean squares of the chords' departures (radial tables are sampled
         // uniformly in t = v^2 / R^2, so their weight per sample is P dv ~ P / sqrt(t)).
+        // (relative to the bin's own sbar: the mean squares of d / sbar and mu^2 / sbar)
         double m0 = 0.0, mvar = 0.0, mmean = 0.0;
         auto scan = [&](const std::vector<float>& mass, const std::vector<float>& q,
-                        const std::vector<float>* mean, double v, double w, bool radial) {
+                        const std::vector<float>* mean, double v, double w, bool radial,
+                        double sbar) {
             const size_t n = mass.size();
             for (size_t i = 0; i < n; ++i) {
                 const double t = (i + 0.5) / static_cast<double>(n);
                 const double pw = w * mass[i] * (radial ? 0.5 / std::sqrt(t) : 1.0);
                 const double d = v + q[i] * ism2 - sbar;
-                m0 += pw, mvar += pw * d * d;
-                if (mean) mmean += pw * sq((*mean)[i] / p.s_major);
+                m0 += pw, mvar += pw * d * d / (sbar * sbar);
+                if (mean) mmean += pw * sq((*mean)[i] / p.s_major) / sbar;
             }
         };
         for (int k = 0; k < 2; ++k) {
@@ -193,16 +202,16 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
             const int l = lv[size_t(k)];
             if (pyr.radial())
                 scan(pyr.tables(l).line_mass, pyr.tables(l).line_var, nullptr, var[size_t(k)],
-                     bw[size_t(k)], true);
+                     bw[size_t(k)], true, sbar_of(p, 0));
             else
                 for (int bin = 0; bin < pyr.direction_bins(); ++bin) {
                     const auto& t = pyr.direction_tables(l, bin);
-                    scan(t.mass, t.var, &t.mean, var[size_t(k)], bw[size_t(k)], false);
+                    scan(t.mass, t.var, &t.mean, var[size_t(k)], bw[size_t(k)], false,
+                         sbar_of(p, bin));
                 }
         }
         if (!(m0 > 0.0)) return false;
-        return std::sqrt(mvar / m0) <= kFarVariance * sbar &&
-               std::sqrt(mmean / m0) <= kFarMean * std::sqrt(sbar);
+        return std::sqrt(mvar / m0) <= kFarVariance && std::sqrt(mmean / m0) <= kFarMean;
     };
     // A place is far when it is faded out, or its footprint is elongated (not the single form),
     // the levels are of one sign and the chord is short.
@@ -320,7 +329,7 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
             row.margin = std::max(row.margin, pyr.radius(std::max(b.lo, b.hi)) / p.s_minor + 2.0);
         }
         row.weight.assign(size_t(G), 0.0f);
-        row.sbar.assign(size_t(G), static_cast<float>(c * c));
+        row.sbar.assign(size_t(G) * m_bins, static_cast<float>(c * c));
         if (!(wide > 0.0)) return;  // nothing drawn on this circle
         // The across coordinate: arc length along the circle, d xi / dx = s_minor (linear
         // between segment centres, held beyond). The kernel's profile across is then the same
@@ -369,13 +378,11 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
             const std::array<double, 2> bw = {b.lo == b.hi ? 1.0 : 1.0 - b.weight,
                                               b.lo == b.hi ? 0.0 : b.weight};
             const std::array<double, 2> var = {p.var_lo, p.var_hi};
-            double sbar = 0.0;
-            for (int k = 0; k < 2; ++k)
-                sbar += bw[size_t(k)] * (var[size_t(k)] + qbar[size_t(lv[size_t(k)])] * ism2);
-            row.sbar[size_t(g)] = static_cast<float>(sbar);
             row.weight[size_t(g)] = static_cast<float>(
                 p.plan.fade / (std::sqrt(2.0 * std::numbers::pi) * p.s_major));
             for (int bin = 0; bin < B; ++bin) {
+                const double sbar = sbar_of(p, bin);
+                row.sbar[size_t(g) * B + bin] = static_cast<float>(sbar);
                 float* t0 = row.tables.data() + (size_t(g) * B + size_t(bin)) * kProfiles * T;
                 for (int k = -row.taps; k <= row.taps; ++k) {
                     const double v = m_v_sign * k * row.dxi;
@@ -440,7 +447,7 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
     // along filter's reach), per pixel y', its scale kappa = dy'/dy and the along variance.
     double smax = c * c;
     for (const Row& row : m_rows)
-        for (float s : row.sbar) smax = std::max(smax, static_cast<double>(s));
+        for (float sb : row.sbar) smax = std::max(smax, static_cast<double>(sb));
     const double y_lo = m_y0, y_hi = m_y0 + (rows - 1) * m_dy;
     // Which rows: y' at 33 columns of both pixel edges of each row (along a row rho is
     // smallest at one column and grows away from it, so the samples bound the row's range).
@@ -478,7 +485,8 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
                 hit[size_t(i)] ? std::sqrt(sq(double(ex[size_t(i)])) + sq(double(ey[size_t(i)]))) : -1.0;
     });
     const size_t np = size_t(m_j1 - m_j0) * W;
-    m_yp.assign(np, 0.0f), m_ik.assign(np, 0.0f), m_is.assign(np, 0.0f), m_rs.assign(np, 0.0f);
+    m_yp.assign(np, 0.0f), m_ik.assign(np, 0.0f);
+    m_is.assign(np * m_bins, 0.0f), m_rs.assign(np * m_bins, 0.0f);
     tbb::parallel_for(m_j0, m_j1, [&](int j) {
         for (int i = 0; i < W; ++i) {
             const size_t p = size_t(j - m_j0) * W + i, q = size_t(j) * W + i;
@@ -495,13 +503,15 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
             const int r = std::clamp(static_cast<int>(std::lround((yc - m_y0) / m_dy)), 0, rows - 1);
             const int g = std::clamp(static_cast<int>((i + 0.5) / m_segment_px), 0, G - 1);
             // The linear deposit spreads an impulse over two sub-rows: variance dy^2 / 6 on
-            // average (in y'), taken off the along Gaussian.
-            const double sbar = m_rows[size_t(r)].sbar[size_t(g)];
-            const double s = std::max(0.5 * sbar, sbar - m_dy * m_dy / (6.0 * kappa * kappa));
+            // average (in y'), taken off the along Gaussian (one per direction bin).
             m_yp[p] = static_cast<float>(yc);
             m_ik[p] = static_cast<float>(1.0 / kappa);
-            m_is[p] = static_cast<float>(1.0 / s);
-            m_rs[p] = static_cast<float>(1.0 / std::sqrt(s));
+            for (int b = 0; b < m_bins; ++b) {
+                const double sbar = m_rows[size_t(r)].sbar[size_t(g) * m_bins + b];
+                const double s = std::max(0.5 * sbar, sbar - m_dy * m_dy / (6.0 * kappa * kappa));
+                m_is[size_t(b) * np + p] = static_cast<float>(1.0 / s);
+                m_rs[size_t(b) * np + p] = static_cast<float>(1.0 / std::sqrt(s));
+            }
         }
     });
     m_active = true;
@@ -621,6 +631,9 @@ void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out
         for (const FarItem& it : items[size_t(c)]) order[fill[size_t(it.row / kBand)]++] = &it;
     });
     std::vector<std::vector<float>> halo(static_cast<size_t>(bands));
+    // Which (sub-row, bin) grids received something (each set by the band that owns the row,
+    // or by the band before through its halo: both bands set it, from disjoint tasks' items).
+    std::vector<uint8_t> filled(size_t(rows) * B, 0), halo_filled(size_t(bands) * B, 0);
     run(bands, [&](int b) {
         const int last = std::min(rows, (b + 1) * kBand);  // first row after the band
         const size_t hn = last < rows ? size_t(m_rows[size_t(last)].nodes) : 0;
@@ -635,6 +648,7 @@ void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out
                     float* d = r == last ? halo[size_t(b)].data() + size_t(bin) * hn : grid(r, bin);
                     d[nd] += it.wb[q] * it.w[e][0];
                     d[nd + 1] += it.wb[q] * it.w[e][1];
+                    (r == last ? halo_filled[size_t(b) * B + bin] : filled[size_t(r) * B + bin]) = 1;
                 }
             }
         }
@@ -644,85 +658,99 @@ void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out
         if (r >= rows || halo[size_t(b)].empty()) return;
         const size_t hn = size_t(m_rows[size_t(r)].nodes);
         for (int bin = 0; bin < B; ++bin) {
+            if (!halo_filled[size_t(b) * B + bin]) continue;
+            filled[size_t(r) * B + bin] = 1;
             float* d = grid(r, bin);
             const float* h = halo[size_t(b)].data() + size_t(bin) * hn;
             for (size_t k = 0; k < hn; ++k) d[k] += h[k];
         }
     });
 
-    // Across: each sub-row convolved with its segments' profiles (summed over the direction
-    // bins), then sampled at the pixel centres (linear between nodes).
-    std::vector<std::array<std::vector<float>, kProfiles>> X(static_cast<size_t>(rows));
-    run(rows, [&](int r) {
-        const Row& row = m_rows[size_t(r)];
-        if (!row.nodes) return;
-        const int T = 2 * row.taps + 1;
-        std::vector<float> x(size_t(row.nodes));
-        for (int m = 0; m < kProfiles; ++m) {
-            if (!row.used[size_t(m)]) continue;
-            std::fill(x.begin(), x.end(), 0.0f);
-            for (int bin = 0; bin < B; ++bin) {
-                const float* d = grid(r, bin);
-                for (int g = 0; g < m_segments; ++g) {
-                    const int n0 = row.segment_node[size_t(g)], n1 = row.segment_node[size_t(g) + 1];
-                    if (n0 >= n1) continue;
-                    const float* t = row.tables.data() +
-                                     ((size_t(g) * B + size_t(bin)) * kProfiles + size_t(m)) * T;
-                    loops.far_across(d, t + row.taps, row.taps, n0, n1, x.data());
-                }
-            }
-            auto& px = X[size_t(r)][size_t(m)];
-            px.resize(size_t(W));
+    // Across and along, by bands of output rows (one task each, its rows written by it alone):
+    // for each sub-row within reach of the band and each direction bin, the sub-row is
+    // convolved across with its segments' profiles and sampled at the pixel centres (linear
+    // between nodes), then added to every pixel of the band it reaches through the along filter
+    // of that bin. Sub-rows are visited in order, so every pixel sums them in the same order.
+    const size_t np = m_yp.size();
+    const int nrow = m_j1 - m_j0;
+    std::vector<int> reach0(static_cast<size_t>(nrow), rows), reach1(static_cast<size_t>(nrow), 0);
+    for (int jj = 0; jj < nrow; ++jj) {
+        double lo = 1e300, hi = -1e300;
+        for (int i = 0; i < W; ++i) {
+            const size_t p = size_t(jj) * W + i;
+            if (m_ik[p] == 0.0f) continue;
+            double smax = 0.0;
+            for (int b = 0; b < B; ++b)
+                smax = std::max(smax, 1.0 / double(m_is[size_t(b) * np + p]));
+            const double reach = kAlongReach * std::sqrt(smax) / m_ik[p];
+            lo = std::min(lo, m_yp[p] - reach), hi = std::max(hi, m_yp[p] + reach);
+        }
+        if (!(lo <= hi)) continue;
+        reach0[size_t(jj)] = std::max(0, static_cast<int>(std::floor((lo - m_y0) / m_dy)));
+        reach1[size_t(jj)] = std::min(rows, static_cast<int>(std::ceil((hi - m_y0) / m_dy)) + 1);
+    }
+    constexpr int kRowsPerTask = 32;
+    const int tasks = (nrow + kRowsPerTask - 1) / kRowsPerTask;
+    run(tasks, [&](int task) {
+        const int ja = task * kRowsPerTask, jb = std::min(nrow, ja + kRowsPerTask);
+        int ra = rows, rb = 0;
+        for (int jj = ja; jj < jb; ++jj)
+            ra = std::min(ra, reach0[size_t(jj)]), rb = std::max(rb, reach1[size_t(jj)]);
+        std::vector<float> acc(size_t(jb - ja) * W, 0.0f), x;
+        std::vector<float> zeros(static_cast<size_t>(W), 0.0f), frac(static_cast<size_t>(W));
+        std::vector<int> node(static_cast<size_t>(W));
+        std::array<std::vector<float>, kProfiles> px;
+        for (int r = ra; r < rb; ++r) {
+            const Row& row = m_rows[size_t(r)];
+            if (!row.nodes) continue;
+            const int T = 2 * row.taps + 1;
+            x.resize(size_t(row.nodes));
+            const float yr = static_cast<float>(row.y);
             for (int i = 0; i < W; ++i) {
                 const double p = (xi_at(row, i + 0.5) - row.xi0) / row.dxi;
-                const int nd = static_cast<int>(p);
-                const float f = static_cast<float>(p - nd);
-                px[size_t(i)] = x[size_t(nd)] + f * (x[size_t(nd) + 1] - x[size_t(nd)]);
+                node[size_t(i)] = static_cast<int>(p);
+                frac[size_t(i)] = static_cast<float>(p - node[size_t(i)]);
+            }
+            for (int bin = 0; bin < B; ++bin) {
+                if (!filled[size_t(r) * B + bin]) continue;
+                const float* d = grid(r, bin);
+                int terms = 0;
+                std::array<const float*, kProfiles> xp{};
+                for (int m = 0; m < kProfiles; ++m) {
+                    xp[size_t(m)] = zeros.data();
+                    if (!row.used[size_t(m)]) continue;
+                    std::fill(x.begin(), x.end(), 0.0f);
+                    for (int g = 0; g < m_segments; ++g) {
+                        const int n0 = row.segment_node[size_t(g)];
+                        const int n1 = row.segment_node[size_t(g) + 1];
+                        if (n0 >= n1) continue;
+                        const float* t =
+                            row.tables.data() +
+                            ((size_t(g) * B + size_t(bin)) * kProfiles + size_t(m)) * T;
+                        loops.far_across(d, t + row.taps, row.taps, n0, n1, x.data());
+                    }
+                    auto& v = px[size_t(m)];
+                    v.resize(size_t(W));
+                    for (int i = 0; i < W; ++i) {
+                        const size_t nd = size_t(node[size_t(i)]);
+                        v[size_t(i)] = x[nd] + frac[size_t(i)] * (x[nd + 1] - x[nd]);
+                    }
+                    xp[size_t(m)] = v.data();
+                    if (m) terms |= m == 1 || m == 3 ? 2 : 1;
+                }
+                for (int jj = ja; jj < jb; ++jj) {
+                    if (r < reach0[size_t(jj)] || r >= reach1[size_t(jj)]) continue;
+                    const size_t p = size_t(jj) * W, pb = size_t(bin) * np + p;
+                    loops.far_along(m_yp.data() + p, m_ik.data() + p, m_is.data() + pb,
+                                    m_rs.data() + pb, W, yr, xp.data(), terms,
+                                    acc.data() + size_t(jj - ja) * W);
+                }
             }
         }
-    });
-
-    // Along: per pixel, the sub-rows within reach of its circle.
-    std::vector<float> yr(static_cast<size_t>(rows));
-    for (int r = 0; r < rows; ++r) yr[size_t(r)] = static_cast<float>(m_rows[size_t(r)].y);
-    constexpr int kChunkPx = 64;
-    const std::vector<float> zeros(size_t(kChunkPx), 0.0f);
-    run(m_j1 - m_j0, [&](int jj) {
-        const int j = m_j0 + jj;
-        std::array<std::vector<const float*>, kProfiles> ptr;
-        for (auto& v : ptr) v.assign(static_cast<size_t>(rows), nullptr);
-        std::vector<float> acc(static_cast<size_t>(kChunkPx));
-        for (int i0 = 0; i0 < W; i0 += kChunkPx) {
-            const int m = std::min(kChunkPx, W - i0);
-            const size_t p = size_t(jj) * W + i0;
-            double lo = 1e300, hi = -1e300;
-            for (int i = 0; i < m; ++i) {
-                if (m_is[p + i] == 0.0f) continue;
-                const double reach = kAlongReach / (std::sqrt(double(m_is[p + i])) * m_ik[p + i]);
-                lo = std::min(lo, m_yp[p + i] - reach), hi = std::max(hi, m_yp[p + i] + reach);
-            }
-            if (!(lo <= hi)) continue;
-            const int r0 = std::max(0, static_cast<int>(std::floor((lo - m_y0) / m_dy)));
-            const int r1 = std::min(rows, static_cast<int>(std::ceil((hi - m_y0) / m_dy)) + 1);
-            if (r0 >= r1) continue;
-            std::fill(acc.begin(), acc.end(), 0.0f);
-            for (int r = r0; r < r1; ++r) {
-                const auto& x = X[size_t(r)];
-                if (x[0].empty()) continue;
-                int terms = 0;
-                for (int q = 0; q < kProfiles; ++q) {
-                    const bool here = !x[size_t(q)].empty();
-                    ptr[size_t(q)][size_t(r)] = here ? x[size_t(q)].data() + i0 : zeros.data();
-                    if (here) terms |= q == 1 || q == 3 ? 2 : q ? 1 : 0;
-                }
-                const std::array<const float* const*, kProfiles> rowptr = {
-                    ptr[0].data(), ptr[1].data(), ptr[2].data(), ptr[3].data(), ptr[4].data()};
-                loops.far_along(m_yp.data() + p, m_ik.data() + p, m_is.data() + p,
-                                m_rs.data() + p, m, yr.data(), rowptr.data(), terms, r, r + 1,
-                                acc.data());
-            }
-            float* dst = out.data.data() + size_t(j) * W + i0;
-            for (int i = 0; i < m; ++i) dst[i] += acc[size_t(i)];
+        for (int jj = ja; jj < jb; ++jj) {
+            float* dst = out.data.data() + size_t(m_j0 + jj) * W;
+            const float* src = acc.data() + size_t(jj - ja) * W;
+            for (int i = 0; i < W; ++i) dst[i] += src[i];
         }
     });
 }
