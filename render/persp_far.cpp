@@ -33,8 +33,8 @@ constexpr double kFarMean = 0.7;
 // twice as much as the line form (whose filter is each impulse's own); with 0.05 they are on a
 // par with it.
 constexpr double kSegmentRad = 0.05;
-constexpr int kAcrossNodes = 16;    // nodes across the narrowest profile of a sub-row
-constexpr int kBand = 16;           // sub-rows per deposit task
+constexpr int kAcrossNodes = 16;  // nodes across the narrowest profile of a sub-row
+constexpr int kBand = 16;         // sub-rows per deposit task
 constexpr int kProfiles = kFarProfiles;
 constexpr double kAlongReach = 4.75;  // the along Gaussian is summed to 4.75 sd
 
@@ -118,8 +118,8 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
     if (!std::isfinite(hz) || std::abs(hz) > 1e7) return;
     const double toward = cam.plane == Plane::Ground ? 1.0 : -1.0;  // image rows nearer the camera
     view.range_row(m_ya, m_yb, m_yc, m_yd);
-    m_segments = std::max(
-        1, static_cast<int>(std::ceil(W / std::max(4.0, kSegmentRad * view.focal_px()))));
+    m_segments =
+        std::max(1, static_cast<int>(std::ceil(W / std::max(4.0, kSegmentRad * view.focal_px()))));
     m_segment_px = static_cast<double>(W) / m_segments;
     m_inv_segment_px = 1.0 / m_segment_px;
     view.homography(m_P);
@@ -250,7 +250,7 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
         double hi = near_rho;
         while (kept_at(g, hi) && hi < 1e15) hi *= 2.0;
         if (!kept_at(g, near_rho)) continue;  // nothing drawn in this column
-        double a = near_rho, b = hi;  // kept, not kept
+        double a = near_rho, b = hi;          // kept, not kept
         for (int it = 0; it < 40 && b / a > 1.0 + 1e-6; ++it) {
             const double m = std::sqrt(a * b);
             (kept_at(g, m) ? a : b) = m;
@@ -280,12 +280,13 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
         const double disc = bd * bd - dd * (L.bx * L.bx + L.by * L.by - m_rho_far2);
         if (!(disc >= 0.0)) continue;
         const double t = (-bd + std::sqrt(disc)) / dd;
-        m_depth_min = std::min(
-            m_depth_min, view.depth(cam.x + L.bx + t * L.dx, cam.y + L.by + t * L.dy));
+        m_depth_min =
+            std::min(m_depth_min, view.depth(cam.x + L.bx + t * L.dx, cam.y + L.by + t * L.dy));
     }
     m_depth_min *= 0.999;
 
-    // Sub-rows over the far zone, a quarter of ... half the pixel filter apart (plus one each side).
+    // Sub-rows over the far zone, a quarter of ... half the pixel filter apart (plus one each
+    // side).
     m_dy = 0.5 * c;
     const double ya = y_of(rho_far), yb = y_of(rho_cut);
     if (!std::isfinite(ya) || !std::isfinite(yb)) return;
@@ -339,9 +340,9 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
         for (int g = 0; g < G; ++g) {
             int k = g;  // nearest valid place
             for (int d = 1; !places[size_t(k)].ok && d < G; ++d)
-                k = g - d >= 0 && places[size_t(g - d)].ok ? g - d
+                k = g - d >= 0 && places[size_t(g - d)].ok  ? g - d
                     : g + d < G && places[size_t(g + d)].ok ? g + d
-                                                              : k;
+                                                            : k;
             sm[size_t(g)] = places[size_t(k)].s_minor;
         }
         auto sm_at = [&](double x) {
@@ -356,14 +357,13 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
         row.dxi = std::max(narrow / kAcrossNodes, 0.25 * c * sm_min);
         row.taps = static_cast<int>(std::ceil(wide / row.dxi)) + 1;
         row.xi0 = xi_at(row, -row.margin) - (row.taps + 1) * row.dxi;
-        row.nodes =
-            static_cast<int>(std::ceil((xi_at(row, W + row.margin) - row.xi0) / row.dxi)) +
-            row.taps + 2;
+        row.nodes = static_cast<int>(std::ceil((xi_at(row, W + row.margin) - row.xi0) / row.dxi)) +
+                    row.taps + 2;
         row.segment_node.assign(size_t(G) + 1, 0);
         for (int g = 1; g < G; ++g)
             row.segment_node[size_t(g)] = std::clamp(
-                static_cast<int>(std::ceil((xi_at(row, g * m_segment_px) - row.xi0) / row.dxi)),
-                0, row.nodes);
+                static_cast<int>(std::ceil((xi_at(row, g * m_segment_px) - row.xi0) / row.dxi)), 0,
+                row.nodes);
         row.segment_node[size_t(G)] = row.nodes;
         const int T = 2 * row.taps + 1;
         const int B = m_bins;
@@ -378,8 +378,8 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
             const std::array<double, 2> bw = {b.lo == b.hi ? 1.0 : 1.0 - b.weight,
                                               b.lo == b.hi ? 0.0 : b.weight};
             const std::array<double, 2> var = {p.var_lo, p.var_hi};
-            row.weight[size_t(g)] = static_cast<float>(
-                p.plan.fade / (std::sqrt(2.0 * std::numbers::pi) * p.s_major));
+            row.weight[size_t(g)] =
+                static_cast<float>(p.plan.fade / (std::sqrt(2.0 * std::numbers::pi) * p.s_major));
             for (int bin = 0; bin < B; ++bin) {
                 const double sbar = sbar_of(p, bin);
                 row.sbar[size_t(g) * B + bin] = static_cast<float>(sbar);
@@ -416,13 +416,13 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
                         a[1] += w * -mu;
                         a[2] += w * (0.5 * d + 0.5 * mu * mu);
                         a[3] += w * (-0.5 * mu * d - mu * mu * mu / 6.0);
-                        a[4] += w * (0.125 * d * d + 0.25 * mu * mu * d +
-                                     mu * mu * mu * mu / 24.0 + k4 * ism4 / 24.0);
+                        a[4] += w * (0.125 * d * d + 0.25 * mu * mu * d + mu * mu * mu * mu / 24.0 +
+                                     k4 * ism4 / 24.0);
                     }
                     for (int m = 0; m < kProfiles; ++m) {
                         t0[size_t(m) * T + size_t(k + row.taps)] = static_cast<float>(a[size_t(m)]);
-                        peak[size_t(m)] =
-                            std::max(peak[size_t(m)], std::abs(a[size_t(m)]) / std::pow(sbar, 0.5 * m));
+                        peak[size_t(m)] = std::max(
+                            peak[size_t(m)], std::abs(a[size_t(m)]) / std::pow(sbar, 0.5 * m));
                     }
                 }
                 // The linear deposit and the linear interpolation back to the pixels each blur
@@ -432,7 +432,8 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
                 for (int m = 0; m < kProfiles; ++m) {
                     float* t = t0 + size_t(m) * T;
                     for (int k = 0; k < T; ++k) {
-                        const float left = k > 0 ? t[k - 1] : 0.0f, right = k + 1 < T ? t[k + 1] : 0.0f;
+                        const float left = k > 0 ? t[k - 1] : 0.0f,
+                                    right = k + 1 < T ? t[k + 1] : 0.0f;
                         sharp[size_t(k)] = t[k] - (left - 2.0f * t[k] + right) / 6.0f;
                     }
                     std::copy(sharp.begin(), sharp.end(), t);
@@ -440,7 +441,8 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
             }
         }
         // Profiles whose term stays below 1e-4 of the main one's peak are left out.
-        for (int m = 0; m < kProfiles; ++m) row.used[size_t(m)] = m == 0 || peak[size_t(m)] > 1e-4 * peak[0];
+        for (int m = 0; m < kProfiles; ++m)
+            row.used[size_t(m)] = m == 0 || peak[size_t(m)] > 1e-4 * peak[0];
     });
 
     // The pixels the far field reaches: rows whose y' range meets the sub-rows' (plus the
@@ -482,7 +484,8 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
         view.texture_row(e, W, cam.x, cam.y, ex.data(), ey.data(), hit.data());
         for (int i = 0; i < W; ++i)
             rho_edge[size_t(e - m_j0) * W + i] =
-                hit[size_t(i)] ? std::sqrt(sq(double(ex[size_t(i)])) + sq(double(ey[size_t(i)]))) : -1.0;
+                hit[size_t(i)] ? std::sqrt(sq(double(ex[size_t(i)])) + sq(double(ey[size_t(i)])))
+                               : -1.0;
     });
     const size_t np = size_t(m_j1 - m_j0) * W;
     m_yp.assign(np, 0.0f), m_ik.assign(np, 0.0f);
@@ -496,11 +499,12 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
             const double r0 = rho_edge[size_t(j - m_j0) * W + i];
             const double r1 = rho_edge[size_t(j + 1 - m_j0) * W + i];
             double kappa = r0 >= 0.0 && r1 >= 0.0 ? std::abs(y_of(r1) - y_of(r0))
-                           : r0 >= 0.0             ? 2.0 * std::abs(yc - y_of(r0))
-                           : r1 >= 0.0             ? 2.0 * std::abs(y_of(r1) - yc)
-                                                   : 0.0;
+                           : r0 >= 0.0            ? 2.0 * std::abs(yc - y_of(r0))
+                           : r1 >= 0.0            ? 2.0 * std::abs(y_of(r1) - yc)
+                                                  : 0.0;
             if (!(kappa > 0.0)) continue;
-            const int r = std::clamp(static_cast<int>(std::lround((yc - m_y0) / m_dy)), 0, rows - 1);
+            const int r =
+                std::clamp(static_cast<int>(std::lround((yc - m_y0) / m_dy)), 0, rows - 1);
             const int g = std::clamp(static_cast<int>((i + 0.5) / m_segment_px), 0, G - 1);
             // The linear deposit spreads an impulse over two sub-rows: variance dy^2 / 6 on
             // average (in y'), taken off the along Gaussian (one per direction bin).
@@ -648,7 +652,8 @@ void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out
                     float* d = r == last ? halo[size_t(b)].data() + size_t(bin) * hn : grid(r, bin);
                     d[nd] += it.wb[q] * it.w[e][0];
                     d[nd + 1] += it.wb[q] * it.w[e][1];
-                    (r == last ? halo_filled[size_t(b) * B + bin] : filled[size_t(r) * B + bin]) = 1;
+                    (r == last ? halo_filled[size_t(b) * B + bin] : filled[size_t(r) * B + bin]) =
+                        1;
                 }
             }
         }

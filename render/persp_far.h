@@ -49,8 +49,8 @@ public:
     bool item(double rx, double ry, float weight, double theta, FarItem& it) const;
     /// Adds the far field of the items to `out`: lists joined in order hold them in
     /// canonical order.
-    void render(const std::vector<std::vector<FarItem>>& items, Frame& out,
-                const PerspLoops& loops, bool parallel) const;
+    void render(const std::vector<std::vector<FarItem>>& items, Frame& out, const PerspLoops& loops,
+                bool parallel) const;
 
 private:
     /// A sub-row: its circle, the across coordinate, node grid and, per segment of columns,
@@ -60,13 +60,13 @@ private:
         /// Across coordinate xi: texture units along the circle, at image columns 0 .. W
         /// (linear between, extended with the end slopes beyond).
         std::vector<double> xi;
-        double margin = 0;            ///< pixels beyond the image edges that still reach it
-        double xi0 = 0, dxi = 1;      ///< node n at xi0 + n dxi
-        int nodes = 0, taps = 0;      ///< node count, half-width of the profiles in nodes
+        double margin = 0;        ///< pixels beyond the image edges that still reach it
+        double xi0 = 0, dxi = 1;  ///< node n at xi0 + n dxi
+        int nodes = 0, taps = 0;  ///< node count, half-width of the profiles in nodes
         std::array<bool, kFarProfiles> used{};  ///< which profiles matter (0 always)
         std::vector<int> segment_node;  ///< first node of each segment (segments + 1 entries)
-        std::vector<float> weight;    ///< per segment: fade / (sqrt(2 pi) s_major)
-        std::vector<float> sbar;      ///< per segment: variance of the along Gaussian, px^2
+        std::vector<float> weight;      ///< per segment: fade / (sqrt(2 pi) s_major)
+        std::vector<float> sbar;        ///< per segment: variance of the along Gaussian, px^2
         /// per segment, direction bin and profile: 2 taps + 1 values (offsets -taps .. taps)
         std::vector<float> tables;
     };
@@ -77,10 +77,10 @@ private:
     double m_rho_far2 = 0, m_depth_min = 0;
     double m_P[9] = {};  ///< the view's homography (PerspectiveView::homography)
     double m_inv_segment_px = 1;
-    int m_bins = 1;          ///< direction bins (1: radial kernel)
-    double m_period = 1;     ///< the bins' period, radians
+    int m_bins = 1;                     ///< direction bins (1: radial kernel)
+    double m_period = 1;                ///< the bins' period, radians
     double m_v_sign = 1, m_u_sign = 1;  ///< orientation of the tables (see the constructor)
-    double m_y0 = 0, m_dy = 1;  ///< sub-row r at y' = y0 + r dy
+    double m_y0 = 0, m_dy = 1;          ///< sub-row r at y' = y0 + r dy
     std::vector<Row> m_rows;
     /// Pixels that receive the far field: rows [m_j0, m_j1), per pixel y', 1 / kappa, 1 / s,
     /// 1 / sqrt(s).

@@ -20,6 +20,12 @@
 //     s_minor projected across (a 1-D table P(v) with its chord variance q(v)) times a Gaussian
 //     along the major axis evaluated in image space: exact in the limit, cost independent of the
 //     anisotropy.
+//   * far field: where the kernel's image is a sliver no taller than the pixel filter (the
+//     chords' spread along the axis small against it), impulses are deposited on sub-rows that
+//     follow the circles round the camera's foot, convolved across with the line form's profile
+//     and filtered along per pixel (render/persp_far.h): a few additions per impulse and a
+//     bounded amount of work per pixel, for radial and (through chords tabulated per direction)
+//     other non-negative kernels.
 // Far away the filtered noise tends to its mean: the remaining standard deviation of the
 // major-axis filtered kernel (KernelPyramid::sd_fraction) fades the impulses out between
 // 2 * cutoff and cutoff, and none are generated beyond, so the work per frame stays bounded
