@@ -246,16 +246,14 @@ int run(const Options& o) {
             "perspective camera: height %g, pitch 15, fov 50, heading 0; horizon at row %.1f; "
             "filter 0.5 px\n\n",
             o.height, view.horizon_row());
-        std::printf("%-44s %8s %8s %22s %22s %24s %8s %9s %7s %11s\n", "row", "impulses",
-                    "far", "generate", "evaluate", "total", "x ortho", "cpu ms", "x cpu",
-                    "pixel evals");
-        std::printf("%-44s %8zu %8s %22s %22s %24s %8s %9.1f %7s %11s\n",
-                    "orthographic, scale 1", ortho.impulses, "-", cell(ortho.generate).c_str(),
-                    cell(ortho.evaluate).c_str(), cell(ortho.total).c_str(), "1.00",
-                    ortho.cpu.median(), "1.00", "-");
+        std::printf("%-44s %8s %8s %22s %22s %24s %8s %9s %7s %11s\n", "row", "impulses", "far",
+                    "generate", "evaluate", "total", "x ortho", "cpu ms", "x cpu", "pixel evals");
+        std::printf("%-44s %8zu %8s %22s %22s %24s %8s %9.1f %7s %11s\n", "orthographic, scale 1",
+                    ortho.impulses, "-", cell(ortho.generate).c_str(), cell(ortho.evaluate).c_str(),
+                    cell(ortho.total).c_str(), "1.00", ortho.cpu.median(), "1.00", "-");
         for (const auto& r : rows)
-            std::printf("%-44s %8zu %8zu %22s %22s %24s %8.2f %9.1f %7.2f %11zu\n",
-                        r.name.c_str(), r.t.impulses, r.t.stats.far, cell(r.t.generate).c_str(),
+            std::printf("%-44s %8zu %8zu %22s %22s %24s %8.2f %9.1f %7.2f %11zu\n", r.name.c_str(),
+                        r.t.impulses, r.t.stats.far, cell(r.t.generate).c_str(),
                         cell(r.t.evaluate).c_str(), cell(r.t.total).c_str(),
                         r.t.total.median() / ortho_ms, r.t.cpu.median(),
                         r.t.cpu.median() / ortho.cpu.median(), r.t.stats.pixels);
@@ -267,8 +265,7 @@ int run(const Options& o) {
             "preparation %.1f, tiles (near field) %.1f, far field %.1f\n",
             d.setup.median(), d.far_setup.median(), d.prepare.median(), d.tiles.median(),
             d.far.median());
-        std::printf("load average at start %s, at end %s\n", load_start.c_str(),
-                    load_end.c_str());
+        std::printf("load average at start %s, at end %s\n", load_start.c_str(), load_end.c_str());
         const double ratio = rows.front().t.total.median() / ortho_ms;
         std::printf(
             "target: perspective frame <= %.0fx the orthographic frame: %.2fx at the default "

@@ -271,7 +271,8 @@ RadialLevelTables radial_tables(const Kernel& k) {
 double grid_at(const std::vector<float>& g, int n, double R, double x, double y) {
     if (!(x * x + y * y < R * R)) return 0.0;
     const double to = (n - 1) / (2.0 * R);
-    const double gx = std::clamp((x + R) * to, 0.0, n - 1.0), gy = std::clamp((y + R) * to, 0.0, n - 1.0);
+    const double gx = std::clamp((x + R) * to, 0.0, n - 1.0),
+                 gy = std::clamp((y + R) * to, 0.0, n - 1.0);
     const int i = std::min(static_cast<int>(gx), n - 2), j = std::min(static_cast<int>(gy), n - 2);
     const double fx = gx - i, fy = gy - j;
     const float* r0 = g.data() + size_t(j) * n + i;
@@ -384,8 +385,9 @@ KernelPyramid::KernelPyramid(const Kernel& base, const PyramidParams& params) {
         m_directional.resize(m_grids.size() * size_t(m_direction_bins));
         for (size_t l = 0; l < m_grids.size(); ++l)
             for (int b = 0; b < m_direction_bins; ++b)
-                m_directional[l * size_t(m_direction_bins) + size_t(b)] = directional_tables(
-                    m_grids[l], m_grid_n[l], radius(int(l)), b * m_direction_period / m_direction_bins);
+                m_directional[l * size_t(m_direction_bins) + size_t(b)] =
+                    directional_tables(m_grids[l], m_grid_n[l], radius(int(l)),
+                                       b * m_direction_period / m_direction_bins);
     }
     // Sign of each level (the line form and the far field need chords of one sign).
     for (int l = 0; l < levels(); ++l) {
@@ -394,7 +396,8 @@ KernelPyramid::KernelPyramid(const Kernel& base, const PyramidParams& params) {
             m_nonnegative.push_back(m_tables[size_t(l)].nonnegative);
             continue;
         }
-        for (float v : m_grids[size_t(l)]) peak = std::max(peak, double(std::abs(v))), lowest = std::min(lowest, double(v));
+        for (float v : m_grids[size_t(l)])
+            peak = std::max(peak, double(std::abs(v))), lowest = std::min(lowest, double(v));
         m_nonnegative.push_back(lowest >= -1e-4 * peak);
     }
 }

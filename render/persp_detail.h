@@ -88,8 +88,8 @@ struct PerspLoops {
     /// Adds items idx[0..n) to the tile covering pixels [tx0, tx0+tw) x [ty0, ty0+th); `acc` is
     /// tw*th floats. X, Y: texture coordinates of all pixel centres (row stride `stride`).
     void (*tile)(const PerspKernel& k, const PerspItem* items, const PerspProbe* probes,
-                 const uint32_t* idx, size_t n, const float* X, const float* Y, int stride,
-                 int tx0, int ty0, int tw, int th, float* acc);
+                 const uint32_t* idx, size_t n, const float* X, const float* Y, int stride, int tx0,
+                 int ty0, int tw, int th, float* acc);
     /// Far field, across: X[n] += sum_{k = -m..m} D[n - k] T[k] for n in [n0, n1) (D readable
     /// on [n0 - m, n1 + m), T on [-m, m]), summed in order of k.
     void (*far_across)(const float* D, const float* T, int m, int n0, int n1, float* X);

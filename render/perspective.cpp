@@ -32,7 +32,6 @@ constexpr int kMaxProbeHalf = 8;  // at most 2 * 8 + 1 probes per impulse
 // whose texture-space Gaussian ignores the perspective bend of the footprint).
 constexpr double kLineFrom = 0.25;
 
-
 bool cpu_has_avx2() {
     static const bool has = __builtin_cpu_supports("avx2");
     return has;
@@ -287,7 +286,8 @@ PerspectiveView::Footprint PerspectiveView::footprint(double x, double y) const 
     const double C = -k * (m_U[0] * q - b * m_F[0]), D = -k * (m_U[1] * q - b * m_F[1]);
     // Eigen-decomposition of J^T J: the smaller eigenvalue's vector is the footprint's major axis.
     const double a11 = A * A + C * C, a22 = B * B + D * D, a12 = A * B + C * D;
-    const double mid = 0.5 * (a11 + a22), half = std::sqrt(0.25 * (a11 - a22) * (a11 - a22) + a12 * a12);
+    const double mid = 0.5 * (a11 + a22),
+                 half = std::sqrt(0.25 * (a11 - a22) * (a11 - a22) + a12 * a12);
     const double l1 = mid + half, l2 = std::max(mid - half, 1e-300);
     Footprint f;
     f.s_minor = 1.0 / std::sqrt(l1);
@@ -476,8 +476,7 @@ sim::Region perspective_region(const kernels::KernelPyramid& pyr, const Perspect
         s.hit = view.texture_point(px, py, s.x, s.y);
         s.kept = false;
         if (!s.hit) return;
-        if (aa.max_distance > 0.0 && std::hypot(s.x - cam.x, s.y - cam.y) > aa.max_distance)
-            return;
+        if (aa.max_distance > 0.0 && std::hypot(s.x - cam.x, s.y - cam.y) > aa.max_distance) return;
         const auto f = view.footprint(s.x, s.y);
         const detail::Plan p = detail::plan_for(pyr, aa, f.s_major, f.s_minor);
         s.kept = p.keep;
@@ -783,8 +782,8 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
         std::vector<float> acc(size_t(tw) * th, 0.0f);
         const uint32_t* idx = bins.data() + count[size_t(t)];
         const size_t m = count[size_t(t) + 1] - count[size_t(t)];
-        loops.tile(lk, items.data(), probes.data(), idx, m, coords.x.data(), coords.y.data(), W,
-                   x0, y0, tw, th, acc.data());
+        loops.tile(lk, items.data(), probes.data(), idx, m, coords.x.data(), coords.y.data(), W, x0,
+                   y0, tw, th, acc.data());
         for (int y = 0; y < th; ++y) {
             float* dst = out.data.data() + size_t(y0 + y) * W + x0;
             const float* src = acc.data() + size_t(y) * tw;

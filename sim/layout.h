@@ -102,8 +102,12 @@ inline ImpulseDraw draw_impulse(const ProcessConfig& c, const Layout& L, const C
             d.amplitude = static_cast<float>(std::sqrt(-2.0 * std::log(r0[3])) *
                                              std::cos(2.0 * std::numbers::pi * r1[0]));
             break;
-        case Amplitude::Uniform: d.amplitude = static_cast<float>(2.0 * r0[3] - 1.0); break;
-        case Amplitude::Sign: d.amplitude = r0[3] < 0.5 ? -1.0f : 1.0f; break;
+        case Amplitude::Uniform:
+            d.amplitude = static_cast<float>(2.0 * r0[3] - 1.0);
+            break;
+        case Amplitude::Sign:
+            d.amplitude = r0[3] < 0.5 ? -1.0f : 1.0f;
+            break;
     }
     d.theta0 = static_cast<float>(2.0 * std::numbers::pi * r1[1]);
     return d;

@@ -277,7 +277,8 @@ void LayerSimulator::impulses_at(int64_t frame, const Region& view, Impulses& ou
     size_t cursor = 0;  // both block lists are in canonical order: merge instead of search
     const detail::CellCover cover = detail::cell_cover(region, L);
     const double t_frame = static_cast<double>(target) * S.dt;
-    const int64_t ct0 = static_cast<int64_t>(std::floor((t_frame - c.lifetime_s) / L.time_cell_s)) - 1;
+    const int64_t ct0 =
+        static_cast<int64_t>(std::floor((t_frame - c.lifetime_s) / L.time_cell_s)) - 1;
     const int64_t ct1 = static_cast<int64_t>(std::floor(t_frame / L.time_cell_s)) + 1;
 
     Particles& P = S.next;
@@ -293,17 +294,15 @@ void LayerSimulator::impulses_at(int64_t frame, const Region& view, Impulses& ou
                         ++cursor;
                     if (reuse && cursor < S.blocks.size() && S.blocks[cursor].key == key) {
                         const Block& b = S.blocks[cursor];
-                        for (size_t i = b.start; i < b.start + b.count; ++i)
-                            P.copy_from(S.live, i);
+                        for (size_t i = b.start; i < b.start + b.count; ++i) P.copy_from(S.live, i);
                     } else {
                         detail::generate_cell(c, L, cx, cy, ct, S.cell, &S.births);
                         for (size_t k = 0; k < S.cell.x.size(); ++k) {
                             P.x.push_back(S.cell.x[k]);
                             P.y.push_back(S.cell.y[k]);
                             P.lnj.push_back(0.0);
-                            P.th.push_back(c.orientation == OrientationMode::Random
-                                               ? S.cell.theta0[k]
-                                               : 0.0);
+                            P.th.push_back(
+                                c.orientation == OrientationMode::Random ? S.cell.theta0[k] : 0.0);
                             const auto [bs, bf] = S.birth_grid(S.births[k]);
                             P.birth_step.push_back(bs);
                             P.birth_frac.push_back(bf);
@@ -375,13 +374,13 @@ void LayerSimulator::State::orient_by_field(int64_t target, const std::vector<fl
     if (config.orientation != OrientationMode::Field || !config.orientation_field) return;
     // theta(x, t) at the particle's current position at the frame time (loop-wrapped like the
     // flow, so a looped layer repeats), plus the per-particle jitter drawn at birth.
-    config.orientation_field->angles(time_of_step(target), out.size(), out.x.data(),
-                                     out.y.data(), out.theta.data());
+    config.orientation_field->angles(time_of_step(target), out.size(), out.x.data(), out.y.data(),
+                                     out.theta.data());
     if (config.orientation_jitter != 0.0) {
         constexpr double kInvPi = 1.0 / 3.14159265358979323846;
         for (size_t j = 0; j < out.size(); ++j)
-            out.theta[j] = static_cast<float>(
-                out.theta[j] + config.orientation_jitter * (th0[j] * kInvPi - 1.0));
+            out.theta[j] = static_cast<float>(out.theta[j] +
+                                              config.orientation_jitter * (th0[j] * kInvPi - 1.0));
     }
 }
 
@@ -407,7 +406,8 @@ void LayerSimulator::State::still_impulses(const Region& view, int64_t target, I
                 const detail::CellKey key(layout, cx, cy, 0);
                 const int count = detail::cell_count(rng, layout, key);
                 for (int k = 0; k < count; ++k) {
-                    const detail::ImpulseDraw d = detail::draw_impulse(c, layout, rng, key, cx, cy, k);
+                    const detail::ImpulseDraw d =
+                        detail::draw_impulse(c, layout, rng, key, cx, cy, k);
                     if (!keep.contains(d.x, d.y)) continue;
                     row.x.push_back(d.x);
                     row.y.push_back(d.y);

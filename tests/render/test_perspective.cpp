@@ -864,9 +864,10 @@ TEST_CASE("perspective frames stay bounded however close the horizon", "[render]
 // ---------------------------------------------------------------------------------------------
 // The far field (render/persp_far.h)
 
-TEST_CASE("the far field draws most impulses of a grazing view for a fraction of the work and "
-          "agrees with the line form",
-          "[render][perspective]") {
+TEST_CASE(
+    "the far field draws most impulses of a grazing view for a fraction of the work and "
+    "agrees with the line form",
+    "[render][perspective]") {
     // The frame of test (a), where the supersampled reference holds every band within 5 % of the
     // texture's sd with the far field on (test (a) runs the defaults). Here: what the far field
     // is for. With it off, the line form draws the same impulses pixel by pixel.
