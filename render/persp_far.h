@@ -4,11 +4,12 @@
 // what it computes). Far from the camera a grazing footprint is hundreds of texture units long
 // and a few wide, so each kernel is a thin sliver of the pixel filter along the depth: its
 // contribution separates into a profile across (the level's line integral, as in the line
-// form) and the pixel filter along. Impulses are deposited (linear weights) onto sub-rows of
-// the image that follow the circles around the camera's foot (the major axis of every
-// footprint points at the foot), each sub-row is convolved across with its profiles, and each
-// pixel filters the sub-rows along: a few additions per impulse, a bounded amount of work per
-// pixel.
+// form) and the pixel filter along (the chord's spread along the axis entering through an
+// expansion). Impulses are deposited (linear weights) onto sub-rows of the image that follow the
+// circles around the camera's foot (the major axis of every footprint points at the foot), and,
+// for kernels that are not radially symmetric, onto direction bins; each sub-row is convolved
+// across with its profiles, and each pixel filters the sub-rows along: a few additions per
+// impulse, a bounded amount of work per pixel.
 
 #include <array>
 #include <cstdint>
@@ -34,7 +35,7 @@ constexpr int kFarProfiles = 5;
 class FarField {
 public:
     /// Sets the far zone of a frame up: inactive when the form does not apply (filtering off,
-    /// isotropic rule, no fade, non-radial or signed kernels, or no footprint long enough).
+    /// isotropic rule, no fade, kernels with negative lobes, or no footprint long enough).
     FarField(const kernels::KernelPyramid& pyramid, const PerspectiveView& view,
              const PixelCoords& coords, const AntiAlias& aa);
     bool active() const { return m_active; }
