@@ -96,6 +96,8 @@ std::string cell(const Stat& s) {
 /// One frame's timings.
 struct FrameTimes {
     Stat setup, generate, evaluate, total;  // setup: region + pixel coordinates (perspective)
+    Stat cpu;                               // process CPU time of the frame (both threads)
+    Stat far_setup, prepare, tiles, far;    // parts of evaluate (perspective)
     size_t impulses = 0;
     render::PerspectiveStats stats;
 };
@@ -123,12 +125,14 @@ void time_ortho(const Scene& sc, sim::LayerSimulator& s, FrameTimes& t) {
     render::Frame f;
     f.resize(kWidth, kHeight);
     sim::Impulses imp;
+    const double c0 = own_cpu_s();
     auto t0 = Clock::now();
     s.impulses_at(0, view.box(), imp);
     const double g = ms_since(t0);
     t0 = Clock::now();
     render::accumulate(sc.kernel, imp, view, f);
     const double e = ms_since(t0);
+    t.cpu.v.push_back(1e3 * (own_cpu_s() - c0));
     t.generate.v.push_back(g), t.evaluate.v.push_back(e), t.total.v.push_back(g + e);
     t.setup.v.push_back(0.0);
     t.impulses = imp.size();
@@ -140,9 +144,10 @@ void time_perspective(const kernels::KernelPyramid& pyr, sim::LayerSimulator& s,
     render::Frame f;
     f.resize(kWidth, kHeight);
     sim::Impulses imp;
+    const double c0 = own_cpu_s();
     auto t0 = Clock::now();
     const render::PerspectiveView view(cam);
-    const sim::Box box = render::perspective_region(pyr, view, aa);
+    const sim::Region box = render::perspective_region(pyr, view, aa);
     const render::PixelCoords pc = render::pixel_coords(view);
     const double su = ms_since(t0);
     t0 = Clock::now();
@@ -151,12 +156,16 @@ void time_perspective(const kernels::KernelPyramid& pyr, sim::LayerSimulator& s,
     t0 = Clock::now();
     render::accumulate_perspective(pyr, imp, view, pc, f, aa, {}, &t.stats);
     const double e = ms_since(t0);
+    t.cpu.v.push_back(1e3 * (own_cpu_s() - c0));
     t.setup.v.push_back(su), t.generate.v.push_back(g), t.evaluate.v.push_back(e);
     t.total.v.push_back(su + g + e);
+    t.far_setup.v.push_back(t.stats.setup_ms), t.prepare.v.push_back(t.stats.prepare_ms);
+    t.tiles.v.push_back(t.stats.tiles_ms), t.far.v.push_back(t.stats.far_ms);
     t.impulses = imp.size();
 }
 
 int run(const Options& o) {
+    const std::string load_start = loadavg();
     tbb::task_arena arena(2);
     Scene sc;
     kernels::PyramidParams pp;
@@ -181,10 +190,15 @@ int run(const Options& o) {
         rows.push_back(std::move(r));
     };
     add("perspective, cut-off 1 % (default)", [](render::AntiAlias&) {});
+    add("perspective, cut-off 2 %", [](render::AntiAlias& a) { a.cutoff = 0.02; });
     add("perspective, cut-off 5 %", [](render::AntiAlias& a) { a.cutoff = 0.05; });
-    add("perspective, cut-off 1 %, major axis only",
-        [](render::AntiAlias& a) { a.anisotropic = false; });
-    if (!o.quick) add("perspective, cut-off 20 %", [](render::AntiAlias& a) { a.cutoff = 0.2; });
+    if (!o.quick) {
+        add("perspective, cut-off 20 %", [](render::AntiAlias& a) { a.cutoff = 0.2; });
+        add("perspective, 1 %, far field off (line form)",
+            [](render::AntiAlias& a) { a.far_field = false; });
+        add("perspective, 1 %, major axis only",
+            [](render::AntiAlias& a) { a.anisotropic = false; });
+    }
     FrameTimes ortho;
 
     arena.execute([&] {
@@ -203,19 +217,26 @@ int run(const Options& o) {
 
     const render::PerspectiveView view(cam);
     const double ortho_ms = ortho.total.median();
+    const std::string load_end = loadavg();
     if (o.csv) {
         std::printf(
             "row,impulses,setup_ms_median,generate_ms_median,evaluate_ms_median,total_ms_median,"
-            "total_ms_min,total_ms_max,ratio_to_ortho,pixel_evaluations,single,probes,line\n");
-        std::printf("orthographic,%zu,0,%.3f,%.3f,%.3f,%.3f,%.3f,1,%.0f,,,\n", ortho.impulses,
-                    ortho.generate.median(), ortho.evaluate.median(), ortho_ms, ortho.total.min(),
-                    ortho.total.max(), double(kWidth) * kHeight * 16.0);
+            "total_ms_min,total_ms_max,ratio_to_ortho,cpu_ms_median,cpu_ratio_to_ortho,"
+            "pixel_evaluations,single,probes,line,far,far_setup_ms,prepare_ms,tiles_ms,far_ms\n");
+        std::printf("orthographic,%zu,0,%.3f,%.3f,%.3f,%.3f,%.3f,1,%.3f,1,%.0f,,,,,,,,\n",
+                    ortho.impulses, ortho.generate.median(), ortho.evaluate.median(), ortho_ms,
+                    ortho.total.min(), ortho.total.max(), ortho.cpu.median(),
+                    double(kWidth) * kHeight * 16.0);
         for (const auto& r : rows)
-            std::printf("\"%s\",%zu,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%zu,%zu,%zu,%zu\n",
-                        r.name.c_str(), r.t.impulses, r.t.setup.median(), r.t.generate.median(),
-                        r.t.evaluate.median(), r.t.total.median(), r.t.total.min(), r.t.total.max(),
-                        r.t.total.median() / ortho_ms, r.t.stats.pixels, r.t.stats.single,
-                        r.t.stats.probes, r.t.stats.line);
+            std::printf(
+                "\"%s\",%zu,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%zu,%zu,%zu,%zu,%zu,%.3f,"
+                "%.3f,%.3f,%.3f\n",
+                r.name.c_str(), r.t.impulses, r.t.setup.median(), r.t.generate.median(),
+                r.t.evaluate.median(), r.t.total.median(), r.t.total.min(), r.t.total.max(),
+                r.t.total.median() / ortho_ms, r.t.cpu.median(),
+                r.t.cpu.median() / ortho.cpu.median(), r.t.stats.pixels, r.t.stats.single,
+                r.t.stats.probes, r.t.stats.line, r.t.stats.far, r.t.far_setup.median(),
+                r.t.prepare.median(), r.t.tiles.median(), r.t.far.median());
     } else {
         std::printf(
             "impulse_bench_perspective: %dx%d, cosine r = 16, density 16, still, 2 threads, "
@@ -225,19 +246,26 @@ int run(const Options& o) {
             "perspective camera: height %g, pitch 15, fov 50, heading 0; horizon at row %.1f; "
             "filter 0.5 px\n\n",
             o.height, view.horizon_row());
-        std::printf("%-44s %10s %22s %22s %24s %8s %12s\n", "row", "impulses", "generate",
-                    "evaluate", "total", "x ortho", "pixel evals");
-        std::printf("%-44s %10zu %22s %22s %24s %8s %12s\n", "orthographic, scale 1",
-                    ortho.impulses, cell(ortho.generate).c_str(), cell(ortho.evaluate).c_str(),
-                    cell(ortho.total).c_str(), "1.00", "-");
+        std::printf("%-44s %8s %8s %22s %22s %24s %8s %9s %7s %11s\n", "row", "impulses", "far",
+                    "generate", "evaluate", "total", "x ortho", "cpu ms", "x cpu", "pixel evals");
+        std::printf("%-44s %8zu %8s %22s %22s %24s %8s %9.1f %7s %11s\n", "orthographic, scale 1",
+                    ortho.impulses, "-", cell(ortho.generate).c_str(), cell(ortho.evaluate).c_str(),
+                    cell(ortho.total).c_str(), "1.00", ortho.cpu.median(), "1.00", "-");
         for (const auto& r : rows)
-            std::printf("%-44s %10zu %22s %22s %24s %8.2f %12zu\n", r.name.c_str(), r.t.impulses,
-                        cell(r.t.generate).c_str(), cell(r.t.evaluate).c_str(),
-                        cell(r.t.total).c_str(), r.t.total.median() / ortho_ms, r.t.stats.pixels);
+            std::printf("%-44s %8zu %8zu %22s %22s %24s %8.2f %9.1f %7.2f %11zu\n", r.name.c_str(),
+                        r.t.impulses, r.t.stats.far, cell(r.t.generate).c_str(),
+                        cell(r.t.evaluate).c_str(), cell(r.t.total).c_str(),
+                        r.t.total.median() / ortho_ms, r.t.cpu.median(),
+                        r.t.cpu.median() / ortho.cpu.median(), r.t.stats.pixels);
+        const auto& d = rows.front().t;
         std::printf(
             "\n(perspective totals include the visible region and the per-pixel texture "
-            "coordinates: median %.1f ms for the default row)\n",
-            rows.front().t.setup.median());
+            "coordinates: median %.1f ms for the default row)\n"
+            "default row, evaluate in parts (ms, median): far-field set-up %.1f, impulse "
+            "preparation %.1f, tiles (near field) %.1f, far field %.1f\n",
+            d.setup.median(), d.far_setup.median(), d.prepare.median(), d.tiles.median(),
+            d.far.median());
+        std::printf("load average at start %s, at end %s\n", load_start.c_str(), load_end.c_str());
         const double ratio = rows.front().t.total.median() / ortho_ms;
         std::printf(
             "target: perspective frame <= %.0fx the orthographic frame: %.2fx at the default "
@@ -259,7 +287,10 @@ int run(const Options& o) {
         b.p.type = kernels::KernelType::Gaussian, b.p.radius = 72.0, b.p.sigma = 24.0;
         Kind c{"gabor r=16 f=1/16 (2-D grids)", {}};
         c.p.type = kernels::KernelType::Gabor, c.p.radius = 16.0, c.p.frequency = 0.0625;
-        kinds = {a, b, c};
+        Kind e{"gaussian r=72 sigma=24 aspect 1.7 (grids)", {}};
+        e.p.type = kernels::KernelType::Gaussian, e.p.radius = 72.0, e.p.sigma = 24.0;
+        e.p.aspect = 1.7;
+        kinds = {a, b, c, e};
     }
     if (o.csv)
         std::printf(

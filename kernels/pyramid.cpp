@@ -267,6 +267,55 @@ RadialLevelTables radial_tables(const Kernel& k) {
     return t;
 }
 
+/// Bilinear sample of an n x n grid over [-R, R]^2 (0 outside the disc of radius R).
+double grid_at(const std::vector<float>& g, int n, double R, double x, double y) {
+    if (!(x * x + y * y < R * R)) return 0.0;
+    const double to = (n - 1) / (2.0 * R);
+    const double gx = std::clamp((x + R) * to, 0.0, n - 1.0),
+                 gy = std::clamp((y + R) * to, 0.0, n - 1.0);
+    const int i = std::min(static_cast<int>(gx), n - 2), j = std::min(static_cast<int>(gy), n - 2);
+    const double fx = gx - i, fy = gy - j;
+    const float* r0 = g.data() + size_t(j) * n + i;
+    const double top = r0[0] + fx * (r0[1] - r0[0]), bot = r0[n] + fx * (r0[n + 1] - r0[n]);
+    return top + fy * (bot - top);
+}
+
+/// The chords of a grid level across direction gamma: mass, mean, variance, fourth cumulant
+/// (trapezoid sums at the grid spacing along each chord).
+DirectionalLineTables directional_tables(const std::vector<float>& g, int n, double R,
+                                         double gamma) {
+    constexpr int kSamples = 129;
+    DirectionalLineTables t;
+    t.mass.resize(kSamples), t.mean.resize(kSamples), t.var.resize(kSamples);
+    t.k4.resize(kSamples);
+    const double ex = std::cos(gamma), ey = std::sin(gamma);
+    const double ds = 2.0 * R / (n - 1);
+    for (int i = 0; i < kSamples; ++i) {
+        const double v = R * (2.0 * i / (kSamples - 1) - 1.0);
+        const double half = std::sqrt(std::max(0.0, R * R - v * v));
+        const int m = static_cast<int>(std::ceil(half / ds));
+        double M[5] = {0, 0, 0, 0, 0};
+        for (int k = -m; k <= m; ++k) {
+            const double sv = k * ds;
+            const double h = grid_at(g, n, R, sv * ex - v * ey, sv * ey + v * ex) * ds;
+            M[0] += h, M[1] += h * sv, M[2] += h * sv * sv, M[3] += h * sv * sv * sv;
+            M[4] += h * sv * sv * sv * sv;
+        }
+        const double P = M[0];
+        const bool mass = std::abs(P) > 1e-12;
+        const double mu = mass ? M[1] / P : 0.0;
+        const double var = mass ? std::max(0.0, M[2] / P - mu * mu) : 0.0;
+        const double c4 = mass ? M[4] / P - 4.0 * mu * M[3] / P + 6.0 * mu * mu * M[2] / P -
+                                     3.0 * mu * mu * mu * mu
+                               : 0.0;
+        t.mass[size_t(i)] = static_cast<float>(P);
+        t.mean[size_t(i)] = static_cast<float>(mu);
+        t.var[size_t(i)] = static_cast<float>(var);
+        t.k4[size_t(i)] = static_cast<float>(mass ? c4 - 3.0 * var * var : 0.0);
+    }
+    return t;
+}
+
 }  // namespace
 
 bool is_radial(const Kernel& k) {
@@ -318,6 +367,38 @@ KernelPyramid::KernelPyramid(const Kernel& base, const PyramidParams& params) {
             m_grids.push_back(m_levels[l].grid_values());
             m_grid_n.push_back(m_levels[l].params().sampled->n);
         }
+        // Chords across directions for the perspective far field: a quarter turn in eighths
+        // of pi when every level is point-symmetric (h(-x) = h(x): the chords across gamma
+        // and gamma + pi are mirror images), else sixteen over a whole turn.
+        bool symmetric = true;
+        for (size_t l = 0; l < m_grids.size() && symmetric; ++l) {
+            const auto& g = m_grids[l];
+            const int n = m_grid_n[l];
+            float peak = 0.0f;
+            for (float v : g) peak = std::max(peak, std::abs(v));
+            for (size_t k = 0; k < g.size() && symmetric; ++k)
+                symmetric = std::abs(g[k] - g[g.size() - 1 - k]) <= 1e-5f * peak;
+            (void)n;
+        }
+        m_direction_bins = symmetric ? 8 : 16;
+        m_direction_period = symmetric ? kPi : 2.0 * kPi;
+        m_directional.resize(m_grids.size() * size_t(m_direction_bins));
+        for (size_t l = 0; l < m_grids.size(); ++l)
+            for (int b = 0; b < m_direction_bins; ++b)
+                m_directional[l * size_t(m_direction_bins) + size_t(b)] =
+                    directional_tables(m_grids[l], m_grid_n[l], radius(int(l)),
+                                       b * m_direction_period / m_direction_bins);
+    }
+    // Sign of each level (the line form and the far field need chords of one sign).
+    for (int l = 0; l < levels(); ++l) {
+        double peak = 0.0, lowest = 0.0;
+        if (m_radial) {
+            m_nonnegative.push_back(m_tables[size_t(l)].nonnegative);
+            continue;
+        }
+        for (float v : m_grids[size_t(l)])
+            peak = std::max(peak, double(std::abs(v))), lowest = std::min(lowest, double(v));
+        m_nonnegative.push_back(lowest >= -1e-4 * peak);
     }
 }
 

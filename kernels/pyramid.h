@@ -14,6 +14,7 @@
 // the kernel by at most 1 % rms (||h - h * g_0|| <= 0.01 ||h||), so the kernel stands for every
 // footprint below sigma_0 and scenes that never zoom out render exactly as without a pyramid.
 
+#include <cstdint>
 #include <vector>
 
 #include "kernels/kernels.h"
@@ -56,6 +57,15 @@ struct RadialLevelTables {
     std::vector<float> line_mass, line_var, line_k4;
     /// True when h_l >= 0 everywhere (the line form applies: see render/perspective.h).
     bool nonnegative = false;
+};
+
+/// Line profiles of a level across one direction (non-radial pyramids, for the perspective
+/// far field): with s along the direction e (at angle gamma in the kernel's frame) and v across
+/// it (e turned a quarter counter-clockwise), at v_i = R_l (2 i / (n - 1) - 1): the chord's mass
+/// P(v) = int h_l ds, its mean, variance and fourth cumulant in s (texture units). Chords inside
+/// the disc of radius R_l only (grid levels are cut to it).
+struct DirectionalLineTables {
+    std::vector<float> mass, mean, var, k4;
 };
 
 class KernelPyramid {
@@ -104,6 +114,17 @@ public:
     const std::vector<float>& grid(int l) const { return m_grids[size_t(l)]; }
     int grid_n(int l) const { return m_grid_n[size_t(l)]; }
 
+    /// Non-radial pyramids: directions tabulated per level (0 for radial pyramids), equally
+    /// spaced over direction_period() (pi when every level is point-symmetric, else 2 pi).
+    int direction_bins() const { return m_direction_bins; }
+    double direction_period() const { return m_direction_period; }
+    /// The line profiles of level l across direction bin b (gamma = b period / bins).
+    const DirectionalLineTables& direction_tables(int l, int b) const {
+        return m_directional[size_t(l) * size_t(m_direction_bins) + size_t(b)];
+    }
+    /// Whether level l is >= 0 everywhere (to within 1e-4 of its peak).
+    bool nonnegative(int l) const { return m_nonnegative[size_t(l)]; }
+
 private:
     bool m_radial = false;
     std::vector<Kernel> m_levels;
@@ -111,6 +132,10 @@ private:
     std::vector<RadialLevelTables> m_tables;
     std::vector<std::vector<float>> m_grids;
     std::vector<int> m_grid_n;
+    int m_direction_bins = 0;
+    double m_direction_period = 0.0;
+    std::vector<DirectionalLineTables> m_directional;
+    std::vector<uint8_t> m_nonnegative;
 };
 
 }  // namespace impulse::kernels

@@ -8,6 +8,9 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "kernels/kernels.h"
+#include "render/render.h"
+
 namespace impulse::render::detail {
 
 /// One pyramid level as the loops see it.
@@ -26,9 +29,30 @@ struct PerspLevel {
 struct PerspKernel {
     bool radial = true;
     const PerspLevel* levels = nullptr;
+    /// Per image row j: rows[4 j .. 4 j + 3] = (x0, y0, dx, dy), the texture point of pixel
+    /// (i, j) being (x0 + i dx, y0 + i dy) relative to the origin (NaN: the row misses the plane).
+    const double* rows = nullptr;
 };
 
 enum PerspMode : uint8_t { kPerspSingle = 0, kPerspProbes = 1, kPerspLine = 2 };
+
+/// How one impulse is filtered: the plan for a footprint (texture units per pixel).
+struct Plan {
+    bool keep = false;
+    double fade = 1.0;
+    uint8_t mode = kPerspSingle;
+    kernels::KernelPyramid::Blend blend;
+    double var_lo = 0, var_hi = 0;  ///< line: extra variance along the major axis, texture units^2
+    int m = 0;                      ///< probes: 2m + 1
+    double sigma_e = 0, step = 0;   ///< probes: Gaussian sd along the axis, spacing
+    double along = 0, across = 0;   ///< texture half-extents of the support (region, boxes)
+};
+/// The pixel filter's standard deviation in (possibly supersampled) pixels.
+double filter_sigma_px(const AntiAlias& aa);
+/// The plan for an impulse whose footprint is s_major x s_minor texture units per pixel
+/// (render/perspective.h: single, probes or line, and the fade).
+Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_major,
+              double s_minor);
 
 /// One probe of an impulse: its offset from the impulse, weight and clipped image box.
 struct PerspProbe {
@@ -59,13 +83,24 @@ struct PerspItem {
     int x0 = 0, y0 = 0, x1 = -1, y1 = -1;  ///< pixels touched (inclusive), clipped to the image
 };
 
-/// Adds items idx[0..n) to the tile covering pixels [tx0, tx0+tw) x [ty0, ty0+th); `acc` is
-/// tw*th floats. X, Y: texture coordinates of all pixel centres (row stride `stride`).
-void persp_tile_base(const PerspKernel& k, const PerspItem* items, const PerspProbe* probes,
-                     const uint32_t* idx, size_t n, const float* X, const float* Y, int stride,
-                     int tx0, int ty0, int tw, int th, float* acc);
-void persp_tile_avx2(const PerspKernel& k, const PerspItem* items, const PerspProbe* probes,
-                     const uint32_t* idx, size_t n, const float* X, const float* Y, int stride,
-                     int tx0, int ty0, int tw, int th, float* acc);
+/// The inner loops, compiled for baseline x86-64 and for AVX2 (same bits).
+struct PerspLoops {
+    /// Adds items idx[0..n) to the tile covering pixels [tx0, tx0+tw) x [ty0, ty0+th); `acc` is
+    /// tw*th floats. X, Y: texture coordinates of all pixel centres (row stride `stride`).
+    void (*tile)(const PerspKernel& k, const PerspItem* items, const PerspProbe* probes,
+                 const uint32_t* idx, size_t n, const float* X, const float* Y, int stride, int tx0,
+                 int ty0, int tw, int th, float* acc);
+    /// Far field, across: X[n] += sum_{k = -m..m} D[n - k] T[k] for n in [n0, n1) (D readable
+    /// on [n0 - m, n1 + m), T on [-m, m]), summed in order of k.
+    void (*far_across)(const float* D, const float* T, int m, int n0, int n1, float* X);
+    /// Far field, along: for pixels i in [0, n) of a row, from the sub-row at y' = yr,
+    /// acc[i] += sum_q g_q(u) x[q][i], g_q the q-th derivative (q = 0 .. 4) of
+    /// g(u) = exp(-u^2 / (2 s)) / sqrt(s), u = (yp[i] - yr) * inv_kappa[i], s = 1 / inv_s[i],
+    /// rsqrt_s[i] = 1 / sqrt(s). terms: bit 0: x[2], x[4] are used; bit 1: x[1], x[3].
+    void (*far_along)(const float* yp, const float* inv_kappa, const float* inv_s,
+                      const float* rsqrt_s, int n, float yr, const float* const* x, int terms,
+                      float* acc);
+};
+extern const PerspLoops kPerspLoopsBase, kPerspLoopsAvx2;
 
 }  // namespace impulse::render::detail

@@ -9,12 +9,14 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <sstream>
 
 #include "render/persp_detail.h"
+#include "render/persp_far.h"
 #include "util/errors.h"
 
 namespace impulse::render {
@@ -30,9 +32,6 @@ constexpr int kMaxProbeHalf = 8;  // at most 2 * 8 + 1 probes per impulse
 // whose texture-space Gaussian ignores the perspective bend of the footprint).
 constexpr double kLineFrom = 0.25;
 
-/// The pixel filter's standard deviation in (possibly supersampled) pixels.
-double filter_sigma_px(const AntiAlias& aa) { return aa.filter_px * aa.footprint_scale; }
-
 bool cpu_has_avx2() {
     static const bool has = __builtin_cpu_supports("avx2");
     return has;
@@ -42,22 +41,48 @@ void require(bool ok, const std::string& what) {
     if (!ok) throw ValueError(what);
 }
 
-/// How one impulse is filtered: the plan for a footprint (texture units per pixel).
-struct Plan {
-    bool keep = false;
-    double fade = 1.0;
-    uint8_t mode = detail::kPerspSingle;
-    kernels::KernelPyramid::Blend blend;
-    double var_lo = 0, var_hi = 0;  // line: extra variance along the major axis, texture units^2
-    int m = 0;                      // probes: 2m + 1
-    double sigma_e = 0, step = 0;   // probes: Gaussian sd along the axis, spacing
-    double along = 0, across = 0;   // texture half-extents of the support (region, boxes)
-};
-
 /// Variance of the Gaussian blur level l actually carries (level 0, the kernel itself, none).
 double blur2(const kernels::KernelPyramid& pyr, int l) {
     return l == 0 ? 0.0 : pyr.sigma(l) * pyr.sigma(l);
 }
+
+/// Probe offsets (units of the axis) and weights for a plan: Gaussian weights at (j - m) step,
+/// positions rescaled so the discrete variance is exactly sigma_e^2.
+void probe_weights(const detail::Plan& p, std::array<double, 2 * kMaxProbeHalf + 1>& t,
+                   std::array<double, 2 * kMaxProbeHalf + 1>& w) {
+    const int n = 2 * p.m + 1;
+    double sw = 0.0;
+    for (int j = 0; j < n; ++j) {
+        t[size_t(j)] = (j - p.m) * p.step;
+        w[size_t(j)] = std::exp(-0.5 * t[size_t(j)] * t[size_t(j)] / (p.sigma_e * p.sigma_e));
+        sw += w[size_t(j)];
+    }
+    double var = 0.0;
+    for (int j = 0; j < n; ++j) {
+        w[size_t(j)] /= sw;
+        var += w[size_t(j)] * t[size_t(j)] * t[size_t(j)];
+    }
+    const double scale = var > 0.0 ? p.sigma_e / std::sqrt(var) : 1.0;
+    for (int j = 0; j < n; ++j) t[size_t(j)] *= scale;
+}
+
+/// Pixel box (inclusive, clipped to the image) of continuous image rectangle [xa, xb] x [ya, yb]
+/// with one pixel of margin.
+void pixel_box(double xa, double xb, double ya, double yb, int W, int H, int& x0, int& y0, int& x1,
+               int& y1) {
+    auto cl = [](double v, int lo, int hi) {
+        return static_cast<int>(std::clamp(v, static_cast<double>(lo), static_cast<double>(hi)));
+    };
+    x0 = cl(std::floor(xa) - 1.0, -1, W), x1 = cl(std::floor(xb) + 1.0, -1, W);
+    y0 = cl(std::floor(ya) - 1.0, -1, H), y1 = cl(std::floor(yb) + 1.0, -1, H);
+    x0 = std::max(x0, 0), y0 = std::max(y0, 0), x1 = std::min(x1, W - 1), y1 = std::min(y1, H - 1);
+}
+
+}  // namespace
+
+namespace detail {
+
+double filter_sigma_px(const AntiAlias& aa) { return aa.filter_px * aa.footprint_scale; }
 
 Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_major,
               double s_minor) {
@@ -122,39 +147,7 @@ Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_m
     return p;
 }
 
-/// Probe offsets (units of the axis) and weights for a plan: Gaussian weights at (j - m) step,
-/// positions rescaled so the discrete variance is exactly sigma_e^2.
-void probe_weights(const Plan& p, std::array<double, 2 * kMaxProbeHalf + 1>& t,
-                   std::array<double, 2 * kMaxProbeHalf + 1>& w) {
-    const int n = 2 * p.m + 1;
-    double sw = 0.0;
-    for (int j = 0; j < n; ++j) {
-        t[size_t(j)] = (j - p.m) * p.step;
-        w[size_t(j)] = std::exp(-0.5 * t[size_t(j)] * t[size_t(j)] / (p.sigma_e * p.sigma_e));
-        sw += w[size_t(j)];
-    }
-    double var = 0.0;
-    for (int j = 0; j < n; ++j) {
-        w[size_t(j)] /= sw;
-        var += w[size_t(j)] * t[size_t(j)] * t[size_t(j)];
-    }
-    const double scale = var > 0.0 ? p.sigma_e / std::sqrt(var) : 1.0;
-    for (int j = 0; j < n; ++j) t[size_t(j)] *= scale;
-}
-
-/// Pixel box (inclusive, clipped to the image) of continuous image rectangle [xa, xb] x [ya, yb]
-/// with one pixel of margin.
-void pixel_box(double xa, double xb, double ya, double yb, int W, int H, int& x0, int& y0, int& x1,
-               int& y1) {
-    auto cl = [](double v, int lo, int hi) {
-        return static_cast<int>(std::clamp(v, static_cast<double>(lo), static_cast<double>(hi)));
-    };
-    x0 = cl(std::floor(xa) - 1.0, -1, W), x1 = cl(std::floor(xb) + 1.0, -1, W);
-    y0 = cl(std::floor(ya) - 1.0, -1, H), y1 = cl(std::floor(yb) + 1.0, -1, H);
-    x0 = std::max(x0, 0), y0 = std::max(y0, 0), x1 = std::min(x1, W - 1), y1 = std::min(y1, H - 1);
-}
-
-}  // namespace
+}  // namespace detail
 
 double fade_weight(double sd, double cutoff) {
     if (!(sd > cutoff)) return 0.0;
@@ -168,12 +161,12 @@ double fade_weight(double sd, double cutoff) {
 
 double filtered_fade(const kernels::KernelPyramid& pyr, const View& view, const AntiAlias& aa) {
     if (!aa.enabled || !aa.fade) return 1.0;
-    return fade_weight(pyr.sd_fraction(filter_sigma_px(aa) * view.scale), aa.cutoff);
+    return fade_weight(pyr.sd_fraction(detail::filter_sigma_px(aa) * view.scale), aa.cutoff);
 }
 
 double filtered_support(const kernels::KernelPyramid& pyr, const View& view, const AntiAlias& aa) {
     if (!aa.enabled) return pyr.radius(0);
-    const auto b = pyr.select(filter_sigma_px(aa) * view.scale, aa.blend);
+    const auto b = pyr.select(detail::filter_sigma_px(aa) * view.scale, aa.blend);
     return pyr.radius(std::max(b.lo, b.hi));
 }
 
@@ -184,7 +177,7 @@ void accumulate_filtered(const kernels::KernelPyramid& pyr, const sim::Impulses&
     if (!aa.enabled) return accumulate(pyr.base(), impulses, view, out, options);
     const double fade = filtered_fade(pyr, view, aa);
     if (!(fade > 0.0)) return;
-    const auto b = pyr.select(filter_sigma_px(aa) * view.scale, aa.blend);
+    const auto b = pyr.select(detail::filter_sigma_px(aa) * view.scale, aa.blend);
     const bool two = b.lo != b.hi && b.weight > 0.0;
     if (!two && fade == 1.0) return accumulate(pyr.level(b.lo), impulses, view, out, options);
     // Two passes in a fixed order (every pixel: all of level lo, then all of level hi).
@@ -293,7 +286,8 @@ PerspectiveView::Footprint PerspectiveView::footprint(double x, double y) const 
     const double C = -k * (m_U[0] * q - b * m_F[0]), D = -k * (m_U[1] * q - b * m_F[1]);
     // Eigen-decomposition of J^T J: the smaller eigenvalue's vector is the footprint's major axis.
     const double a11 = A * A + C * C, a22 = B * B + D * D, a12 = A * B + C * D;
-    const double mid = 0.5 * (a11 + a22), half = std::hypot(0.5 * (a11 - a22), a12);
+    const double mid = 0.5 * (a11 + a22),
+                 half = std::sqrt(0.25 * (a11 - a22) * (a11 - a22) + a12 * a12);
     const double l1 = mid + half, l2 = std::max(mid - half, 1e-300);
     Footprint f;
     f.s_minor = 1.0 / std::sqrt(l1);
@@ -303,11 +297,11 @@ PerspectiveView::Footprint PerspectiveView::footprint(double x, double y) const 
         ex = -a12, ey = a11 - l2;
     else
         ex = a22 - l2, ey = -a12;
-    double n = std::hypot(ex, ey);
+    double n = std::sqrt(ex * ex + ey * ey);
     if (!(n > 0.0)) ex = 1.0, ey = 0.0, n = 1.0;
     f.ex = ex / n, f.ey = ey / n;
     const double ix = A * f.ex + B * f.ey, iy = C * f.ex + D * f.ey;
-    const double in = std::hypot(ix, iy);
+    const double in = std::sqrt(ix * ix + iy * iy);
     f.ix = in > 0.0 ? ix / in : 0.0;
     f.iy = in > 0.0 ? iy / in : 1.0;
     return f;
@@ -320,24 +314,74 @@ double PerspectiveView::horizon_row() const {
     return m_cy - s * m_f * std::tan(p);
 }
 
+void PerspectiveView::homography(double P[9]) const {
+    // image_point: q = F . v, a = R . v, b = U . v with v = (rx, ry, m_z);
+    // px = (cx q + f a) / q, py = (cy q - f b) / q.
+    for (int k = 0; k < 3; ++k) {
+        const double z = k == 2 ? m_z : 1.0;
+        const int i = k == 2 ? 2 : k;
+        P[k] = (m_cx * m_F[i] + m_f * m_R[i]) * z;
+        P[3 + k] = (m_cy * m_F[i] - m_f * m_U[i]) * z;
+        P[6 + k] = m_F[i] * z;
+    }
+}
+
+void PerspectiveView::range_row(double& a, double& b, double& c, double& d) const {
+    // image_point of (x, y) = foot + rho (sin h, -cos h): q = F . v, b = U . v, py = cy - f b / q.
+    const double h = m_cam.heading_deg * kDeg;
+    const double dx = std::sin(h), dy = -std::cos(h);
+    const double qf = m_F[0] * dx + m_F[1] * dy, q0 = m_F[2] * m_z;
+    const double uf = m_U[0] * dx + m_U[1] * dy, u0 = m_U[2] * m_z;
+    a = m_cy * qf - m_f * uf, b = m_cy * q0 - m_f * u0, c = qf, d = q0;
+}
+
+void PerspectiveView::texture_row(double py, int n, double ox, double oy, float* x, float* y,
+                                  uint8_t* hit) const {
+    // The same arithmetic as texture_point: the ray's z component does not depend on the column
+    // (the right vector is horizontal, m_R[2] = 0), so neither does the ray parameter t.
+    const double b = py - m_cy;
+    const double d2 = m_f * m_F[2] + 0.0 * m_R[2] - b * m_U[2];
+    const double t = m_z / d2;
+    const bool any = t > 0.0 && std::isfinite(t);
+    for (int i = 0; i < n; ++i) {
+        const double a = (i + 0.5) - m_cx;
+        const double d0 = m_f * m_F[0] + a * m_R[0] - b * m_U[0];
+        const double d1 = m_f * m_F[1] + a * m_R[1] - b * m_U[1];
+        const double rx = (m_cam.x + t * d0) - ox, ry = (m_cam.y + t * d1) - oy;
+        const bool ok = any && std::abs(rx) < 1e15 && std::abs(ry) < 1e15;
+        x[i] = ok ? static_cast<float>(rx) : kFar;
+        y[i] = ok ? static_cast<float>(ry) : kFar;
+        hit[i] = ok ? 1 : 0;
+    }
+}
+
+bool PerspectiveView::row_line(double py, double ox, double oy, double line[4]) const {
+    const double b = py - m_cy;
+    const double d2 = m_f * m_F[2] + 0.0 * m_R[2] - b * m_U[2];
+    const double t = m_z / d2;
+    if (!(t > 0.0) || !std::isfinite(t)) {
+        line[0] = line[1] = line[2] = line[3] = std::numeric_limits<double>::quiet_NaN();
+        return false;
+    }
+    const double a = 0.5 - m_cx;
+    line[0] = (m_cam.x + t * (m_f * m_F[0] + a * m_R[0] - b * m_U[0])) - ox;
+    line[1] = (m_cam.y + t * (m_f * m_F[1] + a * m_R[1] - b * m_U[1])) - oy;
+    line[2] = t * m_R[0], line[3] = t * m_R[1];
+    return true;
+}
+
 PixelCoords pixel_coords(const PerspectiveView& view) {
     const auto& cam = view.camera();
     PixelCoords pc;
     pc.width = cam.width, pc.height = cam.height;
     pc.origin_x = cam.x, pc.origin_y = cam.y;
     const size_t n = size_t(cam.width) * cam.height;
-    pc.x.assign(n, kFar), pc.y.assign(n, kFar), pc.hit.assign(n, 0);
+    pc.x.resize(n), pc.y.resize(n), pc.hit.resize(n), pc.rows.resize(4 * size_t(cam.height));
     tbb::parallel_for(0, cam.height, [&](int j) {
-        for (int i = 0; i < cam.width; ++i) {
-            double x, y;
-            if (!view.texture_point(i + 0.5, j + 0.5, x, y)) continue;
-            const double rx = x - pc.origin_x, ry = y - pc.origin_y;
-            if (!(std::abs(rx) < 1e15 && std::abs(ry) < 1e15)) continue;
-            const size_t p = size_t(j) * cam.width + i;
-            pc.x[p] = static_cast<float>(rx);
-            pc.y[p] = static_cast<float>(ry);
-            pc.hit[p] = 1;
-        }
+        const size_t p = size_t(j) * cam.width;
+        view.texture_row(j + 0.5, cam.width, pc.origin_x, pc.origin_y, pc.x.data() + p,
+                         pc.y.data() + p, pc.hit.data() + p);
+        view.row_line(j + 0.5, pc.origin_x, pc.origin_y, pc.rows.data() + 4 * size_t(j));
     });
     return pc;
 }
@@ -413,56 +457,131 @@ std::vector<detail::PerspLevel> loop_levels(const kernels::KernelPyramid& pyr) {
 
 }  // namespace
 
-sim::Box perspective_region(const kernels::KernelPyramid& pyr, const PerspectiveView& view,
-                            const AntiAlias& aa) {
+sim::Region perspective_region(const kernels::KernelPyramid& pyr, const PerspectiveView& view,
+                               const AntiAlias& aa) {
     const auto& cam = view.camera();
     const int W = cam.width, H = cam.height;
     // A row of pixels maps to a straight segment of the plane, so samples along each row bound
     // it; the fade varies smoothly along the row, so a sample next to a kept one is kept too.
-    constexpr int kSamples = 17;
-    struct RowBox {
-        double x0 = 1e300, y0 = 1e300, x1 = -1e300, y1 = -1e300;
+    constexpr int kSamples = 16;  // segments per row
+    struct Sample {
+        double x = 0, y = 0, ext = 0;
+        bool hit = false, kept = false, near = false;
     };
-    std::vector<RowBox> rows(static_cast<size_t>(H));
+    auto sample_px = [&](int k) {
+        return k == 0 ? 0.5 : k == kSamples ? W - 0.5 : W * double(k) / kSamples;
+    };
+    // Whether the impulses at image point (px, py) are drawn, and their extent.
+    auto probe = [&](double px, double py, Sample& s) {
+        s.hit = view.texture_point(px, py, s.x, s.y);
+        s.kept = false;
+        if (!s.hit) return;
+        if (aa.max_distance > 0.0 && std::hypot(s.x - cam.x, s.y - cam.y) > aa.max_distance) return;
+        const auto f = view.footprint(s.x, s.y);
+        const detail::Plan p = detail::plan_for(pyr, aa, f.s_major, f.s_minor);
+        s.kept = p.keep;
+        // The line form's long axis points along the depth, where the neighbouring rows are
+        // (the region spans the rows between samples): only its across extent widens it.
+        s.ext = 1.25 * (p.mode == detail::kPerspLine ? p.across : std::max(p.along, p.across));
+    };
+    std::vector<Sample> grid(size_t(H) * (kSamples + 1));
     tbb::parallel_for(0, H, [&](int j) {
-        std::array<double, kSamples + 1> X{}, Y{}, ext{};
-        std::array<bool, kSamples + 1> hit{}, keep{};
+        Sample* row = grid.data() + size_t(j) * (kSamples + 1);
+        for (int k = 0; k <= kSamples; ++k) probe(sample_px(k), j + 0.5, row[k]);
+        // A sample next to a kept one along the row counts as kept, with its neighbour's extent.
+        std::array<double, kSamples + 1> ext{};
         for (int k = 0; k <= kSamples; ++k) {
-            const double px = k == 0 ? 0.5 : k == kSamples ? W - 0.5 : W * double(k) / kSamples;
-            hit[size_t(k)] = view.texture_point(px, j + 0.5, X[size_t(k)], Y[size_t(k)]);
-            if (!hit[size_t(k)]) continue;
-            if (aa.max_distance > 0.0 &&
-                std::hypot(X[size_t(k)] - cam.x, Y[size_t(k)] - cam.y) > aa.max_distance)
-                continue;
-            const auto f = view.footprint(X[size_t(k)], Y[size_t(k)]);
-            const Plan p = plan_for(pyr, aa, f.s_major, f.s_minor);
-            keep[size_t(k)] = p.keep;
-            // The line form's long axis points along the depth, where the neighbouring rows
-            // are: only its across extent widens the region.
-            ext[size_t(k)] =
-                1.25 * (p.mode == detail::kPerspLine ? p.across : std::max(p.along, p.across));
+            const bool left = k > 0 && row[k - 1].kept, right = k < kSamples && row[k + 1].kept;
+            row[k].near = row[k].hit && (row[k].kept || left || right);
+            double e = row[k].kept ? row[k].ext : 0.0;
+            if (left) e = std::max(e, row[k - 1].ext);
+            if (right) e = std::max(e, row[k + 1].ext);
+            ext[size_t(k)] = e;
         }
-        RowBox b;
-        for (int k = 0; k <= kSamples; ++k) {
-            if (!hit[size_t(k)]) continue;
-            const bool near_kept = keep[size_t(k)] || (k > 0 && keep[size_t(k - 1)]) ||
-                                   (k < kSamples && keep[size_t(k + 1)]);
-            if (!near_kept) continue;
-            double e = ext[size_t(k)];
-            if (k > 0 && keep[size_t(k - 1)]) e = std::max(e, ext[size_t(k - 1)]);
-            if (k < kSamples && keep[size_t(k + 1)]) e = std::max(e, ext[size_t(k + 1)]);
-            b.x0 = std::min(b.x0, X[size_t(k)] - e), b.x1 = std::max(b.x1, X[size_t(k)] + e);
-            b.y0 = std::min(b.y0, Y[size_t(k)] - e), b.y1 = std::max(b.y1, Y[size_t(k)] + e);
-        }
-        rows[size_t(j)] = b;
+        for (int k = 0; k <= kSamples; ++k) row[k].ext = ext[size_t(k)];
     });
-    sim::Box box{1e300, 1e300, -1e300, -1e300};
-    for (const auto& r : rows) {
-        box.x0 = std::min(box.x0, r.x0), box.y0 = std::min(box.y0, r.y0);
-        box.x1 = std::max(box.x1, r.x1), box.y1 = std::max(box.y1, r.y1);
+    auto at = [&](int j, int k) -> const Sample& {
+        return grid[size_t(j) * (kSamples + 1) + size_t(k)];
+    };
+    // Where a column of samples passes from kept (row jk) to not kept (row ju), the texture point
+    // just past the cut-off (bisection in the image row): rows near the horizon lie far apart on
+    // the plane, and the region should end at the cut-off, not at the next row.
+    auto boundary = [&](int k, int jk, int ju, double& x, double& y) {
+        double a = jk + 0.5, b = ju + 0.5;  // kept, not kept
+        for (int it = 0; it < 16; ++it) {
+            Sample s;
+            probe(sample_px(k), 0.5 * (a + b), s);
+            (s.kept ? a : b) = 0.5 * (a + b);
+        }
+        if (view.texture_point(sample_px(k), b, x, y)) return;
+        x = at(jk, k).x, y = at(jk, k).y;
+    };
+    // Cells of the sample grid (rows j, j + 1 and samples k, k + 1): the box of the corners
+    // that see the plane (a corner past the cut-off moved back to it), expanded by the largest
+    // extent among the kept ones.
+    auto cell_box = [&](int j, int k, sim::Box& b) {
+        b = {1e300, 1e300, -1e300, -1e300};
+        double e = -1.0;
+        const int rows = H > 1 ? 2 : 1;
+        for (int dj = 0; dj < rows; ++dj)
+            for (int dk = 0; dk <= 1; ++dk) {
+                const Sample& s = at(j + dj, k + dk);
+                if (s.near) e = std::max(e, s.ext);
+                double x = s.x, y = s.y;
+                const int other = j + (rows - 1 - dj);
+                if (!s.kept && other != j + dj && at(other, k + dk).kept)
+                    boundary(k + dk, other, j + dj, x, y);
+                else if (!s.hit)
+                    continue;
+                b.x0 = std::min(b.x0, x), b.x1 = std::max(b.x1, x);
+                b.y0 = std::min(b.y0, y), b.y1 = std::max(b.y1, y);
+            }
+        if (!(e >= 0.0) || !(b.x1 >= b.x0)) return false;
+        b = b.expanded(e);
+        return true;
+    };
+    // Merge: first along each row of cells, then down the rows, while a merged box wastes at
+    // most kWaste of its area: the covered area of a merged box is tracked as the sum of its
+    // parts less their overlaps with the part merged before them (the union of a wedge's row
+    // boxes is the wedge; its bounding box would be about twice as large).
+    constexpr double kWaste = 0.1;
+    struct Merged {
+        sim::Box box, last;
+        double covered = 0.0;
+    };
+    auto overlap = [](const sim::Box& a, const sim::Box& b) {
+        const double w = std::min(a.x1, b.x1) - std::max(a.x0, b.x0);
+        const double h = std::min(a.y1, b.y1) - std::max(a.y0, b.y0);
+        return w > 0.0 && h > 0.0 ? w * h : 0.0;
+    };
+    auto try_merge = [&](Merged& m, const sim::Box& b) {
+        const sim::Box u{std::min(m.box.x0, b.x0), std::min(m.box.y0, b.y0),
+                         std::max(m.box.x1, b.x1), std::max(m.box.y1, b.y1)};
+        const double covered = m.covered + b.area() - overlap(m.last, b);
+        if (u.area() > (1.0 + kWaste) * covered) return false;
+        m.box = u, m.last = b, m.covered = covered;
+        return true;
+    };
+    const int cell_rows = std::max(1, H - 1);
+    std::vector<std::vector<Merged>> rows(static_cast<size_t>(cell_rows));
+    tbb::parallel_for(0, cell_rows, [&](int j) {
+        auto& out = rows[size_t(j)];
+        for (int k = 0; k < kSamples; ++k) {
+            sim::Box b;
+            if (!cell_box(j, k, b)) continue;
+            if (out.empty() || !try_merge(out.back(), b)) out.push_back({b, b, b.area()});
+        }
+    });
+    std::vector<Merged> all;
+    for (int j = cell_rows - 1; j >= 0; --j) {
+        auto& r = rows[size_t(j)];
+        if (r.size() == 1 && !all.empty() && try_merge(all.back(), r.front().box)) continue;
+        all.insert(all.end(), r.begin(), r.end());
     }
-    if (!(box.x0 <= box.x1)) return {0, 0, -1, -1};
-    return box;
+    sim::Region region;
+    region.boxes.reserve(all.size());
+    for (const Merged& m : all) region.boxes.push_back(m.box);
+    return region;
 }
 
 void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impulses& imp,
@@ -475,21 +594,31 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
     if (coords.width != W || coords.height != H)
         throw ValueError("accumulate_perspective: pixel coordinates of another view size");
     const std::vector<detail::PerspLevel> levels = loop_levels(pyr);
-    const detail::PerspKernel lk{pyr.radial(), levels.data()};
+    const detail::PerspKernel lk{pyr.radial(), levels.data(), coords.rows.data()};
     const double orient = pyr.base().params().orientation;
+    using Clock = std::chrono::steady_clock;
+    auto ms = [](Clock::time_point a, Clock::time_point b) {
+        return std::chrono::duration<double, std::milli>(b - a).count();
+    };
+    const auto t0 = Clock::now();
+    const detail::FarField far(pyr, view, coords, aa);
+    const auto t1 = Clock::now();
 
     // Prepare the impulses in chunks (each writes its own items; probes go to per-chunk lists
     // joined in chunk order, so the layout does not depend on scheduling).
     const size_t n = imp.size();
     constexpr size_t kChunk = 1024;
     const size_t chunks = (n + kChunk - 1) / kChunk;
-    std::vector<detail::PerspItem> items(n);
-    std::vector<uint8_t> live(n, 0);
+    std::vector<std::vector<detail::PerspItem>> chunk_items(chunks);
+    std::vector<std::vector<detail::FarItem>> chunk_far(chunks);
     std::vector<std::vector<detail::PerspProbe>> chunk_probes(chunks);
     std::vector<std::array<size_t, 5>> chunk_counts(chunks);
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
         auto& probes = chunk_probes[c];
+        auto& live_items = chunk_items[c];
+        auto& far_items = chunk_far[c];
         auto& counts = chunk_counts[c];
+        if (far.active()) far_items.reserve(std::min(n - c * kChunk, kChunk));
         counts = {0, 0, 0, 0, 0};
         auto area = [](int x0, int y0, int x1, int y1) {
             return x1 >= x0 && y1 >= y0 ? size_t(x1 - x0 + 1) * size_t(y1 - y0 + 1) : size_t(0);
@@ -499,11 +628,18 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
             const double x = imp.x[i], y = imp.y[i];
             if (aa.max_distance > 0.0 && std::hypot(x - cam.x, y - cam.y) > aa.max_distance)
                 continue;
+            if (far.contains(x - cam.x, y - cam.y)) {
+                detail::FarItem fi;
+                if (far.item(x - cam.x, y - cam.y, imp.weight[i],
+                             orient + static_cast<double>(imp.theta[i]), fi))
+                    far_items.push_back(fi);
+                continue;
+            }
             if (!(view.depth(x, y) > 0.0)) continue;
             const auto f = view.footprint(x, y);
-            const Plan p = plan_for(pyr, aa, f.s_major, f.s_minor);
+            const detail::Plan p = detail::plan_for(pyr, aa, f.s_major, f.s_minor);
             if (!p.keep) continue;
-            detail::PerspItem& it = items[i];
+            detail::PerspItem it;
             it.px = static_cast<float>(x - coords.origin_x);
             it.py = static_cast<float>(y - coords.origin_y);
             double sx = 0, sy = 0;
@@ -583,22 +719,28 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
                 ++counts[1];
                 counts[3] += it.nprobe;
             }
-            live[i] = any ? 1 : 0;
-            if (any && p.mode != detail::kPerspProbes)
-                counts[4] += area(it.x0, it.y0, it.x1, it.y1);
+            if (!any) continue;
+            if (p.mode != detail::kPerspProbes) counts[4] += area(it.x0, it.y0, it.x1, it.y1);
+            live_items.push_back(it);
         }
     });
+    // Join the chunks in order (the canonical order of the impulses).
     std::vector<detail::PerspProbe> probes;
+    std::vector<detail::PerspItem> items;
+    size_t far_count = 0;
     {
-        std::vector<size_t> base(chunks, 0);
-        size_t total = 0;
-        for (size_t c = 0; c < chunks; ++c) base[c] = total, total += chunk_probes[c].size();
-        probes.reserve(total);
+        size_t np = 0, ni = 0;
+        for (size_t c = 0; c < chunks; ++c)
+            np += chunk_probes[c].size(), ni += chunk_items[c].size(),
+                far_count += chunk_far[c].size();
+        probes.reserve(np), items.reserve(ni);
         for (size_t c = 0; c < chunks; ++c) {
+            const auto base = static_cast<uint32_t>(probes.size());
             probes.insert(probes.end(), chunk_probes[c].begin(), chunk_probes[c].end());
-            for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i)
-                if (live[i] && items[i].mode == detail::kPerspProbes)
-                    items[i].probe0 += static_cast<uint32_t>(base[c]);
+            for (detail::PerspItem& it : chunk_items[c]) {
+                if (it.mode == detail::kPerspProbes) it.probe0 += base;
+                items.push_back(it);
+            }
         }
     }
     if (stats) {
@@ -609,33 +751,30 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
                 stats->probe_count += c[3];
             stats->pixels += c[4];
         }
-        size_t kept = 0;
-        for (uint8_t l : live) kept += l;
-        stats->culled = n - kept;
+        stats->far = far_count;
+        stats->culled = n - items.size() - far_count;
     }
 
+    const auto t2 = Clock::now();
     // Bin into tiles by image box (counting sort keeps each tile's list in canonical order).
     const int T = std::max(8, options.tile_size);
     const int ntx = (W + T - 1) / T, nty = (H + T - 1) / T;
     std::vector<uint32_t> count(size_t(ntx) * nty + 1, 0);
-    for (size_t i = 0; i < n; ++i) {
-        if (!live[i]) continue;
-        const auto& it = items[i];
+    for (const auto& it : items)
         for (int b = it.y0 / T; b <= it.y1 / T; ++b)
             for (int a = it.x0 / T; a <= it.x1 / T; ++a) ++count[size_t(b) * ntx + a + 1];
-    }
     for (size_t t = 1; t < count.size(); ++t) count[t] += count[t - 1];
     std::vector<uint32_t> bins(count.back());
     std::vector<uint32_t> fill(count.begin(), count.end() - 1);
-    for (size_t i = 0; i < n; ++i) {
-        if (!live[i]) continue;
+    for (size_t i = 0; i < items.size(); ++i) {
         const auto& it = items[i];
         for (int b = it.y0 / T; b <= it.y1 / T; ++b)
             for (int a = it.x0 / T; a <= it.x1 / T; ++a)
                 bins[fill[size_t(b) * ntx + a]++] = uint32_t(i);
     }
 
-    const bool avx2 = options.use_avx2 && cpu_has_avx2();
+    const detail::PerspLoops& loops =
+        options.use_avx2 && cpu_has_avx2() ? detail::kPerspLoopsAvx2 : detail::kPerspLoopsBase;
     auto do_tile = [&](int t) {
         const int a = t % ntx, b = t / ntx;
         const int x0 = a * T, y0 = b * T;
@@ -643,12 +782,8 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
         std::vector<float> acc(size_t(tw) * th, 0.0f);
         const uint32_t* idx = bins.data() + count[size_t(t)];
         const size_t m = count[size_t(t) + 1] - count[size_t(t)];
-        if (avx2)
-            detail::persp_tile_avx2(lk, items.data(), probes.data(), idx, m, coords.x.data(),
-                                    coords.y.data(), W, x0, y0, tw, th, acc.data());
-        else
-            detail::persp_tile_base(lk, items.data(), probes.data(), idx, m, coords.x.data(),
-                                    coords.y.data(), W, x0, y0, tw, th, acc.data());
+        loops.tile(lk, items.data(), probes.data(), idx, m, coords.x.data(), coords.y.data(), W, x0,
+                   y0, tw, th, acc.data());
         for (int y = 0; y < th; ++y) {
             float* dst = out.data.data() + size_t(y0 + y) * W + x0;
             const float* src = acc.data() + size_t(y) * tw;
@@ -660,6 +795,13 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
         tbb::parallel_for(0, ntiles, do_tile);
     else
         for (int t = 0; t < ntiles; ++t) do_tile(t);
+    const auto t3 = Clock::now();
+    if (far.active()) far.render(chunk_far, out, loops, options.parallel);
+    if (stats) {
+        const auto t4 = Clock::now();
+        stats->setup_ms = ms(t0, t1), stats->prepare_ms = ms(t1, t2), stats->tiles_ms = ms(t2, t3);
+        stats->far_ms = ms(t3, t4);
+    }
 }
 
 }  // namespace impulse::render

@@ -20,6 +20,12 @@
 //     s_minor projected across (a 1-D table P(v) with its chord variance q(v)) times a Gaussian
 //     along the major axis evaluated in image space: exact in the limit, cost independent of the
 //     anisotropy.
+//   * far field: where the kernel's image is a sliver no taller than the pixel filter (the
+//     chords' spread along the axis small against it), impulses are deposited on sub-rows that
+//     follow the circles round the camera's foot, convolved across with the line form's profile
+//     and filtered along per pixel (render/persp_far.h): a few additions per impulse and a
+//     bounded amount of work per pixel, for radial and (through chords tabulated per direction)
+//     other non-negative kernels.
 // Far away the filtered noise tends to its mean: the remaining standard deviation of the
 // major-axis filtered kernel (KernelPyramid::sd_fraction) fades the impulses out between
 // 2 * cutoff and cutoff, and none are generated beyond, so the work per frame stays bounded
@@ -55,6 +61,8 @@ struct AntiAlias {
     /// Pixel footprints are multiplied by this (tests): a render at k times the resolution with
     /// footprint_scale k applies the 1x filter, sampled k times finer. >= 1.
     double footprint_scale = 1.0;
+    /// false: no far field; the line form draws every impulse it applies to (tests, benchmarks).
+    bool far_field = true;
 };
 
 /// Fade factor in [0, 1] for a remaining standard deviation fraction `sd` (0 at or below
@@ -117,6 +125,8 @@ public:
     /// [-90, 90], a visible part of the plane).
     explicit PerspectiveView(const PerspectiveCamera& camera);
     const PerspectiveCamera& camera() const { return m_cam; }
+    /// Focal length in pixels.
+    double focal_px() const { return m_f; }
 
     /// The texture point seen at image point (px, py); false when the ray misses the plane.
     bool texture_point(double px, double py, double& x, double& y) const;
@@ -136,6 +146,25 @@ public:
     /// Image row of the horizon (may lie outside the image); rows beyond it miss the plane.
     double horizon_row() const;
 
+    /// The projection as a homography of the texture point relative to the camera's foot:
+    /// with (u, v, w) = P (x - foot_x, y - foot_y, 1), the image point is (u / w, v / w) and
+    /// w > 0 in front of the camera (w is the depth). Row-major 3x3.
+    void homography(double P[9]) const;
+
+    /// The image row of the point at distance rho straight ahead of the camera's foot (along
+    /// the heading): Y(rho) = (a rho + b) / (c rho + d). The far field labels the circles
+    /// around the foot by it.
+    void range_row(double& a, double& b, double& c, double& d) const;
+
+    /// The texture points of the pixel centres (i + 0.5, py), i in [0, n), minus (ox, oy), as
+    /// floats: the arithmetic of texture_point, one division per row. Points that miss the plane
+    /// (or lie beyond 1e15) get hit 0 and a far coordinate.
+    void texture_row(double py, int n, double ox, double oy, float* x, float* y,
+                     uint8_t* hit) const;
+    /// The same row as a line: the texture point of pixel centre (i + 0.5, py) is
+    /// (x0 + i dx, y0 + i dy) - (ox, oy); false (NaNs) when the row misses the plane.
+    bool row_line(double py, double ox, double oy, double line[4]) const;
+
 private:
     PerspectiveCamera m_cam;
     double m_f = 0, m_cx = 0, m_cy = 0;
@@ -150,22 +179,30 @@ struct PixelCoords {
     double origin_x = 0, origin_y = 0;
     std::vector<float> x, y;
     std::vector<uint8_t> hit;
+    /// Per row j, (x0, y0, dx, dy): the texture point of pixel (i, j) is (x0 + i dx, y0 + i dy)
+    /// relative to the origin, in double (NaN for rows that miss the plane).
+    std::vector<double> rows;
 };
 /// Computes the pixel coordinates (origin: the camera's foot). Deterministic; parallel by rows.
 PixelCoords pixel_coords(const PerspectiveView& view);
 
-/// The texture-space box that must hold the impulses for a frame: every visible point whose
+/// The texture region that must hold the impulses for a frame: every visible point whose
 /// impulses are not faded out (nor beyond aa.max_distance), expanded by the support they would
-/// have there. Pass it to sim::LayerSimulator::impulses_at. Empty (x1 < x0) when nothing is
+/// have there, as a union of boxes that follows the visible wedge of the plane (its bounding box
+/// is about twice its area). Pass it to sim::LayerSimulator::impulses_at. Empty when nothing is
 /// visible.
-sim::Box perspective_region(const kernels::KernelPyramid& pyramid, const PerspectiveView& view,
-                            const AntiAlias& aa);
+sim::Region perspective_region(const kernels::KernelPyramid& pyramid, const PerspectiveView& view,
+                               const AntiAlias& aa);
 
 /// Counts of the last perspective evaluation (for benchmarks and tests).
 struct PerspectiveStats {
     size_t impulses = 0;  ///< impulses given
     size_t culled = 0;    ///< faded out, behind the camera, beyond max_distance or off-image
     size_t single = 0, probes = 0, line = 0;  ///< impulses per filter form
+    size_t far = 0;                           ///< impulses drawn by the far field
+    /// Wall time of the parts (ms): far-field set-up, per-impulse preparation, tiled
+    /// evaluation (binning included), far field (deposit, across, along).
+    double setup_ms = 0, prepare_ms = 0, tiles_ms = 0, far_ms = 0;
     size_t probe_count = 0;                   ///< probes evaluated
     size_t pixels = 0;  ///< pixel evaluations (sum of the impulses' and probes' boxes)
 };

@@ -34,15 +34,15 @@ public:
     ~CameraPipeline();
     /// True when frames go through the pyramid (perspective, or orthographic anti-aliasing).
     bool active() const { return m_active; }
-    /// Texture box layer `layer`'s impulses must cover at time t_s (`view`: the orthographic
-    /// view; its box when nothing applies). Empty when the layer is faded to its mean.
-    sim::Box box(size_t layer, const render::View& view, double t_s);
+    /// Texture region layer `layer`'s impulses must cover at time t_s (`view`: the orthographic
+    /// view; its box when nothing applies). A point when the layer is faded to its mean.
+    sim::Region region(size_t layer, const render::View& view, double t_s);
     /// Adds the layer's impulses to `out` (frame size) as the camera sees them at time t_s.
     void accumulate(size_t layer, const sim::Impulses& impulses, const render::View& view,
                     double t_s, render::Frame& out, const render::EvalOptions& options);
-    /// The largest box over the camera's keys (for budget estimates); `view0`: the orthographic
-    /// view at its widest.
-    sim::Box estimate_box(size_t layer, const render::View& view0) const;
+    /// The largest region over the camera's keys (for budget estimates); `view0`: the
+    /// orthographic view at its widest.
+    sim::Region estimate_region(size_t layer, const render::View& view0) const;
     /// The layer's pyramid (null when not active).
     const kernels::KernelPyramid* pyramid(size_t layer) const;
     /// Counts of the last perspective evaluation of a layer.

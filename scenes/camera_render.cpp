@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // The camera-dependent part of rendering a layer: kernel pyramids per layer, the perspective
-// geometry of a frame, the texture box the impulses must cover, and the evaluation.
+// geometry of a frame, the texture region the impulses must cover, and the evaluation.
 
 #include <algorithm>
 #include <set>
@@ -38,21 +38,21 @@ void CameraPipeline::prepare(double t) {
     m_t = t;
 }
 
-sim::Box CameraPipeline::box(size_t layer, const render::View& view, double t) {
+sim::Region CameraPipeline::region(size_t layer, const render::View& view, double t) {
     if (!m_active) return view.box();
     const kernels::KernelPyramid& pyr = *m_pyramids.at(layer);
     if (m_scene->camera.type == CameraConfig::Type::Perspective) {
         prepare(t);
-        const sim::Box b = render::perspective_region(pyr, *m_view, m_aa);
-        if (b.x1 >= b.x0) return b;
+        sim::Region r = render::perspective_region(pyr, *m_view, m_aa);
+        if (!r.empty()) return r;
         const auto& c = m_view->camera();
-        return {c.x, c.y, c.x, c.y};  // nothing to draw: a point (a few impulses, no work)
+        return sim::Box{c.x, c.y, c.x, c.y};  // nothing to draw: a point (a few impulses, no work)
     }
     if (!(render::filtered_fade(pyr, view, m_aa) > 0.0)) {
         // The layer is its mean: ask for next to nothing (a point, never an inverted box).
         const sim::Box v = view.box();
         const double cx = 0.5 * (v.x0 + v.x1), cy = 0.5 * (v.y0 + v.y1);
-        return {cx, cy, cx, cy};
+        return sim::Box{cx, cy, cx, cy};
     }
     // The simulator adds the kernel's own radius; the blended levels reach further.
     return view.box().expanded(
@@ -73,7 +73,7 @@ void CameraPipeline::accumulate(size_t layer, const sim::Impulses& impulses,
     render::accumulate_filtered(pyr, impulses, view, out, m_aa, options);
 }
 
-sim::Box CameraPipeline::estimate_box(size_t layer, const render::View& view0) const {
+sim::Region CameraPipeline::estimate_region(size_t layer, const render::View& view0) const {
     if (!m_active) return view0.box();
     const kernels::KernelPyramid& pyr = *m_pyramids.at(layer);
     const CameraConfig& c = m_scene->camera;
@@ -84,11 +84,11 @@ sim::Box CameraPipeline::estimate_box(size_t layer, const render::View& view0) c
     for (const auto* k : {&c.position_x, &c.position_y, &c.altitude, &c.pitch, &c.heading, &c.fov})
         for (const auto& key : k->keys) times.insert(key.first);
     const auto& o = m_scene->output;
-    sim::Box best{0, 0, 0, 0};
+    sim::Region best = sim::Box{0, 0, 0, 0};
     for (double t : times) {
         const render::PerspectiveView v(c.perspective(o.width, o.height, t));
-        const sim::Box b = render::perspective_region(pyr, v, m_aa);
-        if (b.x1 >= b.x0 && b.area() > best.area()) best = b;
+        sim::Region r = render::perspective_region(pyr, v, m_aa);
+        if (r.area() > best.area()) best = std::move(r);
     }
     return best;
 }

@@ -171,7 +171,7 @@ struct Renderer::State {
     void raw(size_t i, const Pass& pass, const render::View& v, Space space, render::Frame& out,
              sim::Impulses& impulses);
     /// The layer's impulses covering `box`, gain applied, oriented by its source layer if any.
-    void layer_impulses(size_t i, const Pass& pass, const sim::Box& box, sim::Impulses& out);
+    void layer_impulses(size_t i, const Pass& pass, const sim::Region& box, sim::Impulses& out);
     /// Samples layer i's orientation source on a lattice covering the impulses of `box`.
     void orient(size_t i, const Pass& pass, const sim::Box& box);
     /// Rebuilds layer i's marginal transfer for layer time tl when its target or source varies.
@@ -261,7 +261,7 @@ double Renderer::estimated_impulses() const {
         for (const auto& k : S.scene.camera.zoom.keys) min_zoom = std::min(min_zoom, k.second);
         render::View v = S.scene.camera.view(S.scene.output.width, S.scene.output.height, 0.0);
         v.scale = 1.0 / min_zoom;
-        sim::Box box = S.camera->estimate_box(i, v);
+        sim::Region box = S.camera->estimate_region(i, v);
         const Composition& c = S.scene.layers[i].compose;
         // A warp reads the layer up to its largest displacement beyond the view: about 5 sd of
         // the sources over a frame of a million pixels, 6 sd taken.
@@ -372,7 +372,7 @@ void Renderer::render(int64_t frame, render::Frame& out, const render::EvalOptio
             !S.warp_source[i]) {
             // A plain sum: impulses straight into the frame, the mean added at the end.
             sim::Impulses& imp = S.impulses[i];
-            S.layer_impulses(i, pass, S.camera->box(i, view, t), imp);
+            S.layer_impulses(i, pass, S.camera->region(i, view, t), imp);
             S.camera->accumulate(i, imp, view, t, out, options);
             mean += layer.mean.value(S.scene.layer_time(i, frame));
             continue;
@@ -457,7 +457,7 @@ void Renderer::State::field(size_t i, const Pass& pass, const render::View& v, S
 void Renderer::State::raw(size_t i, const Pass& pass, const render::View& v, Space space,
                           render::Frame& out, sim::Impulses& imp) {
     if (space == Space::Camera) {
-        layer_impulses(i, pass, camera->box(i, v, pass.t), imp);
+        layer_impulses(i, pass, camera->region(i, v, pass.t), imp);
         camera->accumulate(i, imp, v, pass.t, out, *pass.options);
     } else {
         layer_impulses(i, pass, v.box(), imp);
@@ -465,9 +465,9 @@ void Renderer::State::raw(size_t i, const Pass& pass, const render::View& v, Spa
     }
 }
 
-void Renderer::State::layer_impulses(size_t i, const Pass& pass, const sim::Box& box,
+void Renderer::State::layer_impulses(size_t i, const Pass& pass, const sim::Region& box,
                                      sim::Impulses& out) {
-    if (orientations[i]) orient(i, pass, box);
+    if (orientations[i]) orient(i, pass, box.bounds());
     sims[i].impulses_at(pass.frame, box, out);
     const LayerConfig& layer = scene.layers[i];
     const double tl = scene.layer_time(i, pass.frame);  // the layer's keys run on its own time

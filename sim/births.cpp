@@ -150,14 +150,18 @@ void cell_impulses(const ProcessConfig& config, int64_t cx, int64_t cy, int64_t 
     detail::generate_cell(config, detail::Layout(config), cx, cy, ct, out, nullptr);
 }
 
-double expected_impulses(const ProcessConfig& config, const Box& region) {
+double expected_impulses(const ProcessConfig& config, const Region& region) {
     // Live impulses in the region, plus the not-yet-dead part of the time cells kept around
     // them (the simulator holds about (T + 3 dt_cell) / T of the live count).
-    double area = region.area();
-    if (config.region) {  // births only where the region's support meets `region`
-        if (const auto s = config.region->support())
-            area = std::max(0.0, std::min(region.x1, s->x1) - std::max(region.x0, s->x0)) *
-                   std::max(0.0, std::min(region.y1, s->y1) - std::max(region.y0, s->y0));
+    double area = 0.0;
+    const std::optional<Box> s = config.region ? config.region->support() : std::nullopt;
+    for (const Box& b : region.boxes) {
+        if (!(b.x1 >= b.x0 && b.y1 >= b.y0)) continue;
+        if (s)  // births only where the birth region's support meets the box
+            area += std::max(0.0, std::min(b.x1, s->x1) - std::max(b.x0, s->x0)) *
+                    std::max(0.0, std::min(b.y1, s->y1) - std::max(b.y0, s->y0));
+        else
+            area += b.area();
     }
     double n = config.intensity * area;
     if (config.lifetime_s > 0) n *= 1.75;

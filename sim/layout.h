@@ -2,8 +2,10 @@
 #pragma once
 // How a process is cut into seeding cells in space and time (internal to impulse::sim).
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "sim/sim.h"
@@ -78,5 +80,34 @@ bool cell_birth(const ProcessConfig& config, const Layout& layout, int64_t cx, i
 /// cell_impulses with the birth times in reduced form (used by the simulator).
 void generate_cell(const ProcessConfig& config, const Layout& layout, int64_t cx, int64_t cy,
                    int64_t ct, CellImpulses& out, std::vector<BirthTime>* births);
+
+/// The cells to generate for a region: per row of cells cy in [cy0, cy1], the merged ranges
+/// [cx_first, cx_last] of cells that meet a box, in increasing order (canonical order).
+struct CellCover {
+    int64_t cy0 = 0, cy1 = -1;
+    std::vector<std::vector<std::pair<int64_t, int64_t>>> rows;  ///< rows[cy - cy0]
+};
+CellCover cell_cover(const Region& region, const Layout& layout);
+
+/// Whether a point lies in a union of boxes (closed boxes), indexed by horizontal bands.
+class BoxIndex {
+public:
+    explicit BoxIndex(const Region& region);
+    bool contains(double x, double y) const {
+        if (!(y >= m_y0 && y <= m_y1)) return false;
+        const size_t band =
+            std::min(m_bands.size() - 1, static_cast<size_t>((y - m_y0) * m_inv_band));
+        for (const uint32_t b : m_bands[band]) {
+            const Box& r = m_boxes[b];
+            if (x >= r.x0 && x <= r.x1 && y >= r.y0 && y <= r.y1) return true;
+        }
+        return false;
+    }
+
+private:
+    std::vector<Box> m_boxes;
+    double m_y0 = 0, m_y1 = -1, m_inv_band = 1;
+    std::vector<std::vector<uint32_t>> m_bands;
+};
 
 }  // namespace impulse::sim::detail

@@ -73,6 +73,21 @@ struct Box {
     double area() const { return (x1 - x0) * (y1 - y0); }
 };
 
+/// A texture-space region: the union of boxes (empty boxes, x1 < x0 or y1 < y0, are ignored).
+/// The part of the plane a perspective camera sees is a wedge whose bounding box is about twice
+/// its area; a union of row boxes follows it.
+struct Region {
+    std::vector<Box> boxes;
+    Region() = default;
+    Region(const Box& box) : boxes{box} {}  // NOLINT: a box is a region
+    /// Bounding box of the non-empty boxes ({0, 0, -1, -1} when there are none).
+    Box bounds() const;
+    /// Sum of the non-empty boxes' areas (at least the union's: a budget estimate).
+    double area() const;
+    bool empty() const;
+    Region expanded(double margin) const;
+};
+
 // ---------------------------------------------------------------------------------------------
 // Flows
 
@@ -387,7 +402,7 @@ void cell_impulses(const ProcessConfig& config, int64_t cx, int64_t cy, int64_t 
                    CellImpulses& out);
 
 /// Expected number of impulses generated for `region` (before culling): the budget estimate.
-double expected_impulses(const ProcessConfig& config, const Box& region);
+double expected_impulses(const ProcessConfig& config, const Region& region);
 
 /// Produces the live impulses of one layer at any frame. Sequential calls (frame f then f+1)
 /// reuse the previous state and step it; any other call integrates from birth. Both paths do the
@@ -401,10 +416,14 @@ public:
     ~LayerSimulator();
     LayerSimulator(LayerSimulator&&) noexcept;
 
-    /// Impulses whose support can touch `view` (texture-space box) at frame `frame`.
-    void impulses_at(int64_t frame, const Box& view, Impulses& out);
+    /// Impulses whose support can touch `view` (texture-space boxes) at frame `frame`. Only the
+    /// seeding cells whose birth region meets a box are generated. A still process (no lifetime)
+    /// generates its cells in parallel, by rows of cells joined in canonical order.
+    void impulses_at(int64_t frame, const Region& view, Impulses& out);
     /// The birth region used for `view`: expanded by support radius + travel bound.
     Box birth_region(const Box& view) const;
+    /// The birth regions of every box of `view`.
+    Region birth_region(const Region& view) const;
     /// Travel bound (max speed * lifetime) for `view`, in texture units.
     double travel_bound(const Box& view) const;
     const ProcessConfig& config() const;

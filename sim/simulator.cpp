@@ -159,6 +159,12 @@ double LayerSimulator::travel_bound(const Box& view) const { return m_state->tra
 Box LayerSimulator::birth_region(const Box& view) const {
     return m_state->birth_region(view);
 }
+Region LayerSimulator::birth_region(const Region& view) const {
+    Region r;
+    for (const Box& b : view.boxes)
+        if (b.x1 >= b.x0 && b.y1 >= b.y0) r.boxes.push_back(m_state->birth_region(b));
+    return r;
+}
 
 void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& order,
                                       int64_t target) {
@@ -257,23 +263,27 @@ void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& o
     });
 }
 
-void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) {
+void LayerSimulator::impulses_at(int64_t frame, const Region& view, Impulses& out) {
     State& S = *m_state;
     const ProcessConfig& c = S.config;
     const Layout& L = S.layout;
     const bool still = c.lifetime_s <= 0;
     const int64_t target = (S.timing.start_frame + frame) * S.substeps;
-    const double travel = S.travel(view);
-    const Box region = S.birth_region(view);
-    if (S.flow && !still) S.flow->prepare(region.expanded(travel + 1.0));
+    if (view.empty()) {
+        out.clear();
+        S.valid = false;
+        return;
+    }
+    const double travel = S.travel(view.bounds());
+    // The birth region follows the view's boxes (a perspective view's wedge, say): only the
+    // cells that meet one of them are generated.
+    const Region region = birth_region(view);
+    if (S.flow && !still) S.flow->prepare(region.bounds().expanded(travel + 1.0));
 
     // Reuse the previous frame's particles only when moving forward in time.
     const bool reuse = S.valid && !still && S.last_step <= target;
     size_t cursor = 0;  // both block lists are in canonical order: merge instead of search
-    const int64_t cx0 = static_cast<int64_t>(std::floor(region.x0 / L.cell_x));
-    const int64_t cx1 = static_cast<int64_t>(std::floor(region.x1 / L.cell_x));
-    const int64_t cy0 = static_cast<int64_t>(std::floor(region.y0 / L.cell_y));
-    const int64_t cy1 = static_cast<int64_t>(std::floor(region.y1 / L.cell_y));
+    const detail::CellCover cover = detail::cell_cover(region, L);
     int64_t ct0 = 0, ct1 = 0;
     const double t_frame = static_cast<double>(target) * S.dt;
     if (!still) {
@@ -290,14 +300,17 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
     std::vector<size_t>& source = S.block_source;  // per block: index in S.blocks, or kGenerate
     source.clear();
     for (int64_t ct = ct0; ct <= ct1; ++ct)
-        for (int64_t cy = cy0; cy <= cy1; ++cy)
-            for (int64_t cx = cx0; cx <= cx1; ++cx) {
-                const BlockKey key{ct, cy, cx};
-                while (reuse && cursor < S.blocks.size() && S.blocks[cursor].key < key) ++cursor;
-                const bool kept = reuse && cursor < S.blocks.size() && S.blocks[cursor].key == key;
-                S.next_blocks.push_back({key, 0, kept ? S.blocks[cursor].count : 0});
-                source.push_back(kept ? cursor : kGenerate);
-            }
+        for (int64_t cy = cover.cy0; cy <= cover.cy1; ++cy)
+            for (const auto& [cx0, cx1] : cover.rows[size_t(cy - cover.cy0)])
+                for (int64_t cx = cx0; cx <= cx1; ++cx) {
+                    const BlockKey key{ct, cy, cx};
+                    while (reuse && cursor < S.blocks.size() && S.blocks[cursor].key < key)
+                        ++cursor;
+                    const bool kept =
+                        reuse && cursor < S.blocks.size() && S.blocks[cursor].key == key;
+                    S.next_blocks.push_back({key, 0, kept ? S.blocks[cursor].count : 0});
+                    source.push_back(kept ? cursor : kGenerate);
+                }
     const size_t n_blocks = S.next_blocks.size();
     constexpr size_t kGrain = 64;  // blocks per task: cells hold a few impulses each
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n_blocks, kGrain), [&](const auto& r) {
@@ -372,11 +385,11 @@ void LayerSimulator::impulses_at(int64_t frame, const Box& view, Impulses& out) 
 
     // Emit the live impulses whose support can touch the view, in canonical order.
     out.clear();
-    const Box keep = view.expanded(S.support_radius);
+    const detail::BoxIndex keep(view.expanded(S.support_radius));
     std::vector<size_t> emitted;
     for (size_t i = 0; i < P.size(); ++i) {
         if (!alive(i)) continue;
-        if (P.x[i] < keep.x0 || P.x[i] > keep.x1 || P.y[i] < keep.y0 || P.y[i] > keep.y1) continue;
+        if (!keep.contains(P.x[i], P.y[i])) continue;
         double w = P.amp[i];
         if (!still) w *= envelope_weight(c.envelope, age_s(i), c.lifetime_s);
         if (!still && c.jacobian) w *= std::exp(0.5 * P.lnj[i]);  // s_k = sqrt(J_k)

@@ -1,0 +1,97 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// The far field of a perspective view (internal to impulse::render; render/perspective.h says
+// what it computes). Far from the camera a grazing footprint is hundreds of texture units long
+// and a few wide, so each kernel is a thin sliver of the pixel filter along the depth: its
+// contribution separates into a profile across (the level's line integral, as in the line
+// form) and the pixel filter along (the chord's spread along the axis entering through an
+// expansion). Impulses are deposited (linear weights) onto sub-rows of the image that follow the
+// circles around the camera's foot (the major axis of every footprint points at the foot), and,
+// for kernels that are not radially symmetric, onto direction bins; each sub-row is convolved
+// across with its profiles, and each pixel filters the sub-rows along: a few additions per
+// impulse, a bounded amount of work per pixel.
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "render/persp_detail.h"
+
+namespace impulse::render::detail {
+
+/// A far impulse, ready to deposit: in direction bins bin and bin + 1 (mod the bins; radial
+/// kernels: one bin) with weights wb[0], wb[1], on sub-rows row and row + 1 at nodes node[e] and
+/// node[e] + 1 with weights w[e][0], w[e][1] (node -1: nothing on that sub-row).
+struct FarItem {
+    int32_t row = 0, bin = 0;
+    int32_t node[2] = {-1, -1};
+    float w[2][2] = {{0, 0}, {0, 0}};
+    float wb[2] = {1, 0};
+};
+
+/// Profiles of the far field: the derivatives 0 .. 4 of the along Gaussian.
+constexpr int kFarProfiles = 5;
+
+class FarField {
+public:
+    /// Sets the far zone of a frame up: inactive when the form does not apply (filtering off,
+    /// isotropic rule, no fade, kernels with negative lobes, or no footprint long enough).
+    FarField(const kernels::KernelPyramid& pyramid, const PerspectiveView& view,
+             const PixelCoords& coords, const AntiAlias& aa);
+    bool active() const { return m_active; }
+    /// Whether the impulse at (rx, ry) from the camera's foot belongs to the far field.
+    bool contains(double rx, double ry) const {
+        return m_active && rx * rx + ry * ry >= m_rho_far2 &&
+               m_P[6] * rx + m_P[7] * ry + m_P[8] >= m_depth_min;
+    }
+    /// The item of a far impulse at (rx, ry) from the foot, turned by theta (radians, the
+    /// kernel's own orientation included; unused for radial kernels); false when it adds
+    /// nothing (behind the camera, faded out, too far off the image).
+    bool item(double rx, double ry, float weight, double theta, FarItem& it) const;
+    /// Adds the far field of the items to `out`: lists joined in order hold them in
+    /// canonical order.
+    void render(const std::vector<std::vector<FarItem>>& items, Frame& out, const PerspLoops& loops,
+                bool parallel) const;
+
+private:
+    /// A sub-row: its circle, the across coordinate, node grid and, per segment of columns,
+    /// the filter.
+    struct Row {
+        double y = 0;  ///< y' of the circle
+        /// Across coordinate xi: texture units along the circle, at image columns 0 .. W
+        /// (linear between, extended with the end slopes beyond).
+        std::vector<double> xi;
+        double margin = 0;        ///< pixels beyond the image edges that still reach it
+        double xi0 = 0, dxi = 1;  ///< node n at xi0 + n dxi
+        int nodes = 0, taps = 0;  ///< node count, half-width of the profiles in nodes
+        std::array<bool, kFarProfiles> used{};  ///< which profiles matter (0 always)
+        std::vector<int> segment_node;  ///< first node of each segment (segments + 1 entries)
+        std::vector<float> weight;      ///< per segment: fade / (sqrt(2 pi) s_major)
+        std::vector<float> sbar;        ///< per segment: variance of the along Gaussian, px^2
+        /// per segment, direction bin and profile: 2 taps + 1 values (offsets -taps .. taps)
+        std::vector<float> tables;
+    };
+    bool m_active = false;
+    int m_width = 0, m_height = 0, m_segments = 1;
+    double m_segment_px = 1;
+    double m_ya = 0, m_yb = 0, m_yc = 0, m_yd = 0;  ///< Y(rho) = (a rho + b) / (c rho + d)
+    double m_rho_far2 = 0, m_depth_min = 0;
+    double m_P[9] = {};  ///< the view's homography (PerspectiveView::homography)
+    double m_inv_segment_px = 1;
+    int m_bins = 1;                     ///< direction bins (1: radial kernel)
+    double m_period = 1;                ///< the bins' period, radians
+    double m_v_sign = 1, m_u_sign = 1;  ///< orientation of the tables (see the constructor)
+    double m_y0 = 0, m_dy = 1;          ///< sub-row r at y' = y0 + r dy
+    std::vector<Row> m_rows;
+    /// Pixels that receive the far field: rows [m_j0, m_j1), per pixel y', 1 / kappa, 1 / s,
+    /// 1 / sqrt(s).
+    int m_j0 = 0, m_j1 = 0;
+    std::vector<float> m_yp, m_ik, m_is, m_rs;
+
+    double y_of(double rho) const { return (m_ya * rho + m_yb) / (m_yc * rho + m_yd); }
+    float row_weight(const Row& row, double sx) const;
+    /// xi of image column x on a sub-row.
+    double xi_at(const Row& row, double x) const;
+};
+
+}  // namespace impulse::render::detail
