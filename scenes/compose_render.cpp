@@ -197,7 +197,7 @@ Theory blend_theory(const Theory& r, const LayerConfig& layer, const Theory& l, 
                 return {(1.0 - o) * r.mean + o * l.mean,
                         (1.0 - o) * (1.0 - o) * r.variance + o * o * l.variance};
             // R (1 - A) + L A with A = o s(L) a function of L only, R independent of L.
-            const auto [lo, hi] = *layer.compose.alpha;
+            const double lo = (*layer.compose.alpha)[0], hi = (*layer.compose.alpha)[1];
             auto A = [&](double v) { return o * alpha_ramp(lo, hi, v); };
             const double ea = expect(layer, l, [&](double v) { return A(v); });
             const double ea2 = expect(layer, l, [&](double v) { return A(v) * A(v); });
