@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // impulse_bench_motion: the motion benchmarks of issue "Motion" item 9, side by side in one run,
-// on the default scene (`clouds`, 1920x1080, 30 fps, Gaussian layers carried by wind + curl
+// on the default scene (`drift`, 1920x1080, 30 fps, Gaussian layers carried by wind + curl
 // noise):
 //   1. sequential frame cost: one scenes::Renderer stepping frames forward (design.md §3);
 //   2. random-access cost of frame 10 000: a fresh Renderer integrating every live particle
@@ -48,7 +48,7 @@ namespace fs = std::filesystem;
 using namespace impulse;
 using namespace impulse::bench;
 
-constexpr const char* kScene = "clouds";
+constexpr const char* kScene = "drift";
 constexpr int64_t kRandomFrame = 10000;       ///< the random-access frame of the issue
 constexpr double kTargetRatio = 2.0;          ///< random access <= 2x a sequential frame
 constexpr double kTargetFps = 24.0;           ///< 1080p30 H.264 end to end, a fast preset

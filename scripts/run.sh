@@ -4,5 +4,5 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 mkdir -p out
-./build/app/impulse render clouds -o out/clouds.mp4
-echo "output: $(pwd)/out/clouds.mp4"
+./build/app/impulse render drift -o out/drift.mp4
+echo "output: $(pwd)/out/drift.mp4"
