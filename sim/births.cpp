@@ -60,12 +60,11 @@ bool thins(const ProcessConfig& c, const Layout& L) {
     return c.region || (c.density_scale && L.time_cell_s > 0);
 }
 
-bool outside_region(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t cy) {
+bool outside_region(const Layout& L, int64_t cx, int64_t cy) {
     // Birth-region culling: a seeding cell outside the region's support would have every birth
     // thinned away (p = 0 there), so it is not generated at all. The test has a margin of a
     // millionth of a cell for rounding in the positions; empty (inverted) supports meet nothing.
-    if (!c.region) return false;
-    const std::optional<Box> support = c.region->support();
+    const std::optional<Box>& support = L.region_support;
     if (!support) return false;
     const double m = 1e-6 * std::max(L.cell_x, L.cell_y);
     const double x0 = static_cast<double>(cx) * L.cell_x - m, x1 = (cx + 1.0) * L.cell_x + m;
@@ -75,7 +74,7 @@ bool outside_region(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t
 }
 
 int cell_count(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t cy, int64_t ct) {
-    if (outside_region(c, L, cx, cy)) return 0;
+    if (outside_region(L, cx, cy)) return 0;
     const int candidates = cell_candidates(c, L, cx, cy, ct);
     if (!thins(c, L)) return candidates;
     int count = 0;
@@ -130,7 +129,7 @@ void generate_cell(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t 
     out.amplitude.clear();
     out.theta0.clear();
     if (births) births->clear();
-    const int candidates = outside_region(c, L, cx, cy) ? 0 : cell_candidates(c, L, cx, cy, ct);
+    const int candidates = outside_region(L, cx, cy) ? 0 : cell_candidates(c, L, cx, cy, ct);
     CellBirth b;
     for (int k = 0; k < candidates; ++k) {
         if (!cell_birth(c, L, cx, cy, ct, k, b)) continue;

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -25,8 +26,12 @@ struct Layout {
     double time_cell_s = 0;                          ///< 0: still process
     int64_t loop_cells = 0;                          ///< time cells per loop, 0: no loop
     double mean_per_cell = 0;
+    /// The birth region's support (null: births anywhere), taken once: cells outside it hold
+    /// no impulse and are never generated.
+    std::optional<Box> region_support;
 
     explicit Layout(const ProcessConfig& c) {
+        if (c.region) region_support = c.region->support();
         cell_x = cell_y = c.cell_size;
         if (c.period) {
             period_cells_x = std::max<int64_t>(1, static_cast<int64_t>((*c.period)[0] / c.cell_size));
@@ -69,7 +74,7 @@ int cell_candidates(const ProcessConfig& config, const Layout& layout, int64_t c
 /// Whether births are thinned (a birth region, or a keyframed density).
 bool thins(const ProcessConfig& config, const Layout& layout);
 /// Whether the cell lies outside the birth region's support (it then holds no impulse).
-bool outside_region(const ProcessConfig& config, const Layout& layout, int64_t cx, int64_t cy);
+bool outside_region(const Layout& layout, int64_t cx, int64_t cy);
 /// How many impulses cell (cx, cy, ct) holds: its candidates that survive the thinning.
 int cell_count(const ProcessConfig& config, const Layout& layout, int64_t cx, int64_t cy,
                int64_t ct);
