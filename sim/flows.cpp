@@ -202,8 +202,11 @@ public:
         const int64_t i1 = static_cast<int64_t>(std::floor(region.x1 / m_hx)) + 3;
         const int64_t j1 = static_cast<int64_t>(std::floor(region.y1 / m_hy)) + 3;
         if (i0 >= m_nx0 && j0 >= m_ny0 && i1 < m_nx0 + m_nw && j1 < m_ny0 + m_nh) return;  // cached
-        // Grow by a quarter on every side so a slowly moving view rarely rebuilds.
-        const int64_t mx = (i1 - i0) / 4 + 1, my = (j1 - j0) / 4 + 1;
+        // A rebuild grows the region by a quarter on every side so a moving view rarely
+        // rebuilds again; the first build is exact, as a still view (or a frame rendered alone)
+        // never asks for more.
+        const bool first = m_nodes.empty();
+        const int64_t mx = first ? 0 : (i1 - i0) / 4 + 1, my = first ? 0 : (j1 - j0) / 4 + 1;
         m_nx0 = i0 - mx, m_ny0 = j0 - my;
         m_nw = i1 - i0 + 1 + 2 * mx, m_nh = j1 - j0 + 1 + 2 * my;
         m_nodes.assign(static_cast<size_t>(m_nw * m_nh), 0.0);
