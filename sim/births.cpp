@@ -11,18 +11,28 @@
 namespace impulse::sim {
 namespace detail {
 
-int poisson_inverse(double mean, double u) {
-    // Walk the CDF from k = 0; terminates because u <= 1 and the CDF reaches 1 - eps. The
-    // cap guards against rounding leaving the CDF just below u.
+namespace {
+
+/// poisson_inverse's walk of the CDF: calls next(cdf) for k = 0, 1, ... until next returns
+/// false or k reaches the cap (which guards against rounding leaving the CDF just below u).
+template <typename Next>
+int walk_poisson_cdf(double mean, Next&& next) {
     double p = std::exp(-mean), cdf = p;
     int k = 0;
     const int cap = static_cast<int>(mean + 40.0 * std::sqrt(mean) + 40.0);
-    while (u > cdf && k < cap) {
+    while (next(cdf) && k < cap) {
         ++k;
         p *= mean / k;
         cdf += p;
     }
     return k;
+}
+
+}  // namespace
+
+int poisson_inverse(double mean, double u) {
+    // Walk the CDF from k = 0; terminates because u <= 1 and the CDF reaches 1 - eps.
+    return walk_poisson_cdf(mean, [u](double cdf) { return u > cdf; });
 }
 
 namespace {
@@ -49,11 +59,30 @@ int cell_candidates(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t
     // so the inversion stays accurate (exp(-mean) does not underflow).
     const int parts = static_cast<int>(std::ceil(L.mean_per_cell / 200.0));
     int count = 0;
+    const std::vector<double>& cdf = L.poisson_cdf;
     for (int p = 0; p < std::max(parts, 1); ++p) {
         const auto u = rng.uniforms(key.kx, key.ky, key.kt, 0xFFFFFFFFu - static_cast<uint32_t>(p));
-        count += poisson_inverse(L.mean_per_cell / std::max(parts, 1), u[0]);
+        if (cdf.empty()) {
+            count += poisson_inverse(L.mean_per_cell / std::max(parts, 1), u[0]);
+            continue;
+        }
+        // The same walk over the tabulated sums: the same comparisons, the same count.
+        int k = 0;
+        while (k < static_cast<int>(cdf.size()) && u[0] > cdf[size_t(k)]) ++k;
+        count += k;
     }
     return count;
+}
+
+void tabulate_poisson(Layout& L) {
+    const int parts = static_cast<int>(std::ceil(L.mean_per_cell / 200.0));
+    L.poisson_cdf.clear();
+    // The walk stops at the cap, so the table holds the sums below it.
+    walk_poisson_cdf(L.mean_per_cell / std::max(parts, 1), [&](double cdf) {
+        L.poisson_cdf.push_back(cdf);
+        return true;
+    });
+    L.poisson_cdf.pop_back();
 }
 
 bool thins(const ProcessConfig& c, const Layout& L) {
@@ -83,6 +112,35 @@ int cell_count(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t cy, 
     return count;
 }
 
+namespace {
+
+/// Whether the birth region keeps candidate k born at (x, y) (Lewis 1986 §3.1, points
+/// "restricted to an area of the plane"): iff its own uniform u in (0, 1] is <= p(x, y) at the
+/// birth position. Thinning a Poisson process by p gives a Poisson process of intensity lambda p
+/// (p = 1 keeps all). The uniform comes from a stream of its own, so a region changes no other
+/// draw.
+bool region_keeps(const ProcessConfig& c, const CellKey& key, int k, double x, double y) {
+    if (!c.region) return true;
+    const CounterRng region_rng(c.seed, c.layer ^ kRegionStream);
+    return !(region_rng.uniforms(key.kx, key.ky, key.kt, k)[0] > c.region->acceptance(x, y));
+}
+
+/// The amplitude from its uniform u (r0[3]) and, for the normal, the angle's uniform v (r1[0]).
+float amplitude_of(Amplitude a, double u, double v) {
+    switch (a) {
+        case Amplitude::Normal:  // Box–Muller; u in (0, 1] so the log is finite
+            return static_cast<float>(std::sqrt(-2.0 * std::log(u)) *
+                                      std::cos(2.0 * std::numbers::pi * v));
+        case Amplitude::Uniform: return static_cast<float>(2.0 * u - 1.0);
+        case Amplitude::Sign: return u < 0.5 ? -1.0f : 1.0f;
+    }
+    return 0.0f;
+}
+
+float theta0_of(double u) { return static_cast<float>(2.0 * std::numbers::pi * u); }
+
+}  // namespace
+
 bool cell_birth(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t cy, int64_t ct, int k,
                 CellBirth& b) {
     const CellKey key = cell_key(L, cx, cy, ct);
@@ -92,15 +150,7 @@ bool cell_birth(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t cy,
     const auto r0 = rng.uniforms(key.kx, key.ky, key.kt, 2u * k);
     b.x = (static_cast<double>(cx) + r0[0]) * L.cell_x;
     b.y = (static_cast<double>(cy) + r0[1]) * L.cell_y;
-    // Birth region (Lewis 1986 §3.1, points "restricted to an area of the plane"): keep the
-    // birth iff its own uniform u in (0, 1] is <= p(x, y) at the birth position. Thinning a
-    // Poisson process by p gives a Poisson process of intensity lambda p (p = 1 keeps all). The
-    // uniform comes from a stream of its own, so a region changes no other draw.
-    if (c.region) {
-        const CounterRng region_rng(c.seed, c.layer ^ kRegionStream);
-        if (region_rng.uniforms(key.kx, key.ky, key.kt, k)[0] > c.region->acceptance(b.x, b.y))
-            return false;
-    }
+    if (!region_keeps(c, key, k, b.x, b.y)) return false;
     const auto r1 = rng.uniforms(key.kx, key.ky, key.kt, 2u * k + 1u);
     b.time = {};
     if (L.time_cell_s > 0) b.time = {(static_cast<double>(key.kt) + r0[2]) * L.time_cell_s, key.loop_index};
@@ -109,16 +159,67 @@ bool cell_birth(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t cy,
     // its own identity, so any region and frame order keeps the same births. The loop-reduced
     // time makes a looped process thin alike in every period.
     if (c.density_scale && L.time_cell_s > 0 && r1[2] > c.density_scale(b.time.phase_s)) return false;
-    switch (c.amplitude) {
-        case Amplitude::Normal:  // Box–Muller; u in (0, 1] so the log is finite
-            b.amplitude = static_cast<float>(std::sqrt(-2.0 * std::log(r0[3])) *
-                                             std::cos(2.0 * std::numbers::pi * r1[0]));
-            break;
-        case Amplitude::Uniform: b.amplitude = static_cast<float>(2.0 * r0[3] - 1.0); break;
-        case Amplitude::Sign: b.amplitude = r0[3] < 0.5 ? -1.0f : 1.0f; break;
-    }
-    b.theta0 = static_cast<float>(2.0 * std::numbers::pi * r1[1]);
+    b.amplitude = amplitude_of(c.amplitude, r0[3], r1[0]);
+    b.theta0 = theta0_of(r1[1]);
     return true;
+}
+
+int still_cell_plan(const ProcessConfig& c, const Layout& L, const BoxIndex& keep, int64_t cx,
+                    int64_t cy, StillCell& s) {
+    s = {};
+    if (outside_region(L, cx, cy)) return 0;
+    s.candidates = cell_candidates(c, L, cx, cy, 0);
+    // A position is (cx + u) * cell with u in (0, 1]: rounding is monotone, so it lies in the
+    // cell's box computed the same way, and a cell inside one keep box keeps every candidate.
+    const bool inside =
+        keep.contains_box(static_cast<double>(cx) * L.cell_x, static_cast<double>(cy) * L.cell_y,
+                          (cx + 1.0) * L.cell_x, (cy + 1.0) * L.cell_y);
+    if (inside && !c.region) return s.candidates;
+    s.kept = s.candidates <= 64 ? StillCell::Mask : StillCell::Test;
+    const CellKey key = cell_key(L, cx, cy, 0);
+    const CounterRng rng(c.seed, c.layer);
+    int n = 0;
+    for (int k = 0; k < s.candidates; ++k) {
+        const auto r0 = rng.uniforms(key.kx, key.ky, key.kt, 2u * k);
+        const double x = (static_cast<double>(cx) + r0[0]) * L.cell_x;
+        const double y = (static_cast<double>(cy) + r0[1]) * L.cell_y;
+        if (!region_keeps(c, key, k, x, y) || !(inside || keep.contains(x, y))) continue;
+        ++n;
+        if (s.kept == StillCell::Mask) s.mask |= uint64_t(1) << k;
+    }
+    return n;
+}
+
+size_t still_cell_write(const ProcessConfig& c, const Layout& L, const BoxIndex& keep, int64_t cx,
+                        int64_t cy, const StillCell& s, bool theta0, Impulses& out, size_t i) {
+    const CellKey key = cell_key(L, cx, cy, 0);
+    const CounterRng rng(c.seed, c.layer);
+    // r1 holds the normal amplitude's angle and theta0; a still layer uses nothing else of it.
+    const bool want_r1 = theta0 || c.amplitude == Amplitude::Normal;
+    // The draws of eight candidates at a time come first, from one 16-counter Philox call
+    // (r0 and r1 of candidate k are counters 2k and 2k + 1; without r1, lane j is r0 of k0 + j).
+    constexpr int kBatch = 8;
+    uint32_t w[4][16];
+    for (int k0 = 0; k0 < s.candidates; k0 += kBatch) {
+        rng.words16(key.kx, key.ky, key.kt, 2u * static_cast<uint32_t>(k0), want_r1 ? 1u : 2u, w);
+        const int m = std::min(kBatch, s.candidates - k0);
+        for (int j = 0; j < m; ++j) {
+            const int k = k0 + j;
+            if (s.kept == StillCell::Mask && !((s.mask >> k) & 1u)) continue;
+            const int e = want_r1 ? 2 * j : j;  // r0's lane; r1's is e + 1
+            const double x = (static_cast<double>(cx) + CounterRng::u01(w[0][e])) * L.cell_x;
+            const double y = (static_cast<double>(cy) + CounterRng::u01(w[1][e])) * L.cell_y;
+            if (s.kept == StillCell::Test && !(region_keeps(c, key, k, x, y) && keep.contains(x, y)))
+                continue;
+            out.x[i] = x;
+            out.y[i] = y;
+            const double v = want_r1 ? CounterRng::u01(w[0][e + 1]) : 0.0;
+            out.weight[i] = amplitude_of(c.amplitude, CounterRng::u01(w[3][e]), v);
+            out.theta[i] = theta0 ? theta0_of(CounterRng::u01(w[1][e + 1])) : 0.0f;
+            ++i;
+        }
+    }
+    return i;
 }
 
 void generate_cell(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t cy, int64_t ct,

@@ -8,6 +8,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "sim/rng.h"
+
 namespace impulse::sim::detail {
 
 /// Fills `out` with psi at the 4 x 4 lattice nodes (i0 + a, j0 + b), row b at out[4 b]: the
@@ -31,8 +33,5 @@ void curl_add_base(const CurlLattice& lattice, double amp, size_t n, const doubl
                    const double* y, double* vx, double* vy, double* curl);
 void curl_add_avx2(const CurlLattice& lattice, double amp, size_t n, const double* x,
                    const double* y, double* vx, double* vy, double* curl);
-
-/// True when the CPU runs AVX2 code (checked once).
-bool cpu_has_avx2();
 
 }  // namespace impulse::sim::detail

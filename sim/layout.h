@@ -29,6 +29,9 @@ struct Layout {
     /// The birth region's support (null: births anywhere), taken once: cells outside it hold
     /// no impulse and are never generated.
     std::optional<Box> region_support;
+    /// The Poisson CDF of one part of a cell's count, as poisson_inverse sums it (filled by
+    /// tabulate_poisson for callers that draw many cells; empty: summed per cell).
+    std::vector<double> poisson_cdf;
 
     explicit Layout(const ProcessConfig& c) {
         if (c.region) region_support = c.region->support();
@@ -71,6 +74,8 @@ struct CellBirth {
 /// How many candidate births cell (cx, cy, ct) holds (Poisson at the process's maximum rate).
 int cell_candidates(const ProcessConfig& config, const Layout& layout, int64_t cx, int64_t cy,
                     int64_t ct);
+/// Fill layout.poisson_cdf: cell_candidates then looks the count up instead of summing it.
+void tabulate_poisson(Layout& layout);
 /// Whether births are thinned (a birth region, or a keyframed density).
 bool thins(const ProcessConfig& config, const Layout& layout);
 /// Whether the cell lies outside the birth region's support (it then holds no impulse).
@@ -98,13 +103,17 @@ CellCover cell_cover(const Region& region, const Layout& layout);
 class BoxIndex {
 public:
     explicit BoxIndex(const Region& region);
-    bool contains(double x, double y) const {
-        if (!(y >= m_y0 && y <= m_y1)) return false;
+    bool contains(double x, double y) const { return contains_box(x, y, x, y); }
+    /// Whether one of the boxes holds the whole box [x0, x1] x [y0, y1] (a union may hold it
+    /// when no single box does: the answer is then false).
+    bool contains_box(double x0, double y0, double x1, double y1) const {
+        if (!(y0 >= m_y0 && y0 <= m_y1)) return false;
+        // A box holding y0 is listed in y0's band (the band of a value grows with it).
         const size_t band =
-            std::min(m_bands.size() - 1, static_cast<size_t>((y - m_y0) * m_inv_band));
+            std::min(m_bands.size() - 1, static_cast<size_t>((y0 - m_y0) * m_inv_band));
         for (const uint32_t b : m_bands[band]) {
             const Box& r = m_boxes[b];
-            if (x >= r.x0 && x <= r.x1 && y >= r.y0 && y <= r.y1) return true;
+            if (x0 >= r.x0 && x1 <= r.x1 && y0 >= r.y0 && y1 <= r.y1) return true;
         }
         return false;
     }
@@ -114,5 +123,24 @@ private:
     double m_y0 = 0, m_y1 = -1, m_inv_band = 1;
     std::vector<std::vector<uint32_t>> m_bands;
 };
+
+/// A still cell's plan for the fast path (LayerSimulator::impulses_at): its candidates and
+/// which of them survive the birth region and fall in the kept boxes. `All`: every candidate;
+/// `Mask`: bit k of `mask` (cells of at most 64 candidates); `Test`: test each again.
+struct StillCell {
+    enum Kept : uint8_t { All, Mask, Test };
+    int candidates = 0;
+    Kept kept = All;
+    uint64_t mask = 0;
+};
+/// Plan cell (cx, cy) of a still process against `keep` into `s`; returns how many of its
+/// impulses fall in `keep`.
+int still_cell_plan(const ProcessConfig& config, const Layout& layout, const BoxIndex& keep,
+                    int64_t cx, int64_t cy, StillCell& s);
+/// Write those impulses of cell (cx, cy), in candidate order, to out[i], out[i + 1], ...: the
+/// weight is the amplitude, theta is theta0 when `theta0`, else 0. Returns the next index.
+size_t still_cell_write(const ProcessConfig& config, const Layout& layout, const BoxIndex& keep,
+                        int64_t cx, int64_t cy, const StillCell& s, bool theta0, Impulses& out,
+                        size_t i);
 
 }  // namespace impulse::sim::detail

@@ -85,11 +85,19 @@ struct LayerSimulator::State {
     Particles live, next;
     std::vector<Block> blocks, next_blocks;  // sorted by key (canonical order)
     std::vector<size_t> block_source;        // impulses_at scratch
+    /// Still fast path scratch: pieces of rows of cells and their cells' plans.
+    struct Piece {
+        int64_t cy, cx0, cx1;  // cells [cx0, cx1] of row cy
+        size_t cell, start;    // first plan in `plans`, first impulse in the output
+    };
+    std::vector<Piece> pieces;
+    std::vector<detail::StillCell> plans;
     int64_t last_step = 0;
     bool valid = false;
 
     State(ProcessConfig c, std::shared_ptr<Flow> f, Timing t, double r)
         : config(std::move(c)), layout(config), flow(std::move(f)), timing(t), support_radius(r) {
+        detail::tabulate_poisson(layout);
         substeps = config.substeps;
         dt = 1.0 / (timing.fps * static_cast<double>(substeps));
         if (config.loop_s > 0) loop_steps = std::llround(config.loop_s * timing.fps) * substeps;
@@ -144,6 +152,9 @@ struct LayerSimulator::State {
     }
 
     void integrate(Particles& p, const std::vector<size_t>& order, int64_t target);
+    void still_impulses(const detail::CellCover& cover, const Region& view, bool theta0,
+                        Impulses& out);
+    void field_orientation(int64_t target, const std::vector<float>& th0, Impulses& out) const;
 };
 
 LayerSimulator::LayerSimulator(ProcessConfig config, std::shared_ptr<Flow> flow, Timing timing,
@@ -263,6 +274,63 @@ void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& o
     });
 }
 
+void LayerSimulator::State::still_impulses(const detail::CellCover& cover, const Region& view,
+                                           bool theta0, Impulses& out) {
+    // A still layer has nothing to carry between frames and nothing to integrate, so its kept
+    // impulses go straight into `out`: each piece of a row of cells is counted (the plan notes
+    // which candidates are kept), then written in place, in parallel. Pieces in canonical order
+    // (rows, then cells) and candidates in order give the order of the general path.
+    constexpr int64_t kPieceCells = 64;  // a few hundred impulses per piece at ~5 per cell
+    pieces.clear();
+    size_t n_cells = 0;
+    for (int64_t cy = cover.cy0; cy <= cover.cy1; ++cy)
+        for (const auto& [cx0, cx1] : cover.rows[size_t(cy - cover.cy0)])
+            for (int64_t a = cx0; a <= cx1; a += kPieceCells) {
+                const int64_t b = std::min(cx1, a + kPieceCells - 1);
+                pieces.push_back({cy, a, b, n_cells, 0});
+                n_cells += static_cast<size_t>(b - a + 1);
+            }
+    plans.resize(n_cells);
+    const detail::BoxIndex keep(view.expanded(support_radius));
+    tbb::parallel_for(size_t(0), pieces.size(), [&](size_t p) {
+        Piece& q = pieces[p];
+        size_t n = 0;
+        for (int64_t cx = q.cx0; cx <= q.cx1; ++cx)
+            n += static_cast<size_t>(detail::still_cell_plan(
+                config, layout, keep, cx, q.cy, plans[q.cell + size_t(cx - q.cx0)]));
+        q.start = n;
+    });
+    size_t total = 0;
+    for (Piece& q : pieces) {
+        const size_t n = q.start;
+        q.start = total, total += n;
+    }
+    // Every element below `total` is written, so the old contents need no clearing.
+    out.x.resize(total), out.y.resize(total), out.weight.resize(total), out.theta.resize(total);
+    tbb::parallel_for(size_t(0), pieces.size(), [&](size_t p) {
+        const Piece& q = pieces[p];
+        size_t i = q.start;
+        for (int64_t cx = q.cx0; cx <= q.cx1; ++cx)
+            i = detail::still_cell_write(config, layout, keep, cx, q.cy,
+                                         plans[q.cell + size_t(cx - q.cx0)], theta0, out, i);
+    });
+}
+
+void LayerSimulator::State::field_orientation(int64_t target, const std::vector<float>& th0,
+                                              Impulses& out) const {
+    // theta(x, t) at the particle's current position at the frame time (loop-wrapped like the
+    // flow, so a looped layer repeats), plus the per-particle jitter from th0, its birth angle
+    // (`th0` is only read when the jitter is not 0).
+    config.orientation_field->angles(time_of_step(target), out.size(), out.x.data(),
+                                     out.y.data(), out.theta.data());
+    const double jitter = config.orientation_jitter.value(time_of_step(target));
+    if (jitter != 0.0) {
+        constexpr double kInvPi = 1.0 / 3.14159265358979323846;
+        for (size_t j = 0; j < out.size(); ++j)
+            out.theta[j] = static_cast<float>(out.theta[j] + jitter * (th0[j] * kInvPi - 1.0));
+    }
+}
+
 void LayerSimulator::impulses_at(int64_t frame, const Region& view, Impulses& out) {
     State& S = *m_state;
     const ProcessConfig& c = S.config;
@@ -284,6 +352,19 @@ void LayerSimulator::impulses_at(int64_t frame, const Region& view, Impulses& ou
     const bool reuse = S.valid && !still && S.last_step <= target;
     size_t cursor = 0;  // both block lists are in canonical order: merge instead of search
     const detail::CellCover cover = detail::cell_cover(region, L);
+    const bool field = c.orientation == OrientationMode::Field && c.orientation_field;
+    if (still) {
+        // out.theta holds theta0 for a random orientation, and for the field's jitter until
+        // field_orientation overwrites it (kept aside first).
+        const bool jitter = field && c.orientation_jitter.value(S.time_of_step(target)) != 0.0;
+        S.still_impulses(cover, view, c.orientation == OrientationMode::Random || jitter, out);
+        if (field) {
+            const std::vector<float> th0 = jitter ? out.theta : std::vector<float>{};
+            S.field_orientation(target, th0, out);
+        }
+        S.valid = false;
+        return;
+    }
     int64_t ct0 = 0, ct1 = 0;
     const double t_frame = static_cast<double>(target) * S.dt;
     if (!still) {
@@ -408,18 +489,10 @@ void LayerSimulator::impulses_at(int64_t frame, const Region& view, Impulses& ou
         for (size_t j = 0; j < n; ++j)
             out.theta[j] = static_cast<float>(std::atan2(vy[j], vx[j]));
     }
-    if (c.orientation == OrientationMode::Field && c.orientation_field) {
-        // theta(x, t) at the particle's current position at the frame time (loop-wrapped like
-        // the flow, so a looped layer repeats), plus the per-particle jitter drawn at birth.
-        c.orientation_field->angles(S.time_of_step(target), out.size(), out.x.data(),
-                                    out.y.data(), out.theta.data());
-        const double jitter = c.orientation_jitter.value(S.time_of_step(target));
-        if (jitter != 0.0) {
-            constexpr double kInvPi = 1.0 / 3.14159265358979323846;
-            for (size_t j = 0; j < out.size(); ++j)
-                out.theta[j] =
-                    static_cast<float>(out.theta[j] + jitter * (P.th0[emitted[j]] * kInvPi - 1.0));
-        }
+    if (field) {
+        std::vector<float> th0(emitted.size());
+        for (size_t j = 0; j < emitted.size(); ++j) th0[j] = P.th0[emitted[j]];
+        S.field_orientation(target, th0, out);
     }
 
     std::swap(S.live, S.next);
