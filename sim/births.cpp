@@ -52,33 +52,42 @@ CellKey cell_key(const Layout& L, int64_t cx, int64_t cy, int64_t ct) {
 
 }  // namespace
 
+namespace {
+
+/// Large means are split into independent Poisson parts (the sum of Poissons is Poisson) so the
+/// inversion stays accurate (exp(-mean) does not underflow); part p draws counter index
+/// kCountIndex - p.
+int poisson_parts(const Layout& L) {
+    return std::max(static_cast<int>(std::ceil(L.mean_per_cell / 200.0)), 1);
+}
+constexpr uint32_t kCountIndex = 0xFFFFFFFFu;
+
+/// One part's count from its uniform u: poisson_inverse, or the same walk over the tabulated
+/// sums (the same comparisons, the same count).
+int poisson_part(const Layout& L, double u) {
+    const std::vector<double>& cdf = L.poisson_cdf;
+    if (cdf.empty()) return poisson_inverse(L.mean_per_cell / poisson_parts(L), u);
+    int k = 0;
+    while (k < static_cast<int>(cdf.size()) && u > cdf[size_t(k)]) ++k;
+    return k;
+}
+
+}  // namespace
+
 int cell_candidates(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t cy, int64_t ct) {
     const CellKey key = cell_key(L, cx, cy, ct);
     const CounterRng rng(c.seed, c.layer);
-    // Large means are split into independent Poisson parts (the sum of Poissons is Poisson)
-    // so the inversion stays accurate (exp(-mean) does not underflow).
-    const int parts = static_cast<int>(std::ceil(L.mean_per_cell / 200.0));
     int count = 0;
-    const std::vector<double>& cdf = L.poisson_cdf;
-    for (int p = 0; p < std::max(parts, 1); ++p) {
-        const auto u = rng.uniforms(key.kx, key.ky, key.kt, 0xFFFFFFFFu - static_cast<uint32_t>(p));
-        if (cdf.empty()) {
-            count += poisson_inverse(L.mean_per_cell / std::max(parts, 1), u[0]);
-            continue;
-        }
-        // The same walk over the tabulated sums: the same comparisons, the same count.
-        int k = 0;
-        while (k < static_cast<int>(cdf.size()) && u[0] > cdf[size_t(k)]) ++k;
-        count += k;
-    }
+    for (int p = 0; p < poisson_parts(L); ++p)
+        count += poisson_part(
+            L, rng.uniforms(key.kx, key.ky, key.kt, kCountIndex - static_cast<uint32_t>(p))[0]);
     return count;
 }
 
 void tabulate_poisson(Layout& L) {
-    const int parts = static_cast<int>(std::ceil(L.mean_per_cell / 200.0));
     L.poisson_cdf.clear();
     // The walk stops at the cap, so the table holds the sums below it.
-    walk_poisson_cdf(L.mean_per_cell / std::max(parts, 1), [&](double cdf) {
+    walk_poisson_cdf(L.mean_per_cell / poisson_parts(L), [&](double cdf) {
         L.poisson_cdf.push_back(cdf);
         return true;
     });
@@ -164,58 +173,97 @@ bool cell_birth(const ProcessConfig& c, const Layout& L, int64_t cx, int64_t cy,
     return true;
 }
 
-int still_cell_plan(const ProcessConfig& c, const Layout& L, const BoxIndex& keep, int64_t cx,
-                    int64_t cy, StillCell& s) {
-    s = {};
-    if (outside_region(L, cx, cy)) return 0;
-    s.candidates = cell_candidates(c, L, cx, cy, 0);
-    // A position is (cx + u) * cell with u in (0, 1]: rounding is monotone, so it lies in the
-    // cell's box computed the same way, and a cell inside one keep box keeps every candidate.
-    const bool inside =
-        keep.contains_box(static_cast<double>(cx) * L.cell_x, static_cast<double>(cy) * L.cell_y,
-                          (cx + 1.0) * L.cell_x, (cy + 1.0) * L.cell_y);
-    if (inside && !c.region) return s.candidates;
-    s.kept = s.candidates <= 64 ? StillCell::Mask : StillCell::Test;
-    const CellKey key = cell_key(L, cx, cy, 0);
+size_t still_piece_plan(const ProcessConfig& c, const Layout& L, const BoxIndex& keep, int64_t cy,
+                        int64_t cx0, int64_t cx1, StillCell* plans, DrawBatch& draws) {
     const CounterRng rng(c.seed, c.layer);
-    int n = 0;
-    for (int k = 0; k < s.candidates; ++k) {
-        const auto r0 = rng.uniforms(key.kx, key.ky, key.kt, 2u * k);
-        const double x = (static_cast<double>(cx) + r0[0]) * L.cell_x;
-        const double y = (static_cast<double>(cy) + r0[1]) * L.cell_y;
-        if (!region_keeps(c, key, k, x, y) || !(inside || keep.contains(x, y))) continue;
-        ++n;
-        if (s.kept == StillCell::Mask) s.mask |= uint64_t(1) << k;
+    const int parts = poisson_parts(L);
+    // The counts' draws of all cells, then the first draws (x, y) of the candidates to test.
+    draws.clear();
+    for (int64_t cx = cx0; cx <= cx1; ++cx) {
+        if (outside_region(L, cx, cy)) continue;
+        const CellKey key = cell_key(L, cx, cy, 0);
+        for (int p = 0; p < parts; ++p)
+            draws.add(key.kx, key.ky, key.kt, kCountIndex - static_cast<uint32_t>(p));
     }
-    return n;
+    draws.run(rng);
+    size_t d = 0, kept = 0;
+    for (int64_t cx = cx0; cx <= cx1; ++cx) {
+        StillCell& s = plans[cx - cx0];
+        s = {};
+        if (outside_region(L, cx, cy)) continue;
+        for (int p = 0; p < parts; ++p) s.candidates += poisson_part(L, draws.u01(d++, 0));
+        // A position is (cx + u) * cell with u in (0, 1]: rounding is monotone, so it lies in
+        // the cell's box computed the same way, and a cell inside one kept box keeps all.
+        const bool inside = keep.contains_box(
+            static_cast<double>(cx) * L.cell_x, static_cast<double>(cy) * L.cell_y,
+            (cx + 1.0) * L.cell_x, (cy + 1.0) * L.cell_y);
+        if (inside && !c.region)
+            kept += static_cast<size_t>(s.candidates);
+        else
+            s.kept = s.candidates <= 64 ? StillCell::Mask : StillCell::Test;
+    }
+    draws.clear();
+    for (int64_t cx = cx0; cx <= cx1; ++cx) {
+        const StillCell& s = plans[cx - cx0];
+        if (s.kept == StillCell::All) continue;
+        const CellKey key = cell_key(L, cx, cy, 0);
+        for (int k = 0; k < s.candidates; ++k) draws.add(key.kx, key.ky, key.kt, 2u * k);
+    }
+    draws.run(rng);
+    d = 0;
+    for (int64_t cx = cx0; cx <= cx1; ++cx) {
+        StillCell& s = plans[cx - cx0];
+        if (s.kept == StillCell::All) continue;
+        const CellKey key = cell_key(L, cx, cy, 0);
+        for (int k = 0; k < s.candidates; ++k, ++d) {
+            const double x = (static_cast<double>(cx) + draws.u01(d, 0)) * L.cell_x;
+            const double y = (static_cast<double>(cy) + draws.u01(d, 1)) * L.cell_y;
+            if (!region_keeps(c, key, k, x, y) || !keep.contains(x, y)) continue;
+            ++kept;
+            if (s.kept == StillCell::Mask) s.mask |= uint64_t(1) << k;
+        }
+    }
+    return kept;
 }
 
-size_t still_cell_write(const ProcessConfig& c, const Layout& L, const BoxIndex& keep, int64_t cx,
-                        int64_t cy, const StillCell& s, bool theta0, Impulses& out, size_t i) {
-    const CellKey key = cell_key(L, cx, cy, 0);
+size_t still_piece_write(const ProcessConfig& c, const Layout& L, const BoxIndex& keep, int64_t cy,
+                         int64_t cx0, int64_t cx1, const StillCell* plans, bool theta0,
+                         DrawBatch& draws, Impulses& out, size_t i) {
     const CounterRng rng(c.seed, c.layer);
     // r1 holds the normal amplitude's angle and theta0; a still layer uses nothing else of it.
     const bool want_r1 = theta0 || c.amplitude == Amplitude::Normal;
-    // The draws of eight candidates at a time come first, from one 16-counter Philox call
-    // (r0 and r1 of candidate k are counters 2k and 2k + 1; without r1, lane j is r0 of k0 + j).
-    constexpr int kBatch = 8;
-    uint32_t w[4][16];
-    for (int k0 = 0; k0 < s.candidates; k0 += kBatch) {
-        rng.words16(key.kx, key.ky, key.kt, 2u * static_cast<uint32_t>(k0), want_r1 ? 1u : 2u, w);
-        const int m = std::min(kBatch, s.candidates - k0);
-        for (int j = 0; j < m; ++j) {
-            const int k = k0 + j;
-            if (s.kept == StillCell::Mask && !((s.mask >> k) & 1u)) continue;
-            const int e = want_r1 ? 2 * j : j;  // r0's lane; r1's is e + 1
-            const double x = (static_cast<double>(cx) + CounterRng::u01(w[0][e])) * L.cell_x;
-            const double y = (static_cast<double>(cy) + CounterRng::u01(w[1][e])) * L.cell_y;
+    auto skipped = [](const StillCell& s, int k) {
+        return s.kept == StillCell::Mask && !((s.mask >> k) & 1u);
+    };
+    // All the draws of the piece first (r0 and r1 of candidate k are counters 2k and 2k + 1),
+    // then the arithmetic, in the same order.
+    draws.clear();
+    for (int64_t cx = cx0; cx <= cx1; ++cx) {
+        const StillCell& s = plans[cx - cx0];
+        const CellKey key = cell_key(L, cx, cy, 0);
+        for (int k = 0; k < s.candidates; ++k) {
+            if (skipped(s, k)) continue;
+            draws.add(key.kx, key.ky, key.kt, 2u * k);
+            if (want_r1) draws.add(key.kx, key.ky, key.kt, 2u * k + 1u);
+        }
+    }
+    draws.run(rng);
+    size_t d = 0;
+    for (int64_t cx = cx0; cx <= cx1; ++cx) {
+        const StillCell& s = plans[cx - cx0];
+        const CellKey key = cell_key(L, cx, cy, 0);
+        for (int k = 0; k < s.candidates; ++k) {
+            if (skipped(s, k)) continue;
+            const size_t r0 = d, r1 = d + 1;
+            d += want_r1 ? 2 : 1;
+            const double x = (static_cast<double>(cx) + draws.u01(r0, 0)) * L.cell_x;
+            const double y = (static_cast<double>(cy) + draws.u01(r0, 1)) * L.cell_y;
             if (s.kept == StillCell::Test && !(region_keeps(c, key, k, x, y) && keep.contains(x, y)))
                 continue;
             out.x[i] = x;
             out.y[i] = y;
-            const double v = want_r1 ? CounterRng::u01(w[0][e + 1]) : 0.0;
-            out.weight[i] = amplitude_of(c.amplitude, CounterRng::u01(w[3][e]), v);
-            out.theta[i] = theta0 ? theta0_of(CounterRng::u01(w[1][e + 1])) : 0.0f;
+            out.weight[i] = amplitude_of(c.amplitude, draws.u01(r0, 3), want_r1 ? draws.u01(r1, 0) : 0.0);
+            out.theta[i] = theta0 ? theta0_of(draws.u01(r1, 1)) : 0.0f;
             ++i;
         }
     }

@@ -133,14 +133,15 @@ struct StillCell {
     Kept kept = All;
     uint64_t mask = 0;
 };
-/// Plan cell (cx, cy) of a still process against `keep` into `s`; returns how many of its
-/// impulses fall in `keep`.
-int still_cell_plan(const ProcessConfig& config, const Layout& layout, const BoxIndex& keep,
-                    int64_t cx, int64_t cy, StillCell& s);
-/// Write those impulses of cell (cx, cy), in candidate order, to out[i], out[i + 1], ...: the
+class DrawBatch;
+/// Plan the cells [cx0, cx1] of row cy of a still process against `keep` into plans[0, ...];
+/// returns how many of their impulses fall in `keep`. `draws` is scratch.
+size_t still_piece_plan(const ProcessConfig& config, const Layout& layout, const BoxIndex& keep,
+                        int64_t cy, int64_t cx0, int64_t cx1, StillCell* plans, DrawBatch& draws);
+/// Write those impulses, cell by cell and in candidate order, to out[i], out[i + 1], ...: the
 /// weight is the amplitude, theta is theta0 when `theta0`, else 0. Returns the next index.
-size_t still_cell_write(const ProcessConfig& config, const Layout& layout, const BoxIndex& keep,
-                        int64_t cx, int64_t cy, const StillCell& s, bool theta0, Impulses& out,
-                        size_t i);
+size_t still_piece_write(const ProcessConfig& config, const Layout& layout, const BoxIndex& keep,
+                         int64_t cy, int64_t cx0, int64_t cx1, const StillCell* plans, bool theta0,
+                         DrawBatch& draws, Impulses& out, size_t i);
 
 }  // namespace impulse::sim::detail

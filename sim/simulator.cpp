@@ -3,7 +3,9 @@
 // previous frame with identical arithmetic, Jacobian compensation, orientation.
 
 #include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,6 +13,7 @@
 #include <tuple>
 
 #include "sim/layout.h"
+#include "sim/rng.h"
 #include "util/errors.h"
 
 namespace impulse::sim {
@@ -92,6 +95,7 @@ struct LayerSimulator::State {
     };
     std::vector<Piece> pieces;
     std::vector<detail::StillCell> plans;
+    tbb::enumerable_thread_specific<detail::DrawBatch> draws;  // per thread, kept across frames
     int64_t last_step = 0;
     bool valid = false;
 
@@ -294,25 +298,23 @@ void LayerSimulator::State::still_impulses(const detail::CellCover& cover, const
     const detail::BoxIndex keep(view.expanded(support_radius));
     tbb::parallel_for(size_t(0), pieces.size(), [&](size_t p) {
         Piece& q = pieces[p];
-        size_t n = 0;
-        for (int64_t cx = q.cx0; cx <= q.cx1; ++cx)
-            n += static_cast<size_t>(detail::still_cell_plan(
-                config, layout, keep, cx, q.cy, plans[q.cell + size_t(cx - q.cx0)]));
-        q.start = n;
+        q.start = detail::still_piece_plan(config, layout, keep, q.cy, q.cx0, q.cx1,
+                                           &plans[q.cell], draws.local());
     });
     size_t total = 0;
     for (Piece& q : pieces) {
         const size_t n = q.start;
         q.start = total, total += n;
     }
-    // Every element below `total` is written, so the old contents need no clearing.
-    out.x.resize(total), out.y.resize(total), out.weight.resize(total), out.theta.resize(total);
+    // Every element below `total` is written, so the old contents need no clearing. Growing a
+    // vector zeroes it (and faults its pages in): for a new output that is tens of MB, so the
+    // four arrays grow side by side.
+    tbb::parallel_invoke([&] { out.x.resize(total); }, [&] { out.y.resize(total); },
+                         [&] { out.weight.resize(total); }, [&] { out.theta.resize(total); });
     tbb::parallel_for(size_t(0), pieces.size(), [&](size_t p) {
         const Piece& q = pieces[p];
-        size_t i = q.start;
-        for (int64_t cx = q.cx0; cx <= q.cx1; ++cx)
-            i = detail::still_cell_write(config, layout, keep, cx, q.cy,
-                                         plans[q.cell + size_t(cx - q.cx0)], theta0, out, i);
+        detail::still_piece_write(config, layout, keep, q.cy, q.cx0, q.cx1, &plans[q.cell], theta0,
+                                  draws.local(), out, q.start);
     });
 }
 

@@ -4,7 +4,7 @@
 // cells), each cell's impulses from sim::cell_impulses in order, kept when the position lies in
 // a box of the view expanded by the support radius; weight = amplitude, theta = theta0 for a
 // random orientation (0 otherwise), a field's angle plus jitter (theta0 / pi - 1) for a field.
-// Every value must match bit for bit. Also the 16-counter Philox against Random123's.
+// Every value must match bit for bit. Also the batched (AVX2) Philox against Random123's.
 
 #include <algorithm>
 #include <catch2/catch.hpp>
@@ -159,19 +159,21 @@ TEST_CASE("still fast path: dense cells (over 64 candidates, split Poisson draws
     }
 }
 
-TEST_CASE("16-counter Philox matches Random123", "[sim][still]") {
+TEST_CASE("batched Philox draws match CounterRng's", "[sim][still]") {
     const sim::detail::CounterRng rng(0xFEDCBA9876543210ull, 0x5245474Eu);
+    sim::detail::DrawBatch batch;
     const int64_t big = int64_t(1) << 40;
-    for (const auto& [a, b, c] : {std::array<int64_t, 3>{0, 0, 0}, {-3, 7, 1}, {big + 5, -big, 2},
-                                  {123456789, -987654321, -big}})
-        for (const uint32_t d0 : {0u, 14u, 0xFFFFFFF3u})
-            for (const uint32_t step : {1u, 2u}) {
-                uint32_t w[4][16];
-                rng.words16(a, b, c, d0, step, w);
-                for (uint32_t j = 0; j < 16; ++j) {
-                    const auto u = rng.uniforms(a, b, c, d0 + j * step);
-                    for (int i = 0; i < 4; ++i)
-                        CHECK(sim::detail::CounterRng::u01(w[i][j]) == u[size_t(i)]);
-                }
-            }
+    for (const size_t n : {1, 16, 37, 300}) {  // partial and whole lane groups, regrown arrays
+        batch.clear();
+        std::vector<std::array<double, 4>> want;
+        for (size_t j = 0; j < n; ++j) {
+            const int64_t a = int64_t(j) * 977 - big, b = int64_t(j % 7) - 3, c = int64_t(j) << 33;
+            const uint32_t d = 0xFFFFFFF0u + uint32_t(j);
+            CHECK(batch.add(a, b, c, d) == j);
+            want.push_back(rng.uniforms(a, b, c, d));
+        }
+        batch.run(rng);
+        for (size_t j = 0; j < n; ++j)
+            for (int i = 0; i < 4; ++i) CHECK(batch.u01(j, i) == want[j][size_t(i)]);
+    }
 }
