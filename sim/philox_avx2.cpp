@@ -23,7 +23,7 @@ struct Lanes {
     __m256i w[4];
 };
 
-void round(Lanes& c, __m256i k0, __m256i k1) {
+void philox_round(Lanes& c, __m256i k0, __m256i k1) {
     const __m256i m0 = _mm256_set1_epi32(static_cast<int>(0xD2511F53u));
     const __m256i m1 = _mm256_set1_epi32(static_cast<int>(0xCD9E8D57u));
     __m256i hi0, lo0, hi1, lo1;
@@ -54,8 +54,8 @@ void philox4x32_avx2(const uint32_t key[2], size_t n, const uint32_t* const in[4
             if (r > 0) k0 += 0x9E3779B9u, k1 += 0xBB67AE85u;
             const __m256i vk0 = _mm256_set1_epi32(static_cast<int>(k0));
             const __m256i vk1 = _mm256_set1_epi32(static_cast<int>(k1));
-            round(a, vk0, vk1);
-            round(b, vk0, vk1);
+            philox_round(a, vk0, vk1);
+            philox_round(b, vk0, vk1);
         }
         store(a, out, j);
         store(b, out, j + 8);

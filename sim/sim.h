@@ -418,7 +418,8 @@ public:
 
     /// Impulses whose support can touch `view` (texture-space boxes) at frame `frame`. Only the
     /// seeding cells whose birth region meets a box are generated. A still process (no lifetime)
-    /// generates its cells in parallel, by rows of cells joined in canonical order.
+    /// writes its impulses straight into `out`, pieces of rows of cells in parallel, each in its
+    /// place of the canonical order (the same values and order as cell_impulses cell by cell).
     void impulses_at(int64_t frame, const Region& view, Impulses& out);
     /// The birth region used for `view`: expanded by support radius + travel bound.
     Box birth_region(const Box& view) const;
