@@ -18,6 +18,10 @@ struct PerspLevel {
     float radius = 1, inv_r2 = 1;  ///< support R_l and 1 / R_l^2
     const float* table = nullptr;  ///< radial: h_l at q = r^2 / R_l^2, linear
     int table_n = 0;
+    /// radial, when a short series fits h_l to 1e-6 of h_l(0): its Chebyshev coefficients in q
+    /// (kernels::EnvelopePolynomial), evaluated instead of `table` (arithmetic, no gathers)
+    const float* poly = nullptr;
+    int poly_n = 0;
     const float* line_p = nullptr;   ///< radial: line mass P and chord variance q at
     const float* line_q = nullptr;   ///< t = v^2 / R_l^2, linear; and the chord's
     const float* line_k4 = nullptr;  ///< fourth cumulant (Edgeworth correction)

@@ -288,6 +288,7 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
     // Sub-rows over the far zone, a quarter of ... half the pixel filter apart (plus one each
     // side).
     m_dy = 0.5 * c;
+    m_inv_dy = 1.0 / m_dy;
     const double ya = y_of(rho_far), yb = y_of(rho_cut);
     if (!std::isfinite(ya) || !std::isfinite(yb)) return;
     m_y0 = std::min(ya, yb) - m_dy;
@@ -355,6 +356,7 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
         row.xi.assign(size_t(W) + 1, 0.0);
         for (int x = 0; x < W; ++x) row.xi[size_t(x) + 1] = row.xi[size_t(x)] + sm_at(x + 0.5);
         row.dxi = std::max(narrow / kAcrossNodes, 0.25 * c * sm_min);
+        row.inv_dxi = 1.0 / row.dxi;
         row.taps = static_cast<int>(std::ceil(wide / row.dxi)) + 1;
         row.xi0 = xi_at(row, -row.margin) - (row.taps + 1) * row.dxi;
         row.nodes = static_cast<int>(std::ceil((xi_at(row, W + row.margin) - row.xi0) / row.dxi)) +
@@ -521,7 +523,7 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
     m_active = true;
 }
 
-double FarField::xi_at(const Row& row, double x) const {
+inline double FarField::xi_at(const Row& row, double x) const {
     const int W = m_width;
     if (x <= 0.0) return row.xi[0] + x * (row.xi[1] - row.xi[0]);
     if (x >= W) return row.xi[size_t(W)] + (x - W) * (row.xi[size_t(W)] - row.xi[size_t(W) - 1]);
@@ -529,7 +531,7 @@ double FarField::xi_at(const Row& row, double x) const {
     return row.xi[size_t(i)] + (x - i) * (row.xi[size_t(i) + 1] - row.xi[size_t(i)]);
 }
 
-float FarField::row_weight(const Row& row, double sx) const {
+inline float FarField::row_weight(const Row& row, double sx) const {
     // Linear between segment centres (held beyond the first and last).
     const double gf = sx * m_inv_segment_px - 0.5;
     if (!(gf > 0.0)) return row.weight.front();
@@ -543,7 +545,7 @@ bool FarField::item(double rx, double ry, float weight, double theta, FarItem& i
     const double depth = m_P[6] * rx + m_P[7] * ry + m_P[8];
     if (!(depth > 0.0)) return false;
     const double yc = y_of(std::sqrt(rx * rx + ry * ry));
-    const double q = (yc - m_y0) / m_dy;
+    const double q = (yc - m_y0) * m_inv_dy;
     if (!(q >= 0.0 && q < static_cast<double>(m_rows.size() - 1))) return false;
     const int r = static_cast<int>(q);
     const double sx = (m_P[0] * rx + m_P[1] * ry + m_P[2]) / depth;
@@ -570,7 +572,7 @@ bool FarField::item(double rx, double ry, float weight, double theta, FarItem& i
         it.node[e] = -1;
         if (!row.nodes) continue;
         const double w = weight * (e ? fy : 1.0 - fy) * row_weight(row, sx);
-        const double p = (xi_at(row, sx) - row.xi0) / row.dxi;
+        const double p = (xi_at(row, sx) - row.xi0) * row.inv_dxi;
         const int nd = static_cast<int>(p);
         if (w == 0.0 || nd < 0 || nd + 1 >= row.nodes) continue;
         const double fx = p - nd;

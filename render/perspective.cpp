@@ -26,6 +26,10 @@ constexpr double kPi = std::numbers::pi;
 constexpr double kDeg = kPi / 180.0;
 constexpr float kFar = 1e18f;     // texture coordinate of pixels that miss the plane
 constexpr int kMaxProbeHalf = 8;  // at most 2 * 8 + 1 probes per impulse
+// Radial levels whose Chebyshev series has at most this many terms are evaluated by it rather
+// than by their table (the cosine kernel itself: 7 terms, its blurred levels 15-41). Measured on
+// impulse_bench_perspective, whose near field is nearly all level 0: 24 was no faster.
+constexpr size_t kMaxPolyTerms = 12;
 // The line form is used once the blur along the major axis reaches this fraction of the level's
 // support radius (empirical: against supersampled references of a cosine kernel the line form
 // is within 1-3 % of a single impulse's filtered kernel from there on, better than probes,
@@ -448,6 +452,16 @@ std::vector<detail::PerspLevel> loop_levels(const kernels::KernelPyramid& pyr) {
             L.line_p = t.line_mass.data(), L.line_q = t.line_var.data(),
             L.line_k4 = t.line_k4.data();
             L.line_n = static_cast<int>(t.line_mass.size());
+            // A table lookup is two reads at computed indices per pixel, which the vectorised
+            // loop does element by element; a short Chebyshev series is a few vector multiplies
+            // and adds. Its error (at most 1e-6 of h_l(0)) is of the order of the table's.
+            const auto& poly = pyr.level(l).polynomial();
+            const double e0 = std::abs(pyr.level(l).envelope(0.0));
+            if (poly.coefficients.size() >= 3 && poly.coefficients.size() <= kMaxPolyTerms &&
+                poly.max_error < 1e-6 * e0) {
+                L.poly = poly.coefficients.data();
+                L.poly_n = static_cast<int>(poly.coefficients.size());
+            }
         } else {
             L.grid = pyr.grid(l).data(), L.grid_n = pyr.grid_n(l);
         }
