@@ -492,8 +492,12 @@ void LayerSimulator::impulses_at(int64_t frame, const Region& view, Impulses& ou
             out.theta[j] = static_cast<float>(std::atan2(vy[j], vx[j]));
     }
     if (field) {
-        std::vector<float> th0(emitted.size());
-        for (size_t j = 0; j < emitted.size(); ++j) th0[j] = P.th0[emitted[j]];
+        // Birth angles only for the jitter (field_orientation reads them only then).
+        std::vector<float> th0;
+        if (c.orientation_jitter.value(S.time_of_step(target)) != 0.0) {
+            th0.resize(emitted.size());
+            for (size_t j = 0; j < emitted.size(); ++j) th0[j] = P.th0[emitted[j]];
+        }
         S.field_orientation(target, th0, out);
     }
 
