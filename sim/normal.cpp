@@ -4,6 +4,7 @@
 
 #include "sim/normal.h"
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 
@@ -17,23 +18,19 @@ using namespace normal_poly;
 
 /// ln u for a positive normal double u.
 double log_of(double u) {
-    // u = m 2^e with m in [sqrt(1/2), sqrt(2)): e and m from the bits, exactly (fdlibm's
-    // reduction), so ln u = e ln 2 + ln m.
-    const uint64_t bits = std::bit_cast<uint64_t>(u);
-    double e = static_cast<double>(static_cast<int64_t>(bits >> 52) - 1023);
-    double m = std::bit_cast<double>((bits & 0x000FFFFFFFFFFFFFull) | 0x3FF0000000000000ull);
-    if (m >= kSqrt2) {
-        m = m * 0.5;
-        e = e + 1.0;
-    }
+    // u = m 2^e with m in [sqrt(1/2), sqrt(2)), so ln u = e ln 2 + ln m; e and m exactly from
+    // the bits, without a branch (musl's log.c): the bits of a positive double grow with it,
+    // and those of sqrt(1/2) 2^e are kSqrtHalfBits + e 2^52, so e = floor((bits - kSqrtHalfBits)
+    // / 2^52) and m's bits are the remainder + kSqrtHalfBits.
+    const uint64_t bits = std::bit_cast<uint64_t>(u) + (kOneBits - kSqrtHalfBits);
+    const double e = static_cast<double>(static_cast<int64_t>(bits >> 52) - 1023);
+    const double m = std::bit_cast<double>((bits & kMantissaBits) + kSqrtHalfBits);
     const double f = m - 1.0;  // exact (Sterbenz): m in [1/2, 2]
     const double s = f / (2.0 + f);
     const double z = s * s;
-    double q = kLogQ[8];
-    for (int j = 7; j >= 0; --j) q = q * z + kLogQ[j];
     const double s2 = s + s;
     // e ln 2 = e kLn2Hi (exact) + e kLn2Lo; the small parts are added first.
-    return e * kLn2Hi + (e * kLn2Lo + (s2 + s2 * (z * q)));
+    return e * kLn2Hi + (e * kLn2Lo + (s2 + s2 * (z * log_series(z))));
 }
 
 /// cos(2 pi v) for v in [0, 1].
@@ -41,12 +38,9 @@ double cos_2pi(double v) {
     // cos(2 pi v) = cos(2 pi a) with a = min(v, 1 - v) in [0, 1/2], = sin(2 pi d) with
     // d = 1/4 - a in [-1/4, 1/4]. Both subtractions are exact where the result is small
     // (Sterbenz), so the relative error holds near the zeros v = 1/4, 3/4 too.
-    const double a = v > 0.5 ? 1.0 - v : v;
+    const double a = std::min(v, 1.0 - v);
     const double d = 0.25 - a;
-    const double z = d * d;
-    double p = kSin[10];
-    for (int n = 9; n >= 0; --n) p = p * z + kSin[n];
-    return d * p;
+    return d * sin_series(d * d);
 }
 
 }  // namespace

@@ -48,7 +48,10 @@ namespace normal_poly {
 /// for every binary exponent e of a double.
 inline constexpr double kLn2Hi = 6.93147180369123816490e-01;
 inline constexpr double kLn2Lo = 1.90821492927058770002e-10;
-inline constexpr double kSqrt2 = 1.4142135623730951;
+/// Bits of 1, of sqrt(1/2) rounded (0.70710678118654757) and the mantissa's mask.
+inline constexpr uint64_t kOneBits = 0x3FF0000000000000ull;
+inline constexpr uint64_t kSqrtHalfBits = 0x3FE6A09E667F3BCDull;
+inline constexpr uint64_t kMantissaBits = 0x000FFFFFFFFFFFFFull;
 
 /// ln m = 2 atanh(s), s = (m - 1) / (m + 1) = f / (2 + f) with f = m - 1: the series
 /// 2 s + 2 s z Q(z), z = s^2, Q(z) = sum_j z^j / (2 j + 3). For m in [sqrt(1/2), sqrt(2)],
@@ -64,6 +67,27 @@ inline constexpr double kSin[] = {6.283185307179586,     -41.34170224039976,   8
                                   -76.70585975306139,    42.058693944897655,   -15.09464257682299,
                                   3.819952584848282,     -0.7181223017785006,  0.10422916220813984,
                                   -0.012031585942120627, 0.0011309237482517963};
+
+/// Q(z) of kLogQ and P(z) of kSin by Estrin's scheme (Knuth, TAOCP vol. 2, 4.6.4): pairs
+/// c_2i + c_2i+1 z, combined with z^2, z^4, z^8, so the chain of dependent operations is about
+/// half Horner's. A template over the lane type (double in sim/normal.cpp, four lanes in
+/// sim/normal_avx2.cpp, each instantiating only its own) so both builds do the same operations
+/// in the same order; T needs + and * and construction from a double.
+template <typename T>
+T log_series(T z) {
+    const T z2 = z * z, z4 = z2 * z2, z8 = z4 * z4;
+    const T p01 = T(kLogQ[0]) + T(kLogQ[1]) * z, p23 = T(kLogQ[2]) + T(kLogQ[3]) * z;
+    const T p45 = T(kLogQ[4]) + T(kLogQ[5]) * z, p67 = T(kLogQ[6]) + T(kLogQ[7]) * z;
+    return (p01 + p23 * z2) + (p45 + p67 * z2) * z4 + T(kLogQ[8]) * z8;
+}
+template <typename T>
+T sin_series(T z) {
+    const T z2 = z * z, z4 = z2 * z2, z8 = z4 * z4;
+    const T p01 = T(kSin[0]) + T(kSin[1]) * z, p23 = T(kSin[2]) + T(kSin[3]) * z;
+    const T p45 = T(kSin[4]) + T(kSin[5]) * z, p67 = T(kSin[6]) + T(kSin[7]) * z;
+    const T p89 = T(kSin[8]) + T(kSin[9]) * z;
+    return (p01 + p23 * z2) + (p45 + p67 * z2) * z4 + (p89 + T(kSin[10]) * z2) * z8;
+}
 
 }  // namespace normal_poly
 

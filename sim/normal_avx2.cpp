@@ -18,39 +18,40 @@ __m256d add(__m256d a, __m256d b) { return _mm256_add_pd(a, b); }
 __m256d mul(__m256d a, __m256d b) { return _mm256_mul_pd(a, b); }
 __m256d set(double a) { return _mm256_set1_pd(a); }
 
+/// Four lanes as the polynomial templates of sim/normal.h want them.
+struct Lanes {
+    explicit Lanes(double a) : v(set(a)) {}
+    explicit Lanes(__m256d a) : v(a) {}
+    __m256d v;
+};
+Lanes operator+(Lanes a, Lanes b) { return Lanes(add(a.v, b.v)); }
+Lanes operator*(Lanes a, Lanes b) { return Lanes(mul(a.v, b.v)); }
+
 /// log_of (sim/normal.cpp) of four positive normal doubles.
 __m256d log_of(__m256d u) {
-    const __m256i bits = _mm256_castpd_si256(u);
-    // The biased exponent b as the double 2^52 + b (its bits are those of 2^52 with b in the
-    // low mantissa bits), then e = b - 1023 exactly: AVX2 has no int64 -> double conversion.
-    const __m256d magic = _mm256_castsi256_pd(_mm256_set1_epi64x(0x4330000000000000ll));
-    const __m256d biased = _mm256_castsi256_pd(
-        _mm256_or_si256(_mm256_srli_epi64(bits, 52), _mm256_castpd_si256(magic)));
-    __m256d e = _mm256_sub_pd(biased, set(4503599627370496.0 + 1023.0));
-    __m256d m = _mm256_castsi256_pd(
-        _mm256_or_si256(_mm256_and_si256(bits, _mm256_set1_epi64x(0x000FFFFFFFFFFFFFll)),
-                        _mm256_set1_epi64x(0x3FF0000000000000ll)));
-    const __m256d high = _mm256_cmp_pd(m, set(kSqrt2), _CMP_GE_OQ);
-    m = _mm256_blendv_pd(m, mul(m, set(0.5)), high);
-    e = _mm256_blendv_pd(e, add(e, set(1.0)), high);
+    const __m256i bits = _mm256_add_epi64(_mm256_castpd_si256(u),
+                                          _mm256_set1_epi64x(int64_t(kOneBits - kSqrtHalfBits)));
+    // e + 1023 as the double 2^52 + e + 1023 (its bits are those of 2^52 with e + 1023 in the
+    // low mantissa bits), then e exactly: AVX2 has no int64 -> double conversion.
+    const __m256i magic = _mm256_set1_epi64x(0x4330000000000000ll);
+    const __m256d biased = _mm256_castsi256_pd(_mm256_or_si256(_mm256_srli_epi64(bits, 52), magic));
+    const __m256d e = _mm256_sub_pd(biased, set(4503599627370496.0 + 1023.0));
+    const __m256d m = _mm256_castsi256_pd(
+        _mm256_add_epi64(_mm256_and_si256(bits, _mm256_set1_epi64x(int64_t(kMantissaBits))),
+                         _mm256_set1_epi64x(int64_t(kSqrtHalfBits))));
     const __m256d f = _mm256_sub_pd(m, set(1.0));
     const __m256d s = _mm256_div_pd(f, add(set(2.0), f));
     const __m256d z = mul(s, s);
-    __m256d q = set(kLogQ[8]);
-    for (int j = 7; j >= 0; --j) q = add(mul(q, z), set(kLogQ[j]));
+    const __m256d q = log_series(Lanes(z)).v;
     const __m256d s2 = add(s, s);
     return add(mul(e, set(kLn2Hi)), add(mul(e, set(kLn2Lo)), add(s2, mul(s2, mul(z, q)))));
 }
 
 /// cos_2pi (sim/normal.cpp) of four v in [0, 1].
 __m256d cos_2pi(__m256d v) {
-    const __m256d a =
-        _mm256_blendv_pd(v, _mm256_sub_pd(set(1.0), v), _mm256_cmp_pd(v, set(0.5), _CMP_GT_OQ));
+    const __m256d a = _mm256_min_pd(v, _mm256_sub_pd(set(1.0), v));
     const __m256d d = _mm256_sub_pd(set(0.25), a);
-    const __m256d z = mul(d, d);
-    __m256d p = set(kSin[10]);
-    for (int n = 9; n >= 0; --n) p = add(mul(p, z), set(kSin[n]));
-    return mul(d, p);
+    return mul(d, sin_series(Lanes(mul(d, d))).v);
 }
 
 /// Four normals.

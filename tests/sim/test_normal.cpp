@@ -61,13 +61,13 @@ std::vector<double> inputs(bool angle) {
 }  // namespace
 
 TEST_CASE("normal amplitude: accuracy against the C library in long double", "[sim][stats]") {
-    // The bound derived (unit roundoff e = 2^-53). ln: s = f / (2 + f) is within 2e of s
-    // (two roundings, f exact), the series adds under 1e (its terms after 2s sum to < 1 % of
-    // it), and e ln 2 + ln m loses at most a factor 3 to cancellation (e = -1, m -> sqrt(2):
-    // (ln 2 + ln sqrt 2) / ln sqrt 2), plus the last additions: under 12e. The square root
-    // halves it and rounds: 6.5e. cos: d exact, d^2 and the Horner steps 4e. The product: 1e.
-    // In all 11.5e = 1.3e-15; allowed 16e = 1.8e-15. Measured: 5.0e (5.5e-16) over these
-    // 3.5 million pairs, and no float off the float of the long-double value.
+    // The bound derived (unit roundoff e = 2^-53). ln: f = m - 1 exact, s = f / (2 + f) within
+    // 2e (two roundings); 2 s (1 + z Q) adds about 1e (z Q < 1 %); e ln 2 + ln m two more
+    // roundings. As |ln m| <= ln 2 / 2 <= |ln u| whenever e != 0, ln u is within about 5e. The
+    // square root halves that and rounds: 3.5e. cos: d exact where |d| < 1/8 (Sterbenz), within
+    // 1e elsewhere; d^2 and the Estrin steps about 4e. The product: 1e. In all about 9e; allowed
+    // 16e = 1.8e-15 for the slack of this accounting. Measured: 6.3e (7.0e-16) over these 3.5
+    // million pairs, and no float off the float of the long-double value.
     const double tol = 16 * std::ldexp(1.0, -53);
     const std::vector<double> us = inputs(false), vs = inputs(true);
     // Every u with v at a 1/3 (cos = -1/2), and every v with u at a grid word near e^-1/2
