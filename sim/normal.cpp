@@ -19,9 +19,9 @@ using namespace normal_poly;
 /// ln u for a positive normal double u.
 double log_of(double u) {
     // u = m 2^e with m in [sqrt(1/2), sqrt(2)), so ln u = e ln 2 + ln m; e and m exactly from
-    // the bits, without a branch (musl's log.c): the bits of a positive double grow with it,
-    // and those of sqrt(1/2) 2^e are kSqrtHalfBits + e 2^52, so e = floor((bits - kSqrtHalfBits)
-    // / 2^52) and m's bits are the remainder + kSqrtHalfBits.
+    // the bits, without a branch (the offset trick of musl's log.c): the bits of a positive
+    // double grow with it, and those of sqrt(1/2) 2^e are kSqrtHalfBits + e 2^52, so
+    // e = floor((bits - kSqrtHalfBits) / 2^52) and m's bits are the rest + kSqrtHalfBits.
     const uint64_t bits = std::bit_cast<uint64_t>(u) + (kOneBits - kSqrtHalfBits);
     const double e = static_cast<double>(static_cast<int64_t>(bits >> 52) - 1023);
     const double m = std::bit_cast<double>((bits & kMantissaBits) + kSqrtHalfBits);
