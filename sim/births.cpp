@@ -6,6 +6,7 @@
 #include <numbers>
 
 #include "sim/layout.h"
+#include "sim/normal.h"
 #include "sim/rng.h"
 
 namespace impulse::sim {
@@ -138,8 +139,7 @@ bool region_keeps(const ProcessConfig& c, const CellKey& key, int k, double x, d
 float amplitude_of(Amplitude a, double u, double v) {
     switch (a) {
         case Amplitude::Normal:  // Box–Muller; u in (0, 1] so the log is finite
-            return static_cast<float>(std::sqrt(-2.0 * std::log(u)) *
-                                      std::cos(2.0 * std::numbers::pi * v));
+            return static_cast<float>(normal_from_uniforms(u, v));
         case Amplitude::Uniform: return static_cast<float>(2.0 * u - 1.0);
         case Amplitude::Sign: return u < 0.5 ? -1.0f : 1.0f;
     }
@@ -228,7 +228,7 @@ size_t still_piece_plan(const ProcessConfig& c, const Layout& L, const BoxIndex&
 
 size_t still_piece_write(const ProcessConfig& c, const Layout& L, const BoxIndex& keep, int64_t cy,
                          int64_t cx0, int64_t cx1, const StillCell* plans, bool theta0,
-                         DrawBatch& draws, Impulses& out, size_t i) {
+                         DrawBatch& draws, NormalBatch& normals, Impulses& out, size_t i) {
     const CounterRng rng(c.seed, c.layer);
     // r1 holds the normal amplitude's angle and theta0; a still layer uses nothing else of it.
     const bool want_r1 = theta0 || c.amplitude == Amplitude::Normal;
@@ -248,6 +248,11 @@ size_t still_piece_write(const ProcessConfig& c, const Layout& L, const BoxIndex
         }
     }
     draws.run(rng);
+    // Normal amplitudes are computed together at the end (NormalBatch: AVX2 lanes), the same
+    // bits as amplitude_of's.
+    const bool normal = c.amplitude == Amplitude::Normal;
+    const size_t first = i;
+    normals.clear();
     size_t d = 0;
     for (int64_t cx = cx0; cx <= cx1; ++cx) {
         const StillCell& s = plans[cx - cx0];
@@ -262,11 +267,15 @@ size_t still_piece_write(const ProcessConfig& c, const Layout& L, const BoxIndex
                 continue;
             out.x[i] = x;
             out.y[i] = y;
-            out.weight[i] = amplitude_of(c.amplitude, draws.u01(r0, 3), want_r1 ? draws.u01(r1, 0) : 0.0);
+            if (normal)
+                normals.add(draws.u01(r0, 3), draws.u01(r1, 0));
+            else
+                out.weight[i] = amplitude_of(c.amplitude, draws.u01(r0, 3), 0.0);
             out.theta[i] = theta0 ? theta0_of(draws.u01(r1, 1)) : 0.0f;
             ++i;
         }
     }
+    if (normal) normals.run(out.weight.data() + first);
     return i;
 }
 

@@ -134,14 +134,16 @@ struct StillCell {
     uint64_t mask = 0;
 };
 class DrawBatch;
+class NormalBatch;
 /// Plan the cells [cx0, cx1] of row cy of a still process against `keep` into plans[0, ...];
 /// returns how many of their impulses fall in `keep`. `draws` is scratch.
 size_t still_piece_plan(const ProcessConfig& config, const Layout& layout, const BoxIndex& keep,
                         int64_t cy, int64_t cx0, int64_t cx1, StillCell* plans, DrawBatch& draws);
 /// Write those impulses, cell by cell and in candidate order, to out[i], out[i + 1], ...: the
 /// weight is the amplitude, theta is theta0 when `theta0`, else 0. Returns the next index.
+/// `draws` and `normals` are scratch.
 size_t still_piece_write(const ProcessConfig& config, const Layout& layout, const BoxIndex& keep,
                          int64_t cy, int64_t cx0, int64_t cx1, const StillCell* plans, bool theta0,
-                         DrawBatch& draws, Impulses& out, size_t i);
+                         DrawBatch& draws, NormalBatch& normals, Impulses& out, size_t i);
 
 }  // namespace impulse::sim::detail

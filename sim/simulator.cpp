@@ -13,6 +13,7 @@
 #include <tuple>
 
 #include "sim/layout.h"
+#include "sim/normal.h"
 #include "sim/rng.h"
 #include "util/errors.h"
 
@@ -96,6 +97,7 @@ struct LayerSimulator::State {
     std::vector<Piece> pieces;
     std::vector<detail::StillCell> plans;
     tbb::enumerable_thread_specific<detail::DrawBatch> draws;  // per thread, kept across frames
+    tbb::enumerable_thread_specific<detail::NormalBatch> normals;  // the same
     int64_t last_step = 0;
     bool valid = false;
 
@@ -314,7 +316,7 @@ void LayerSimulator::State::still_impulses(const detail::CellCover& cover, const
     tbb::parallel_for(size_t(0), pieces.size(), [&](size_t p) {
         const Piece& q = pieces[p];
         detail::still_piece_write(config, layout, keep, q.cy, q.cx0, q.cx1, &plans[q.cell], theta0,
-                                  draws.local(), out, q.start);
+                                  draws.local(), normals.local(), out, q.start);
     });
 }
 
