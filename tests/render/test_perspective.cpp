@@ -506,7 +506,8 @@ TEST_CASE(
 
     const auto bands = depth_bands(view, 8);
     WARN("perspective (a): " << st.impulses << " impulses, " << st.culled
-                             << " culled, forms single " << st.single << " probes " << st.probes
+                             << " culled, forms single " << st.single << " axial " << st.axial
+                             << " probes " << st.probes
                              << " line " << st.line << "; reference to " << dref
                              << " units; sd0 = " << sd0);
     std::ostringstream table;
