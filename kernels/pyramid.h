@@ -57,6 +57,16 @@ struct RadialLevelTables {
     std::vector<float> line_mass, line_var, line_k4;
     /// True when h_l >= 0 everywhere (the line form applies: see render/perspective.h).
     bool nonnegative = false;
+    /// h_l blurred along one axis (the perspective near field's footprint filter: the level for
+    /// the footprint's minor axis, convolved along its major axis with a 1-D Gaussian), for
+    /// the extra variances var_k = k axial_var_max / (slices - 1), k = 0 .. slices - 1: on the
+    /// quarter plane (the result is even in both axes), axial[(k nv + j) nu + i] at
+    /// v_j = R_l j / (nv - 1) across and u_i = axial_extent[k] i / (nu - 1) along, bilinear.
+    /// The extent R_l + 3 sqrt(var_k) truncates the Gaussian at 3 sd; the last column and row
+    /// are 0, so coordinates clamped to the table read 0 outside.
+    std::vector<float> axial, axial_extent;
+    int axial_nu = 0, axial_nv = 0;
+    double axial_var_max = 0.0;  ///< texture units^2
 };
 
 /// Line profiles of a level across one direction (non-radial pyramids, for the perspective

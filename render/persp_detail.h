@@ -28,6 +28,13 @@ struct PerspLevel {
     int line_n = 0;
     const float* grid = nullptr;  ///< grid levels: n x n over [-R_l, R_l]^2, bilinear
     int grid_n = 0;
+    /// radial: h_l blurred along the major axis (kernels::RadialLevelTables::axial): `slices`
+    /// tables of nv x nu samples, slice k for the extra variance k / axial_inv_dvar, over
+    /// [0, axial_extent[k]] along and [0, R_l] across
+    const float* axial = nullptr;
+    const float* axial_extent = nullptr;
+    int axial_nu = 0, axial_nv = 0, axial_slices = 0;
+    float axial_inv_dvar = 0;
 };
 
 struct PerspKernel {
@@ -38,7 +45,7 @@ struct PerspKernel {
     const double* rows = nullptr;
 };
 
-enum PerspMode : uint8_t { kPerspSingle = 0, kPerspProbes = 1, kPerspLine = 2 };
+enum PerspMode : uint8_t { kPerspSingle = 0, kPerspProbes = 1, kPerspLine = 2, kPerspAxial = 3 };
 
 /// How one impulse is filtered: the plan for a footprint (texture units per pixel).
 struct Plan {
@@ -46,7 +53,8 @@ struct Plan {
     double fade = 1.0;
     uint8_t mode = kPerspSingle;
     kernels::KernelPyramid::Blend blend;
-    double var_lo = 0, var_hi = 0;  ///< line: extra variance along the major axis, texture units^2
+    double var_lo = 0, var_hi = 0;  ///< line, axial: extra variance along the major axis, texture
+                                    ///< units^2, per level
     int m = 0;                      ///< probes: 2m + 1
     double sigma_e = 0, step = 0;   ///< probes: Gaussian sd along the axis, spacing
     double along = 0, across = 0;   ///< texture half-extents of the support (region, boxes)
@@ -54,7 +62,7 @@ struct Plan {
 /// The pixel filter's standard deviation in (possibly supersampled) pixels.
 double filter_sigma_px(const AntiAlias& aa);
 /// The plan for an impulse whose footprint is s_major x s_minor texture units per pixel
-/// (render/perspective.h: single, probes or line, and the fade).
+/// (render/perspective.h: single, axial, probes or line, and the fade).
 Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_major,
               double s_minor);
 
@@ -82,7 +90,9 @@ struct PerspItem {
     float curv = 0;
     /// line: d ln(s_minor) / d(image offset along the axis): the keystone (nearer is wider).
     float keystone = 0;
-    float var_lo = 0, var_hi = 0;  ///< line: extra blur along the major axis, pixels^2, per level
+    /// extra blur along the major axis per level: line: pixels^2; axial: texture units^2
+    float var_lo = 0, var_hi = 0;
+    float ex = 1, ey = 0;  ///< axial: texture direction of the footprint's major axis
     uint32_t probe0 = 0, nprobe = 0;       ///< probes: range in the probe array
     int x0 = 0, y0 = 0, x1 = -1, y1 = -1;  ///< pixels touched (inclusive), clipped to the image
 };

@@ -50,6 +50,15 @@ double blur2(const kernels::KernelPyramid& pyr, int l) {
     return l == 0 ? 0.0 : pyr.sigma(l) * pyr.sigma(l);
 }
 
+/// Half-extent along the axis of level l's axial table for an extra variance `var`: that of the
+/// slice above it, the wider of the two the loops blend.
+double axial_along(const kernels::KernelPyramid& pyr, int l, double var) {
+    const auto& t = pyr.tables(l);
+    const int last = static_cast<int>(t.axial_extent.size()) - 1;
+    const int s = std::min(last, static_cast<int>(std::ceil(var / t.axial_var_max * last)));
+    return t.axial_extent[size_t(s)];
+}
+
 /// Probe offsets (units of the axis) and weights for a plan: Gaussian weights at (j - m) step,
 /// positions rescaled so the discrete variance is exactly sigma_e^2.
 void probe_weights(const detail::Plan& p, std::array<double, 2 * kMaxProbeHalf + 1>& t,
@@ -114,6 +123,21 @@ Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_m
     if (3.0 * se < spacing) return single(sM);  // sM <= 1.2 si: anisotropy below notice
     const bool line_ok =
         pyr.radial() && pyr.tables(p.blend.lo).nonnegative && pyr.tables(p.blend.hi).nonnegative;
+    // Radial kernels, where the levels' axial tables cover the blur each needs: one evaluation
+    // per pixel (the variance along adds: h_l * g_(var_l) has sM^2 more than h along).
+    auto axial = [&] {
+        const int lo = p.blend.lo, hi = p.blend.hi;
+        if (!pyr.radial()) return false;
+        const double vlo = std::max(0.0, sM * sM - blur2(pyr, lo)),
+                     vhi = std::max(0.0, sM * sM - blur2(pyr, hi));
+        if (!(vlo <= pyr.tables(lo).axial_var_max && vhi <= pyr.tables(hi).axial_var_max))
+            return false;
+        p.mode = detail::kPerspAxial;
+        p.var_lo = vlo, p.var_hi = vhi;
+        p.across = pyr.radius(std::max(lo, hi));
+        p.along = std::max(axial_along(pyr, lo, vlo), axial_along(pyr, hi, vhi));
+        return true;
+    };
     int m = static_cast<int>(std::ceil(3.0 * se / spacing));
     if (line_ok && (se >= kLineFrom * pyr.radius(p.blend.lo) || m > kMaxProbeHalf)) {
         p.mode = detail::kPerspLine;
@@ -124,6 +148,7 @@ Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_m
         p.along = 4.0 * std::sqrt(sM * sM + R * R / 3.0) + R;
         return p;
     }
+    if (axial()) return p;
     if (m > kMaxProbeHalf) {
         // Too anisotropic for the probe budget (grid kernels): widen the isotropic part until
         // 3 sqrt(sM^2 - si^2) <= 2 m sqrt(s0^2 + si^2) with m = kMaxProbeHalf.
@@ -134,6 +159,7 @@ Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_m
         spacing = pyr.probe_spacing(p.blend.lo);
         se = std::sqrt(std::max(0.0, sM * sM - si * si));
         if (3.0 * se < spacing) return single(sM);
+        if (axial()) return p;
         m = std::min(kMaxProbeHalf, static_cast<int>(std::ceil(3.0 * se / spacing)));
     }
     // Probes add what the blended levels do not carry along the axis.
@@ -452,6 +478,10 @@ std::vector<detail::PerspLevel> loop_levels(const kernels::KernelPyramid& pyr) {
             L.line_p = t.line_mass.data(), L.line_q = t.line_var.data(),
             L.line_k4 = t.line_k4.data();
             L.line_n = static_cast<int>(t.line_mass.size());
+            L.axial = t.axial.data(), L.axial_extent = t.axial_extent.data();
+            L.axial_nu = t.axial_nu, L.axial_nv = t.axial_nv;
+            L.axial_slices = static_cast<int>(t.axial_extent.size());
+            L.axial_inv_dvar = static_cast<float>((L.axial_slices - 1) / t.axial_var_max);
             // A table lookup is two reads at computed indices per pixel, which the vectorised
             // loop does element by element; a short Chebyshev series is a few vector multiplies
             // and adds. Its error (at most 1e-6 of h_l(0)) is of the order of the table's.
@@ -626,14 +656,14 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
     std::vector<std::vector<detail::PerspItem>> chunk_items(chunks);
     std::vector<std::vector<detail::FarItem>> chunk_far(chunks);
     std::vector<std::vector<detail::PerspProbe>> chunk_probes(chunks);
-    std::vector<std::array<size_t, 5>> chunk_counts(chunks);
+    std::vector<std::array<size_t, 6>> chunk_counts(chunks);
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
         auto& probes = chunk_probes[c];
         auto& live_items = chunk_items[c];
         auto& far_items = chunk_far[c];
         auto& counts = chunk_counts[c];
         if (far.active()) far_items.reserve(std::min(n - c * kChunk, kChunk));
-        counts = {0, 0, 0, 0, 0};
+        counts = {0, 0, 0, 0, 0, 0};
         auto area = [](int x0, int y0, int x1, int y1) {
             return x1 >= x0 && y1 >= y0 ? size_t(x1 - x0 + 1) * size_t(y1 - y0 + 1) : size_t(0);
         };
@@ -711,6 +741,21 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
                 pixel_box(xa - ax, xb + ax, ya - ay, yb + ay, W, H, it.x0, it.y0, it.x1, it.y1);
                 any = it.x0 <= it.x1 && it.y0 <= it.y1;
                 ++counts[2];
+            } else if (p.mode == detail::kPerspAxial) {
+                it.ex = static_cast<float>(f.ex), it.ey = static_cast<float>(f.ey);
+                it.var_lo = static_cast<float>(p.var_lo), it.var_hi = static_cast<float>(p.var_hi);
+                // the image box of the rectangle along x across the support
+                const double ux = p.along * f.ex, uy = p.along * f.ey;
+                const double vx = -p.across * f.ey, vy = p.across * f.ex;
+                const std::array<std::array<double, 2>, 4> rect = {{{x - ux - vx, y - uy - vy},
+                                                                    {x + ux - vx, y + uy - vy},
+                                                                    {x + ux + vx, y + uy + vy},
+                                                                    {x - ux + vx, y - uy + vy}}};
+                double xa, xb, ya, yb;
+                if (project_box(view, rect, xa, xb, ya, yb))
+                    pixel_box(xa, xb, ya, yb, W, H, it.x0, it.y0, it.x1, it.y1);
+                any = it.x0 <= it.x1 && it.y0 <= it.y1;
+                ++counts[5];
             } else {
                 probe_weights(p, t, w);
                 it.probe0 = static_cast<uint32_t>(probes.size());
@@ -763,7 +808,7 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
         for (const auto& c : chunk_counts) {
             stats->single += c[0], stats->probes += c[1], stats->line += c[2],
                 stats->probe_count += c[3];
-            stats->pixels += c[4];
+            stats->pixels += c[4], stats->axial += c[5];
         }
         stats->far = far_count;
         stats->culled = n - items.size() - far_count;

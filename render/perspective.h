@@ -14,8 +14,15 @@
 // with its depth):
 //   * single: the isotropic level for s_major blended with its neighbour (orthographic views,
 //     near-isotropic footprints, or `anisotropic = false`: the conservative major-axis rule);
+//   * axial: for radial kernels (of either sign), the level for s_minor convolved along the
+//     major axis with a 1-D Gaussian of the variance it lacks there (sd_major^2 less the level's
+//     own blur), read from the level's tables of such blurs (KernelPyramid::tables(l).axial:
+//     bilinear in the offset along and across, linear between the two tabulated variances that
+//     bracket it): one evaluation per pixel, where the probes below took 2m + 1;
 //   * probes: the isotropic level for s_minor, repeated at Gaussian-weighted points along the
-//     major axis (footprint assembly) so the blur is sd_major along and sd_minor across;
+//     major axis (footprint assembly) so the blur is sd_major along and sd_minor across: for
+//     non-radial kernels (gabor, elliptical, grids, exemplars: their blurred levels would need a
+//     table per orientation) and for radial ones blurred beyond the tables' range;
 //   * line: for strongly anisotropic footprints of non-negative radial kernels, the level for
 //     s_minor projected across (a 1-D table P(v) with its chord variance q(v)) times a Gaussian
 //     along the major axis evaluated in image space: exact in the limit, cost independent of the
@@ -31,8 +38,8 @@
 // 2 * cutoff and cutoff, and none are generated beyond, so the work per frame stays bounded
 // however close the horizon is.
 //
-// Determinism: every pixel sums its impulses in canonical order (and an impulse's probes in
-// order), each pixel is written by one task, and the per-pixel code uses only + - * / sqrt and
+// Determinism: every pixel sums its impulses in canonical order (and an impulse's probes or
+// table slices in order), each pixel is written by one task, and the per-pixel code uses only + - * / sqrt and
 // the polynomial exp of the evaluator, compiled for baseline x86-64 and AVX2 without FMA
 // contraction: the bits do not depend on threads, tiles or the CPU.
 
@@ -198,7 +205,7 @@ sim::Region perspective_region(const kernels::KernelPyramid& pyramid, const Pers
 struct PerspectiveStats {
     size_t impulses = 0;  ///< impulses given
     size_t culled = 0;    ///< faded out, behind the camera, beyond max_distance or off-image
-    size_t single = 0, probes = 0, line = 0;  ///< impulses per filter form
+    size_t single = 0, axial = 0, probes = 0, line = 0;  ///< impulses per filter form
     size_t far = 0;                           ///< impulses drawn by the far field
     /// Wall time of the parts (ms): far-field set-up, per-impulse preparation, tiled
     /// evaluation (binning included), far field (deposit, across, along).
