@@ -34,7 +34,6 @@ constexpr double kFarMean = 0.7;
 // par with it.
 constexpr double kSegmentRad = 0.05;
 constexpr int kAcrossNodes = 16;  // nodes across the narrowest profile of a sub-row
-constexpr int kBand = 16;         // sub-rows per deposit task
 constexpr int kProfiles = kFarProfiles;
 constexpr double kAlongReach = 4.75;  // the along Gaussian is summed to 4.75 sd
 
@@ -542,11 +541,9 @@ inline float FarField::row_weight(const Row& row, double sx) const {
 }
 
 bool FarField::item(double rx, double ry, float weight, double theta, FarItem& it) const {
+    double q;
+    if (!place_row(rx, ry, q)) return false;
     const double depth = m_P[6] * rx + m_P[7] * ry + m_P[8];
-    if (!(depth > 0.0)) return false;
-    const double yc = y_of(std::sqrt(rx * rx + ry * ry));
-    const double q = (yc - m_y0) * m_inv_dy;
-    if (!(q >= 0.0 && q < static_cast<double>(m_rows.size() - 1))) return false;
     const int r = static_cast<int>(q);
     const double sx = (m_P[0] * rx + m_P[1] * ry + m_P[2]) / depth;
     const Row& a = m_rows[size_t(r)];
@@ -584,8 +581,8 @@ bool FarField::item(double rx, double ry, float weight, double theta, FarItem& i
     return any;
 }
 
-void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out,
-                      const PerspLoops& loops, bool parallel) const {
+size_t FarField::render(const Impulses& in, Frame& out, const PerspLoops& loops,
+                        bool parallel) const {
     const int rows = static_cast<int>(m_rows.size());
     const int W = m_width;
     auto run = [&](int n, auto&& f) {
@@ -608,15 +605,14 @@ void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out
         return D.data() + off[size_t(r)] + size_t(bin) * stride(row) + size_t(row.taps);
     };
 
-    // Deposit by bands of sub-rows: items binned in canonical order, each band summed by one
-    // task into its rows, the row after the band into a halo added afterwards.
-    const int bands = (rows + kBand - 1) / kBand;
-    const int chunks = static_cast<int>(items.size());
-    std::vector<uint32_t> count(size_t(chunks) * bands, 0);
-    run(chunks, [&](int c) {
-        for (const FarItem& it : items[size_t(c)])
-            ++count[size_t(c) * bands + size_t(it.row / kBand)];
-    });
+    // Deposit by bands of sub-rows: impulses sorted by band in canonical order (a counting sort
+    // of their indices, 4 bytes each: a frame has millions, and memory new to the process costs
+    // a page fault per 4 KiB), each band's items made and summed by one task into its rows, the
+    // row after the band into a halo added afterwards.
+    const sim::Impulses& imp = *in.imp;
+    const size_t n = imp.size();
+    const int bands = this->bands();
+    const int chunks = static_cast<int>((n + in.chunk - 1) / in.chunk);
     std::vector<size_t> start(size_t(chunks) * bands + 1, 0);
     std::vector<size_t> band_start(static_cast<size_t>(bands) + 1, 0);
     {
@@ -625,18 +621,21 @@ void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out
             band_start[size_t(b)] = total;
             for (int c = 0; c < chunks; ++c) {
                 start[size_t(c) * bands + b] = total;
-                total += count[size_t(c) * bands + b];
+                total += in.counts[size_t(c) * bands + b];
             }
         }
         band_start[size_t(bands)] = total;
     }
-    std::vector<const FarItem*> order(band_start.back());
+    std::vector<uint32_t> order(band_start.back());
     run(chunks, [&](int c) {
         std::vector<size_t> fill(start.begin() + ptrdiff_t(c) * bands,
                                  start.begin() + ptrdiff_t(c + 1) * bands);
-        for (const FarItem& it : items[size_t(c)]) order[fill[size_t(it.row / kBand)]++] = &it;
+        const size_t i1 = std::min(n, (size_t(c) + 1) * in.chunk);
+        for (size_t i = size_t(c) * in.chunk; i < i1; ++i)
+            if (in.band[i] >= 0) order[fill[size_t(in.band[i])]++] = static_cast<uint32_t>(i);
     });
     std::vector<std::vector<float>> halo(static_cast<size_t>(bands));
+    std::vector<size_t> drawn_in(static_cast<size_t>(bands), 0);
     // Which (sub-row, bin) grids received something (each set by the band that owns the row,
     // or by the band before through its halo: both bands set it, from disjoint tasks' items).
     std::vector<uint8_t> filled(size_t(rows) * B, 0), halo_filled(size_t(bands) * B, 0);
@@ -644,8 +643,14 @@ void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out
         const int last = std::min(rows, (b + 1) * kBand);  // first row after the band
         const size_t hn = last < rows ? size_t(m_rows[size_t(last)].nodes) : 0;
         if (hn) halo[size_t(b)].assign(size_t(B) * hn, 0.0f);
+        size_t drawn = 0;
         for (size_t k = band_start[size_t(b)]; k < band_start[size_t(b) + 1]; ++k) {
-            const FarItem& it = *order[k];
+            const size_t i = order[k];
+            FarItem it;
+            if (!item(imp.x[i] - in.cam_x, imp.y[i] - in.cam_y, imp.weight[i],
+                      in.orient + static_cast<double>(imp.theta[i]), it))
+                continue;
+            ++drawn;
             for (int e = 0; e < 2; ++e) {
                 const int r = it.row + e, nd = it.node[e];
                 if (nd < 0) continue;
@@ -659,6 +664,7 @@ void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out
                 }
             }
         }
+        drawn_in[size_t(b)] = drawn;
     });
     run(bands, [&](int b) {
         const int r = (b + 1) * kBand;
@@ -760,6 +766,9 @@ void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out
             for (int i = 0; i < W; ++i) dst[i] += src[i];
         }
     });
+    size_t drawn = 0;
+    for (size_t d : drawn_in) drawn += d;
+    return drawn;
 }
 
 }  // namespace impulse::render::detail

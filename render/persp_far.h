@@ -12,6 +12,7 @@
 // impulse, a bounded amount of work per pixel.
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -44,14 +45,34 @@ public:
         return m_active && rx * rx + ry * ry >= m_rho_far2 &&
                m_P[6] * rx + m_P[7] * ry + m_P[8] >= m_depth_min;
     }
+    /// Bands of sub-rows, the unit of the deposit (render).
+    int bands() const {
+        return m_active ? (static_cast<int>(m_rows.size()) + kBand - 1) / kBand : 0;
+    }
+    /// The band whose deposit takes a far impulse at (rx, ry) from the foot, -1 when it adds
+    /// nothing (behind the camera, or beyond the sub-rows). item() may still drop it.
+    int band(double rx, double ry) const {
+        double q;
+        return place_row(rx, ry, q) ? static_cast<int>(q) / kBand : -1;
+    }
     /// The item of a far impulse at (rx, ry) from the foot, turned by theta (radians, the
     /// kernel's own orientation included; unused for radial kernels); false when it adds
     /// nothing (behind the camera, faded out, too far off the image).
     bool item(double rx, double ry, float weight, double theta, FarItem& it) const;
-    /// Adds the far field of the items to `out`: lists joined in order hold them in
-    /// canonical order.
-    void render(const std::vector<std::vector<FarItem>>& items, Frame& out, const PerspLoops& loops,
-                bool parallel) const;
+    /// The far impulses of a frame, sorted by band. Impulse i of `imp` lies at (x[i] - cam_x,
+    /// y[i] - cam_y) from the foot, turned by orient + theta[i]; band[i] = band() of it, or -1
+    /// when it is not far; counts[c * bands() + b]: how many impulses of chunk c (impulses
+    /// [c * chunk, (c + 1) * chunk)) are in band b.
+    struct Impulses {
+        const sim::Impulses* imp = nullptr;
+        double cam_x = 0, cam_y = 0, orient = 0;
+        const int32_t* band = nullptr;
+        const uint32_t* counts = nullptr;
+        size_t chunk = 1;
+    };
+    /// Adds the far field of the impulses to `out`, summed in their canonical order whatever the
+    /// threads; returns how many impulses it drew (item() true).
+    size_t render(const Impulses& in, Frame& out, const PerspLoops& loops, bool parallel) const;
 
 private:
     /// A sub-row: its circle, the across coordinate, node grid and, per segment of columns,
@@ -91,6 +112,18 @@ private:
     std::vector<float> m_yp, m_ik, m_is, m_rs;
 
     double y_of(double rho) const { return (m_ya * rho + m_yb) / (m_yc * rho + m_yd); }
+    /// Sub-rows per deposit task (a band); the halo between bands fixes the order of the sums,
+    /// so it is part of the output's bits.
+    static constexpr int kBand = 16;
+    /// The sub-row coordinate q (row floor(q), weight q - floor(q) on the next) of an impulse at
+    /// (rx, ry) from the foot; false behind the camera or beyond the sub-rows.
+    bool place_row(double rx, double ry, double& q) const {
+        const double depth = m_P[6] * rx + m_P[7] * ry + m_P[8];
+        if (!(depth > 0.0)) return false;
+        const double yc = y_of(std::sqrt(rx * rx + ry * ry));
+        q = (yc - m_y0) * m_inv_dy;
+        return q >= 0.0 && q < static_cast<double>(m_rows.size() - 1);
+    }
     // Inlined into item (called for every far impulse; the calls cost more than the bodies).
     [[gnu::always_inline]] inline float row_weight(const Row& row, double sx) const;
     /// xi of image column x on a sub-row.
