@@ -55,10 +55,12 @@ public:
         double q;
         return place_row(rx, ry, q) ? static_cast<int>(q) / kBand : -1;
     }
-    /// The item of a far impulse at (rx, ry) from the foot, turned by theta (radians, the
-    /// kernel's own orientation included; unused for radial kernels); false when it adds
-    /// nothing (behind the camera, faded out, too far off the image).
-    bool item(double rx, double ry, float weight, double theta, FarItem& it) const;
+    /// The item of a far impulse at (rx, ry) from the foot (band() >= 0), at sub-row coordinate
+    /// q and image column sx (place()), turned by theta (radians, the kernel's own orientation
+    /// included; unused for radial kernels); false when it adds nothing (faded out, too far
+    /// off the image).
+    bool item(double rx, double ry, double q, double sx, float weight, double theta,
+              FarItem& it) const;
     /// The far impulses of a frame, sorted by band. Impulse i of `imp` lies at (x[i] - cam_x,
     /// y[i] - cam_y) from the foot, turned by orient + theta[i]; band[i] = band() of it, or -1
     /// when it is not far; counts[c * bands() + b]: how many impulses of chunk c (impulses
@@ -118,11 +120,19 @@ private:
     /// The sub-row coordinate q (row floor(q), weight q - floor(q) on the next) of an impulse at
     /// (rx, ry) from the foot; false behind the camera or beyond the sub-rows.
     bool place_row(double rx, double ry, double& q) const {
-        const double depth = m_P[6] * rx + m_P[7] * ry + m_P[8];
-        if (!(depth > 0.0)) return false;
-        const double yc = y_of(std::sqrt(rx * rx + ry * ry));
-        q = (yc - m_y0) * m_inv_dy;
-        return q >= 0.0 && q < static_cast<double>(m_rows.size() - 1);
+        double depth;
+        place(rx, ry, depth, q);
+        return depth > 0.0 && q >= 0.0 && q < static_cast<double>(m_rows.size() - 1);
+    }
+    /// The depth and sub-row coordinate q of an impulse at (rx, ry) from the foot (the
+    /// arithmetic of place_row, branch-free so that loops over impulses vectorise).
+    void place(double rx, double ry, double& depth, double& q) const {
+        depth = m_P[6] * rx + m_P[7] * ry + m_P[8];
+        q = (y_of(std::sqrt(rx * rx + ry * ry)) - m_y0) * m_inv_dy;
+    }
+    /// The image column of an impulse at (rx, ry) from the foot and depth `depth`.
+    double column(double rx, double ry, double depth) const {
+        return (m_P[0] * rx + m_P[1] * ry + m_P[2]) / depth;
     }
     // Inlined into item (called for every far impulse; the calls cost more than the bodies).
     [[gnu::always_inline]] inline float row_weight(const Row& row, double sx) const;
