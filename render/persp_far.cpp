@@ -578,8 +578,8 @@ bool FarField::item(double rx, double ry, double q, double sx, float weight, dou
     return any;
 }
 
-size_t FarField::render(const Impulses& in, Frame& out, const PerspLoops& loops,
-                        bool parallel) const {
+size_t FarField::render(const Impulses& in, Frame& out, const PerspLoops& loops, bool parallel,
+                        FarScratch& scratch) const {
     const int rows = static_cast<int>(m_rows.size());
     const int W = m_width;
     auto run = [&](int n, auto&& f) {
@@ -596,7 +596,8 @@ size_t FarField::render(const Impulses& in, Frame& out, const PerspLoops& loops,
         const Row& row = m_rows[size_t(r)];
         off[size_t(r) + 1] = off[size_t(r)] + (row.nodes ? size_t(B) * stride(row) : 0);
     }
-    std::vector<float> D(off.back(), 0.0f);
+    std::vector<float>& D = scratch.grids;
+    D.assign(off.back(), 0.0f);
     auto grid = [&](int r, int bin) {
         const Row& row = m_rows[size_t(r)];
         return D.data() + off[size_t(r)] + size_t(bin) * stride(row) + size_t(row.taps);
@@ -623,7 +624,8 @@ size_t FarField::render(const Impulses& in, Frame& out, const PerspLoops& loops,
         }
         band_start[size_t(bands)] = total;
     }
-    std::vector<uint32_t> order(band_start.back());
+    std::vector<uint32_t>& order = scratch.order;
+    order.resize(band_start.back());
     run(chunks, [&](int c) {
         std::vector<size_t> fill(start.begin() + ptrdiff_t(c) * bands,
                                  start.begin() + ptrdiff_t(c + 1) * bands);

@@ -30,6 +30,12 @@ struct FarItem {
     float wb[2] = {1, 0};
 };
 
+/// Memory of FarField::render kept from frame to frame (PerspectiveWorkspace).
+struct FarScratch {
+    std::vector<uint32_t> order;  ///< far impulses sorted by band
+    std::vector<float> grids;     ///< the sub-rows' node grids
+};
+
 /// Profiles of the far field: the derivatives 0 .. 4 of the along Gaussian.
 constexpr int kFarProfiles = 5;
 
@@ -74,7 +80,8 @@ public:
     };
     /// Adds the far field of the impulses to `out`, summed in their canonical order whatever the
     /// threads; returns how many impulses it drew (item() true).
-    size_t render(const Impulses& in, Frame& out, const PerspLoops& loops, bool parallel) const;
+    size_t render(const Impulses& in, Frame& out, const PerspLoops& loops, bool parallel,
+                  FarScratch& scratch) const;
 
 private:
     /// A sub-row: its circle, the across coordinate, node grid and, per segment of columns,
