@@ -103,8 +103,12 @@ double signed_table_at(const std::vector<float>& t, double v, double R) {
 
 }  // namespace
 
-FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& view,
-                   const PixelCoords& coords, const AntiAlias& aa) {
+void FarField::setup(const kernels::KernelPyramid& pyr, const PerspectiveView& view,
+                     const PixelCoords& coords, const AntiAlias& aa) {
+    // Everything below is set afresh but the arrays' memory (m_v_sign, which the frame may not
+    // set, included).
+    m_active = false;
+    m_v_sign = 1.0;
     if (!(aa.far_field && aa.enabled && aa.anisotropic && aa.fade)) return;
     if (!pyr.radial() && pyr.direction_bins() == 0) return;
     m_bins = pyr.radial() ? 1 : pyr.direction_bins();
@@ -311,6 +315,9 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
     tbb::parallel_for(0, rows, [&](int r) {
         Row& row = m_rows[size_t(r)];
         row.y = m_y0 + r * m_dy;
+        // (a row of an earlier frame: its arrays are assigned below, its scalars reset here)
+        row.margin = 0.0, row.xi0 = 0.0, row.dxi = row.inv_dxi = 1.0;
+        row.nodes = row.taps = 0, row.used = {};
         // rho of the circle (inverse of the Moebius map), held inside the far zone
         double rho = (m_yb - m_yd * row.y) / (m_yc * row.y - m_ya);
         if (!(rho >= rho_far)) rho = rho_far;
@@ -478,7 +485,8 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
         if (use[size_t(j)]) m_j0 = std::min(m_j0, j), m_j1 = j + 1;
     if (m_j0 >= m_j1) return;
     // rho at the pixel edges (row boundaries e = m_j0 .. m_j1) of those rows.
-    std::vector<double> rho_edge(size_t(W) * (m_j1 - m_j0 + 1), -1.0);
+    std::vector<double>& rho_edge = m_rho_edge;
+    rho_edge.assign(size_t(W) * (m_j1 - m_j0 + 1), -1.0);
     tbb::parallel_for(m_j0, m_j1 + 1, [&](int e) {
         std::vector<float> ex(static_cast<size_t>(W)), ey(static_cast<size_t>(W));
         std::vector<uint8_t> hit(static_cast<size_t>(W));

@@ -44,7 +44,15 @@ public:
     /// Sets the far zone of a frame up: inactive when the form does not apply (filtering off,
     /// isotropic rule, no fade, kernels with negative lobes, or no footprint long enough).
     FarField(const kernels::KernelPyramid& pyramid, const PerspectiveView& view,
-             const PixelCoords& coords, const AntiAlias& aa);
+             const PixelCoords& coords, const AntiAlias& aa) {
+        setup(pyramid, view, coords, aa);
+    }
+    /// Inactive until set up.
+    FarField() = default;
+    /// Sets the far zone of another frame up, reusing this one's memory (a frame's sub-rows and
+    /// per-pixel arrays are megabytes, new pages every frame otherwise).
+    void setup(const kernels::KernelPyramid& pyramid, const PerspectiveView& view,
+               const PixelCoords& coords, const AntiAlias& aa);
     bool active() const { return m_active; }
     /// Whether the impulse at (rx, ry) from the camera's foot belongs to the far field.
     bool contains(double rx, double ry) const {
@@ -111,7 +119,7 @@ private:
     double m_inv_segment_px = 1;
     int m_bins = 1;                     ///< direction bins (1: radial kernel)
     double m_period = 1;                ///< the bins' period, radians
-    double m_v_sign = 1, m_u_sign = 1;  ///< orientation of the tables (see the constructor)
+    double m_v_sign = 1, m_u_sign = 1;  ///< orientation of the tables (see setup)
     double m_y0 = 0, m_dy = 1;          ///< sub-row r at y' = y0 + r dy
     double m_inv_dy = 1;                ///< 1 / dy (item: a multiply, not a divide, per impulse)
     std::vector<Row> m_rows;
@@ -119,6 +127,7 @@ private:
     /// 1 / sqrt(s).
     int m_j0 = 0, m_j1 = 0;
     std::vector<float> m_yp, m_ik, m_is, m_rs;
+    std::vector<double> m_rho_edge;  ///< set-up only: rho at the pixel edges of those rows
 
     double y_of(double rho) const { return (m_ya * rho + m_yb) / (m_yc * rho + m_yd); }
     /// Sub-rows per deposit task (a band); the halo between bands fixes the order of the sums,

@@ -607,6 +607,7 @@ struct PerspScratch {
     std::vector<PerspProbe> probes;
     std::vector<int32_t> far_band;
     std::vector<uint32_t> far_counts;
+    FarField far_field;
     FarScratch far;
 };
 }  // namespace detail
@@ -648,7 +649,8 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
     } release{scratch ? workspace : nullptr};
     if (!scratch) own = std::make_unique<detail::PerspScratch>(), scratch = own.get();
     const auto t0 = Clock::now();
-    const detail::FarField far(pyr, view, coords, aa);
+    detail::FarField& far = scratch->far_field;
+    far.setup(pyr, view, coords, aa);
     const auto t1 = Clock::now();
 
     // Prepare the impulses in chunks (each writes its own items; probes go to per-chunk lists
