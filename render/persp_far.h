@@ -75,10 +75,10 @@ public:
     /// off the image).
     bool item(double rx, double ry, double q, double sx, float weight, double theta,
               FarItem& it) const;
-    /// The far impulses of a frame, sorted by band. Impulse i of `imp` lies at (x[i] - cam_x,
-    /// y[i] - cam_y) from the foot, turned by orient + theta[i]; band[i] = band() of it, or -1
-    /// when it is not far; counts[c * bands() + b]: how many impulses of chunk c (impulses
-    /// [c * chunk, (c + 1) * chunk)) are in band b.
+    /// The impulses of a frame as the far field reads them. Impulse i of `imp` lies at
+    /// (x[i] - cam_x, y[i] - cam_y) from the foot, turned by orient + theta[i]; band[i]: band()
+    /// of it, or -1 when it is not far; counts[c * bands() + b]: how many impulses of chunk c
+    /// (impulses [c * chunk, (c + 1) * chunk)) are in band b.
     struct Impulses {
         const sim::Impulses* imp = nullptr;
         double cam_x = 0, cam_y = 0, orient = 0;
