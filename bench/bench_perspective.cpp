@@ -138,9 +138,11 @@ void time_ortho(const Scene& sc, sim::LayerSimulator& s, FrameTimes& t) {
     t.impulses = imp.size();
 }
 
+/// Times one perspective frame; `ws` is reused from frame to frame, as a renderer keeps one per
+/// layer.
 void time_perspective(const kernels::KernelPyramid& pyr, sim::LayerSimulator& s,
                       const render::PerspectiveCamera& cam, const render::AntiAlias& aa,
-                      FrameTimes& t) {
+                      render::PerspectiveWorkspace& ws, FrameTimes& t) {
     render::Frame f;
     f.resize(kWidth, kHeight);
     sim::Impulses imp;
@@ -154,7 +156,7 @@ void time_perspective(const kernels::KernelPyramid& pyr, sim::LayerSimulator& s,
     s.impulses_at(0, box, imp);
     const double g = ms_since(t0);
     t0 = Clock::now();
-    render::accumulate_perspective(pyr, imp, view, pc, f, aa, {}, &t.stats);
+    render::accumulate_perspective(pyr, imp, view, pc, f, aa, {}, &t.stats, &ws);
     const double e = ms_since(t0);
     t.cpu.v.push_back(1e3 * (own_cpu_s() - c0));
     t.setup.v.push_back(su), t.generate.v.push_back(g), t.evaluate.v.push_back(e);
@@ -203,15 +205,16 @@ int run(const Options& o) {
 
     arena.execute([&] {
         sim::LayerSimulator s(sc.process, nullptr, {}, sc.kernel.radius());
+        render::PerspectiveWorkspace ws;
         // warm-up (untimed)
         {
             FrameTimes w;
             time_ortho(sc, s, w);
-            time_perspective(pyr, s, cam, rows.front().aa, w);
+            time_perspective(pyr, s, cam, rows.front().aa, ws, w);
         }
         for (int rep = 0; rep < o.reps; ++rep) {
             time_ortho(sc, s, ortho);
-            for (auto& r : rows) time_perspective(pyr, s, cam, r.aa, r.t);
+            for (auto& r : rows) time_perspective(pyr, s, cam, r.aa, ws, r.t);
         }
     });
 

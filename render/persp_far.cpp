@@ -34,7 +34,6 @@ constexpr double kFarMean = 0.7;
 // par with it.
 constexpr double kSegmentRad = 0.05;
 constexpr int kAcrossNodes = 16;  // nodes across the narrowest profile of a sub-row
-constexpr int kBand = 16;         // sub-rows per deposit task
 constexpr int kProfiles = kFarProfiles;
 constexpr double kAlongReach = 4.75;  // the along Gaussian is summed to 4.75 sd
 
@@ -104,8 +103,12 @@ double signed_table_at(const std::vector<float>& t, double v, double R) {
 
 }  // namespace
 
-FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& view,
-                   const PixelCoords& coords, const AntiAlias& aa) {
+void FarField::setup(const kernels::KernelPyramid& pyr, const PerspectiveView& view,
+                     const PixelCoords& coords, const AntiAlias& aa) {
+    // Everything below is set afresh but the arrays' memory (m_v_sign, which the frame may not
+    // set, included).
+    m_active = false;
+    m_v_sign = 1.0;
     if (!(aa.far_field && aa.enabled && aa.anisotropic && aa.fade)) return;
     if (!pyr.radial() && pyr.direction_bins() == 0) return;
     m_bins = pyr.radial() ? 1 : pyr.direction_bins();
@@ -312,6 +315,9 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
     tbb::parallel_for(0, rows, [&](int r) {
         Row& row = m_rows[size_t(r)];
         row.y = m_y0 + r * m_dy;
+        // (a row of an earlier frame: its arrays are assigned below, its scalars reset here)
+        row.margin = 0.0, row.xi0 = 0.0, row.dxi = row.inv_dxi = 1.0;
+        row.nodes = row.taps = 0, row.used = {};
         // rho of the circle (inverse of the Moebius map), held inside the far zone
         double rho = (m_yb - m_yd * row.y) / (m_yc * row.y - m_ya);
         if (!(rho >= rho_far)) rho = rho_far;
@@ -479,7 +485,8 @@ FarField::FarField(const kernels::KernelPyramid& pyr, const PerspectiveView& vie
         if (use[size_t(j)]) m_j0 = std::min(m_j0, j), m_j1 = j + 1;
     if (m_j0 >= m_j1) return;
     // rho at the pixel edges (row boundaries e = m_j0 .. m_j1) of those rows.
-    std::vector<double> rho_edge(size_t(W) * (m_j1 - m_j0 + 1), -1.0);
+    std::vector<double>& rho_edge = m_rho_edge;
+    rho_edge.assign(size_t(W) * (m_j1 - m_j0 + 1), -1.0);
     tbb::parallel_for(m_j0, m_j1 + 1, [&](int e) {
         std::vector<float> ex(static_cast<size_t>(W)), ey(static_cast<size_t>(W));
         std::vector<uint8_t> hit(static_cast<size_t>(W));
@@ -541,14 +548,9 @@ inline float FarField::row_weight(const Row& row, double sx) const {
     return static_cast<float>((1.0 - t) * row.weight[size_t(g)] + t * row.weight[size_t(g) + 1]);
 }
 
-bool FarField::item(double rx, double ry, float weight, double theta, FarItem& it) const {
-    const double depth = m_P[6] * rx + m_P[7] * ry + m_P[8];
-    if (!(depth > 0.0)) return false;
-    const double yc = y_of(std::sqrt(rx * rx + ry * ry));
-    const double q = (yc - m_y0) * m_inv_dy;
-    if (!(q >= 0.0 && q < static_cast<double>(m_rows.size() - 1))) return false;
+bool FarField::item(double rx, double ry, double q, double sx, float weight, double theta,
+                    FarItem& it) const {
     const int r = static_cast<int>(q);
-    const double sx = (m_P[0] * rx + m_P[1] * ry + m_P[2]) / depth;
     const Row& a = m_rows[size_t(r)];
     const Row& b = m_rows[size_t(r) + 1];
     const double margin = std::max(a.nodes ? a.margin : 0.0, b.nodes ? b.margin : 0.0);
@@ -584,8 +586,8 @@ bool FarField::item(double rx, double ry, float weight, double theta, FarItem& i
     return any;
 }
 
-void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out,
-                      const PerspLoops& loops, bool parallel) const {
+size_t FarField::render(const Impulses& in, Frame& out, const PerspLoops& loops, bool parallel,
+                        FarScratch& scratch) const {
     const int rows = static_cast<int>(m_rows.size());
     const int W = m_width;
     auto run = [&](int n, auto&& f) {
@@ -602,21 +604,21 @@ void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out
         const Row& row = m_rows[size_t(r)];
         off[size_t(r) + 1] = off[size_t(r)] + (row.nodes ? size_t(B) * stride(row) : 0);
     }
-    std::vector<float> D(off.back(), 0.0f);
+    std::vector<float>& D = scratch.grids;
+    D.assign(off.back(), 0.0f);
     auto grid = [&](int r, int bin) {
         const Row& row = m_rows[size_t(r)];
         return D.data() + off[size_t(r)] + size_t(bin) * stride(row) + size_t(row.taps);
     };
 
-    // Deposit by bands of sub-rows: items binned in canonical order, each band summed by one
-    // task into its rows, the row after the band into a halo added afterwards.
-    const int bands = (rows + kBand - 1) / kBand;
-    const int chunks = static_cast<int>(items.size());
-    std::vector<uint32_t> count(size_t(chunks) * bands, 0);
-    run(chunks, [&](int c) {
-        for (const FarItem& it : items[size_t(c)])
-            ++count[size_t(c) * bands + size_t(it.row / kBand)];
-    });
+    // Deposit by bands of sub-rows: impulses sorted by band in canonical order (a counting sort
+    // of their indices, 4 bytes each: a frame has millions, and memory new to the process costs
+    // a page fault per 4 KiB), each band's items made and summed by one task into its rows, the
+    // row after the band into a halo added afterwards.
+    const sim::Impulses& imp = *in.imp;
+    const size_t n = imp.size();
+    const int bands = this->bands();
+    const int chunks = static_cast<int>((n + in.chunk - 1) / in.chunk);
     std::vector<size_t> start(size_t(chunks) * bands + 1, 0);
     std::vector<size_t> band_start(static_cast<size_t>(bands) + 1, 0);
     {
@@ -625,18 +627,22 @@ void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out
             band_start[size_t(b)] = total;
             for (int c = 0; c < chunks; ++c) {
                 start[size_t(c) * bands + b] = total;
-                total += count[size_t(c) * bands + b];
+                total += in.counts[size_t(c) * bands + b];
             }
         }
         band_start[size_t(bands)] = total;
     }
-    std::vector<const FarItem*> order(band_start.back());
+    std::vector<uint32_t>& order = scratch.order;
+    order.resize(band_start.back());
     run(chunks, [&](int c) {
         std::vector<size_t> fill(start.begin() + ptrdiff_t(c) * bands,
                                  start.begin() + ptrdiff_t(c + 1) * bands);
-        for (const FarItem& it : items[size_t(c)]) order[fill[size_t(it.row / kBand)]++] = &it;
+        const size_t i1 = std::min(n, (size_t(c) + 1) * in.chunk);
+        for (size_t i = size_t(c) * in.chunk; i < i1; ++i)
+            if (in.band[i] >= 0) order[fill[size_t(in.band[i])]++] = static_cast<uint32_t>(i);
     });
     std::vector<std::vector<float>> halo(static_cast<size_t>(bands));
+    std::vector<size_t> drawn_in(static_cast<size_t>(bands), 0);
     // Which (sub-row, bin) grids received something (each set by the band that owns the row,
     // or by the band before through its halo: both bands set it, from disjoint tasks' items).
     std::vector<uint8_t> filled(size_t(rows) * B, 0), halo_filled(size_t(bands) * B, 0);
@@ -644,21 +650,47 @@ void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out
         const int last = std::min(rows, (b + 1) * kBand);  // first row after the band
         const size_t hn = last < rows ? size_t(m_rows[size_t(last)].nodes) : 0;
         if (hn) halo[size_t(b)].assign(size_t(B) * hn, 0.0f);
-        for (size_t k = band_start[size_t(b)]; k < band_start[size_t(b) + 1]; ++k) {
-            const FarItem& it = *order[k];
-            for (int e = 0; e < 2; ++e) {
-                const int r = it.row + e, nd = it.node[e];
-                if (nd < 0) continue;
-                for (int q = 0; q < (B > 1 ? 2 : 1); ++q) {
-                    const int bin = (it.bin + q) % B;
-                    float* d = r == last ? halo[size_t(b)].data() + size_t(bin) * hn : grid(r, bin);
-                    d[nd] += it.wb[q] * it.w[e][0];
-                    d[nd + 1] += it.wb[q] * it.w[e][1];
-                    (r == last ? halo_filled[size_t(b) * B + bin] : filled[size_t(r) * B + bin]) =
-                        1;
+        size_t drawn = 0;
+        // Items are made kItemBlock at a time: the place and image column of a block first (a
+        // square root and two divides per impulse, whose latency dominated, in a loop the
+        // compiler vectorises; the same operations in the same order, so the same bits), then
+        // the rest per impulse.
+        constexpr int kItemBlock = 8;
+        std::array<double, kItemBlock> rx{}, ry{}, depth{}, qr{}, sx{};
+        const size_t k0 = band_start[size_t(b)], k1 = band_start[size_t(b) + 1];
+        for (size_t kb = k0; kb < k1; kb += kItemBlock) {
+            const int m = static_cast<int>(std::min<size_t>(kItemBlock, k1 - kb));
+            for (int j = 0; j < m; ++j) {
+                const size_t i = order[kb + size_t(j)];
+                rx[size_t(j)] = imp.x[i] - in.cam_x, ry[size_t(j)] = imp.y[i] - in.cam_y;
+            }
+            for (int j = 0; j < kItemBlock; ++j) {
+                place(rx[size_t(j)], ry[size_t(j)], depth[size_t(j)], qr[size_t(j)]);
+                sx[size_t(j)] = column(rx[size_t(j)], ry[size_t(j)], depth[size_t(j)]);
+            }
+            for (int j = 0; j < m; ++j) {
+                const size_t i = order[kb + size_t(j)];
+                FarItem it;
+                if (!item(rx[size_t(j)], ry[size_t(j)], qr[size_t(j)], sx[size_t(j)], imp.weight[i],
+                          in.orient + static_cast<double>(imp.theta[i]), it))
+                    continue;
+                ++drawn;
+                for (int e = 0; e < 2; ++e) {
+                    const int r = it.row + e, nd = it.node[e];
+                    if (nd < 0) continue;
+                    for (int q = 0; q < (B > 1 ? 2 : 1); ++q) {
+                        const int bin = (it.bin + q) % B;
+                        float* d =
+                            r == last ? halo[size_t(b)].data() + size_t(bin) * hn : grid(r, bin);
+                        d[nd] += it.wb[q] * it.w[e][0];
+                        d[nd + 1] += it.wb[q] * it.w[e][1];
+                        (r == last ? halo_filled[size_t(b) * B + bin]
+                                   : filled[size_t(r) * B + bin]) = 1;
+                    }
                 }
             }
         }
+        drawn_in[size_t(b)] = drawn;
     });
     run(bands, [&](int b) {
         const int r = (b + 1) * kBand;
@@ -760,6 +792,9 @@ void FarField::render(const std::vector<std::vector<FarItem>>& items, Frame& out
             for (int i = 0; i < W; ++i) dst[i] += src[i];
         }
     });
+    size_t drawn = 0;
+    for (size_t d : drawn_in) drawn += d;
+    return drawn;
 }
 
 }  // namespace impulse::render::detail

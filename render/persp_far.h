@@ -12,6 +12,7 @@
 // impulse, a bounded amount of work per pixel.
 
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -29,6 +30,12 @@ struct FarItem {
     float wb[2] = {1, 0};
 };
 
+/// Memory of FarField::render kept from frame to frame (PerspectiveWorkspace).
+struct FarScratch {
+    std::vector<uint32_t> order;  ///< far impulses sorted by band
+    std::vector<float> grids;     ///< the sub-rows' node grids
+};
+
 /// Profiles of the far field: the derivatives 0 .. 4 of the along Gaussian.
 constexpr int kFarProfiles = 5;
 
@@ -37,21 +44,52 @@ public:
     /// Sets the far zone of a frame up: inactive when the form does not apply (filtering off,
     /// isotropic rule, no fade, kernels with negative lobes, or no footprint long enough).
     FarField(const kernels::KernelPyramid& pyramid, const PerspectiveView& view,
-             const PixelCoords& coords, const AntiAlias& aa);
+             const PixelCoords& coords, const AntiAlias& aa) {
+        setup(pyramid, view, coords, aa);
+    }
+    /// Inactive until set up.
+    FarField() = default;
+    /// Sets the far zone of another frame up, reusing this one's memory (a frame's sub-rows and
+    /// per-pixel arrays are megabytes, new pages every frame otherwise).
+    void setup(const kernels::KernelPyramid& pyramid, const PerspectiveView& view,
+               const PixelCoords& coords, const AntiAlias& aa);
     bool active() const { return m_active; }
     /// Whether the impulse at (rx, ry) from the camera's foot belongs to the far field.
     bool contains(double rx, double ry) const {
         return m_active && rx * rx + ry * ry >= m_rho_far2 &&
                m_P[6] * rx + m_P[7] * ry + m_P[8] >= m_depth_min;
     }
-    /// The item of a far impulse at (rx, ry) from the foot, turned by theta (radians, the
-    /// kernel's own orientation included; unused for radial kernels); false when it adds
-    /// nothing (behind the camera, faded out, too far off the image).
-    bool item(double rx, double ry, float weight, double theta, FarItem& it) const;
-    /// Adds the far field of the items to `out`: lists joined in order hold them in
-    /// canonical order.
-    void render(const std::vector<std::vector<FarItem>>& items, Frame& out, const PerspLoops& loops,
-                bool parallel) const;
+    /// Bands of sub-rows, the unit of the deposit (render).
+    int bands() const {
+        return m_active ? (static_cast<int>(m_rows.size()) + kBand - 1) / kBand : 0;
+    }
+    /// The band whose deposit takes a far impulse at (rx, ry) from the foot, -1 when it adds
+    /// nothing (behind the camera, or beyond the sub-rows). item() may still drop it.
+    int band(double rx, double ry) const {
+        double q;
+        return place_row(rx, ry, q) ? static_cast<int>(q) / kBand : -1;
+    }
+    /// The item of a far impulse at (rx, ry) from the foot (band() >= 0), at sub-row coordinate
+    /// q and image column sx (place()), turned by theta (radians, the kernel's own orientation
+    /// included; unused for radial kernels); false when it adds nothing (faded out, too far
+    /// off the image).
+    bool item(double rx, double ry, double q, double sx, float weight, double theta,
+              FarItem& it) const;
+    /// The impulses of a frame as the far field reads them. Impulse i of `imp` lies at
+    /// (x[i] - cam_x, y[i] - cam_y) from the foot, turned by orient + theta[i]; band[i]: band()
+    /// of it, or -1 when it is not far; counts[c * bands() + b]: how many impulses of chunk c
+    /// (impulses [c * chunk, (c + 1) * chunk)) are in band b.
+    struct Impulses {
+        const sim::Impulses* imp = nullptr;
+        double cam_x = 0, cam_y = 0, orient = 0;
+        const int32_t* band = nullptr;
+        const uint32_t* counts = nullptr;
+        size_t chunk = 1;
+    };
+    /// Adds the far field of the impulses to `out`, summed in their canonical order whatever the
+    /// threads; returns how many impulses it drew (item() true).
+    size_t render(const Impulses& in, Frame& out, const PerspLoops& loops, bool parallel,
+                  FarScratch& scratch) const;
 
 private:
     /// A sub-row: its circle, the across coordinate, node grid and, per segment of columns,
@@ -81,7 +119,7 @@ private:
     double m_inv_segment_px = 1;
     int m_bins = 1;                     ///< direction bins (1: radial kernel)
     double m_period = 1;                ///< the bins' period, radians
-    double m_v_sign = 1, m_u_sign = 1;  ///< orientation of the tables (see the constructor)
+    double m_v_sign = 1, m_u_sign = 1;  ///< orientation of the tables (see setup)
     double m_y0 = 0, m_dy = 1;          ///< sub-row r at y' = y0 + r dy
     double m_inv_dy = 1;                ///< 1 / dy (item: a multiply, not a divide, per impulse)
     std::vector<Row> m_rows;
@@ -89,8 +127,29 @@ private:
     /// 1 / sqrt(s).
     int m_j0 = 0, m_j1 = 0;
     std::vector<float> m_yp, m_ik, m_is, m_rs;
+    std::vector<double> m_rho_edge;  ///< set-up only: rho at the pixel edges of those rows
 
     double y_of(double rho) const { return (m_ya * rho + m_yb) / (m_yc * rho + m_yd); }
+    /// Sub-rows per deposit task (a band); the halo between bands fixes the order of the sums,
+    /// so it is part of the output's bits.
+    static constexpr int kBand = 16;
+    /// The sub-row coordinate q (row floor(q), weight q - floor(q) on the next) of an impulse at
+    /// (rx, ry) from the foot; false behind the camera or beyond the sub-rows.
+    bool place_row(double rx, double ry, double& q) const {
+        double depth;
+        place(rx, ry, depth, q);
+        return depth > 0.0 && q >= 0.0 && q < static_cast<double>(m_rows.size() - 1);
+    }
+    /// The depth and sub-row coordinate q of an impulse at (rx, ry) from the foot (the
+    /// arithmetic of place_row, branch-free so that loops over impulses vectorise).
+    void place(double rx, double ry, double& depth, double& q) const {
+        depth = m_P[6] * rx + m_P[7] * ry + m_P[8];
+        q = (y_of(std::sqrt(rx * rx + ry * ry)) - m_y0) * m_inv_dy;
+    }
+    /// The image column of an impulse at (rx, ry) from the foot and depth `depth`.
+    double column(double rx, double ry, double depth) const {
+        return (m_P[0] * rx + m_P[1] * ry + m_P[2]) / depth;
+    }
     // Inlined into item (called for every far impulse; the calls cost more than the bodies).
     [[gnu::always_inline]] inline float row_weight(const Row& row, double sx) const;
     /// xi of image column x on a sub-row.

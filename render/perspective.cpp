@@ -628,10 +628,34 @@ sim::Region perspective_region(const kernels::KernelPyramid& pyr, const Perspect
     return region;
 }
 
+namespace detail {
+/// The per-frame arrays of accumulate_perspective that a PerspectiveWorkspace keeps.
+struct PerspScratch {
+    std::vector<std::vector<PerspItem>> chunk_items;
+    std::vector<std::vector<PerspProbe>> chunk_probes;
+    std::vector<PerspItem> items;
+    std::vector<PerspProbe> probes;
+    std::vector<int32_t> far_band;
+    std::vector<uint32_t> far_counts;
+    FarField far_field;
+    FarScratch far;
+};
+}  // namespace detail
+
+PerspectiveWorkspace::PerspectiveWorkspace()
+    : m_scratch(std::make_unique<detail::PerspScratch>()) {}
+PerspectiveWorkspace::~PerspectiveWorkspace() = default;
+
+detail::PerspScratch* PerspectiveWorkspace::acquire() {
+    return m_busy.exchange(true, std::memory_order_acquire) ? nullptr : m_scratch.get();
+}
+
+void PerspectiveWorkspace::release() { m_busy.store(false, std::memory_order_release); }
+
 void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impulses& imp,
                             const PerspectiveView& view, const PixelCoords& coords, Frame& out,
                             const AntiAlias& aa, const EvalOptions& options,
-                            PerspectiveStats* stats) {
+                            PerspectiveStats* stats, PerspectiveWorkspace* workspace) {
     const auto& cam = view.camera();
     const int W = cam.width, H = cam.height;
     if (out.width != W || out.height != H) out.resize(W, H);
@@ -644,8 +668,19 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
     auto ms = [](Clock::time_point a, Clock::time_point b) {
         return std::chrono::duration<double, std::milli>(b - a).count();
     };
+    // Scratch memory: the workspace's when one is lent and free, else this call's own.
+    std::unique_ptr<detail::PerspScratch> own;
+    detail::PerspScratch* scratch = workspace ? workspace->acquire() : nullptr;
+    struct Release {
+        PerspectiveWorkspace* w;
+        ~Release() {
+            if (w) w->release();
+        }
+    } release{scratch ? workspace : nullptr};
+    if (!scratch) own = std::make_unique<detail::PerspScratch>(), scratch = own.get();
     const auto t0 = Clock::now();
-    const detail::FarField far(pyr, view, coords, aa);
+    detail::FarField& far = scratch->far_field;
+    far.setup(pyr, view, coords, aa);
     const auto t1 = Clock::now();
 
     // Prepare the impulses in chunks (each writes its own items; probes go to per-chunk lists
@@ -653,16 +688,23 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
     const size_t n = imp.size();
     constexpr size_t kChunk = 1024;
     const size_t chunks = (n + kChunk - 1) / kChunk;
-    std::vector<std::vector<detail::PerspItem>> chunk_items(chunks);
-    std::vector<std::vector<detail::FarItem>> chunk_far(chunks);
-    std::vector<std::vector<detail::PerspProbe>> chunk_probes(chunks);
+    auto& chunk_items = scratch->chunk_items;
+    auto& chunk_probes = scratch->chunk_probes;
+    if (chunk_items.size() < chunks) chunk_items.resize(chunks), chunk_probes.resize(chunks);
     std::vector<std::array<size_t, 6>> chunk_counts(chunks);
+    // Far impulses: their band per impulse and counts per chunk and band, from which the far
+    // field sorts them (the items themselves are made there: stored, they would be tens of
+    // megabytes of memory new to every frame).
+    const int far_bands = far.bands();
+    std::vector<int32_t>& far_band = scratch->far_band;
+    if (far.active()) far_band.resize(n);
+    std::vector<uint32_t>& far_counts = scratch->far_counts;
+    far_counts.assign(chunks * size_t(far_bands), 0);
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
         auto& probes = chunk_probes[c];
         auto& live_items = chunk_items[c];
-        auto& far_items = chunk_far[c];
         auto& counts = chunk_counts[c];
-        if (far.active()) far_items.reserve(std::min(n - c * kChunk, kChunk));
+        probes.clear(), live_items.clear();
         counts = {0, 0, 0, 0, 0, 0};
         auto area = [](int x0, int y0, int x1, int y1) {
             return x1 >= x0 && y1 >= y0 ? size_t(x1 - x0 + 1) * size_t(y1 - y0 + 1) : size_t(0);
@@ -670,13 +712,13 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
         std::array<double, 2 * kMaxProbeHalf + 1> t{}, w{};
         for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
             const double x = imp.x[i], y = imp.y[i];
+            if (far.active()) far_band[i] = -1;
             if (aa.max_distance > 0.0 && std::hypot(x - cam.x, y - cam.y) > aa.max_distance)
                 continue;
             if (far.contains(x - cam.x, y - cam.y)) {
-                detail::FarItem fi;
-                if (far.item(x - cam.x, y - cam.y, imp.weight[i],
-                             orient + static_cast<double>(imp.theta[i]), fi))
-                    far_items.push_back(fi);
+                const int b = far.band(x - cam.x, y - cam.y);
+                far_band[i] = b;
+                if (b >= 0) ++far_counts[c * size_t(far_bands) + size_t(b)];
                 continue;
             }
             if (!(view.depth(x, y) > 0.0)) continue;
@@ -784,14 +826,13 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
         }
     });
     // Join the chunks in order (the canonical order of the impulses).
-    std::vector<detail::PerspProbe> probes;
-    std::vector<detail::PerspItem> items;
-    size_t far_count = 0;
+    std::vector<detail::PerspProbe>& probes = scratch->probes;
+    std::vector<detail::PerspItem>& items = scratch->items;
+    probes.clear(), items.clear();
     {
         size_t np = 0, ni = 0;
         for (size_t c = 0; c < chunks; ++c)
-            np += chunk_probes[c].size(), ni += chunk_items[c].size(),
-                far_count += chunk_far[c].size();
+            np += chunk_probes[c].size(), ni += chunk_items[c].size();
         probes.reserve(np), items.reserve(ni);
         for (size_t c = 0; c < chunks; ++c) {
             const auto base = static_cast<uint32_t>(probes.size());
@@ -810,8 +851,6 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
                 stats->probe_count += c[3];
             stats->pixels += c[4], stats->axial += c[5];
         }
-        stats->far = far_count;
-        stats->culled = n - items.size() - far_count;
     }
 
     const auto t2 = Clock::now();
@@ -855,8 +894,14 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
     else
         for (int t = 0; t < ntiles; ++t) do_tile(t);
     const auto t3 = Clock::now();
-    if (far.active()) far.render(chunk_far, out, loops, options.parallel);
+    const size_t far_count =
+        far.active()
+            ? far.render({&imp, cam.x, cam.y, orient, far_band.data(), far_counts.data(), kChunk},
+                         out, loops, options.parallel, scratch->far)
+            : 0;
     if (stats) {
+        stats->far = far_count;
+        stats->culled = n - items.size() - far_count;
         const auto t4 = Clock::now();
         stats->setup_ms = ms(t0, t1), stats->prepare_ms = ms(t1, t2), stats->tiles_ms = ms(t2, t3);
         stats->far_ms = ms(t3, t4);

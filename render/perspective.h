@@ -43,8 +43,10 @@
 // the polynomial exp of the evaluator, compiled for baseline x86-64 and AVX2 without FMA
 // contraction: the bits do not depend on threads, tiles or the CPU.
 
+#include <atomic>
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include "kernels/kernels.h"
@@ -210,16 +212,41 @@ struct PerspectiveStats {
     /// Wall time of the parts (ms): far-field set-up, per-impulse preparation, tiled
     /// evaluation (binning included), far field (deposit, across, along).
     double setup_ms = 0, prepare_ms = 0, tiles_ms = 0, far_ms = 0;
-    size_t probe_count = 0;                   ///< probes evaluated
-    size_t pixels = 0;  ///< pixel evaluations (sum of the impulses' and probes' boxes)
+    size_t probe_count = 0;  ///< probes evaluated
+    size_t pixels = 0;       ///< pixel evaluations (sum of the impulses' and probes' boxes)
+};
+
+namespace detail {
+struct PerspScratch;
+}
+
+/// Memory that accumulate_perspective keeps from call to call: a frame's per-impulse arrays are
+/// tens of megabytes, and memory new to the process costs a page fault per 4 KiB on every frame.
+/// Optional; keep one per caller that renders frame after frame (one per layer). Safe to share:
+/// a call that finds the workspace in use by another uses memory of its own.
+class PerspectiveWorkspace {
+public:
+    PerspectiveWorkspace();
+    ~PerspectiveWorkspace();
+    PerspectiveWorkspace(const PerspectiveWorkspace&) = delete;
+    PerspectiveWorkspace& operator=(const PerspectiveWorkspace&) = delete;
+    /// (internal) The memory, or null while another call holds it; give it back with release().
+    detail::PerspScratch* acquire();
+    void release();
+
+private:
+    std::unique_ptr<detail::PerspScratch> m_scratch;
+    std::atomic<bool> m_busy{false};
 };
 
 /// Adds sum_k w_k h_k(X(p) - x_k) to `out` (resized to the view, not cleared) for every pixel p
 /// that sees the plane, h_k the kernel filtered for the footprint at x_k (see the header
 /// comment). Deterministic (tile and thread independent); AVX2 where available, same bits.
+/// `workspace` (optional) lends memory reused across calls; it does not change the result.
 void accumulate_perspective(const kernels::KernelPyramid& pyramid, const sim::Impulses& impulses,
                             const PerspectiveView& view, const PixelCoords& coords, Frame& out,
                             const AntiAlias& aa, const EvalOptions& options = {},
-                            PerspectiveStats* stats = nullptr);
+                            PerspectiveStats* stats = nullptr,
+                            PerspectiveWorkspace* workspace = nullptr);
 
 }  // namespace impulse::render

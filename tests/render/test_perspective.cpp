@@ -76,7 +76,8 @@ struct PerspectiveCase {
 
 Frame render_frame(const KernelPyramid& pyr, sim::LayerSimulator& s, const PerspectiveCamera& cam,
                    const AntiAlias& aa, render::PerspectiveStats* stats = nullptr,
-                   const render::EvalOptions& eo = {}) {
+                   const render::EvalOptions& eo = {},
+                   render::PerspectiveWorkspace* workspace = nullptr) {
     const PerspectiveView v(cam);
     const sim::Region box = render::perspective_region(pyr, v, aa);
     sim::Impulses imp;
@@ -84,7 +85,7 @@ Frame render_frame(const KernelPyramid& pyr, sim::LayerSimulator& s, const Persp
     const auto pc = render::pixel_coords(v);
     Frame f;
     f.resize(cam.width, cam.height);
-    render::accumulate_perspective(pyr, imp, v, pc, f, aa, eo, stats);
+    render::accumulate_perspective(pyr, imp, v, pc, f, aa, eo, stats, workspace);
     return f;
 }
 
@@ -959,4 +960,35 @@ TEST_CASE("far-field frames are bit-identical across threads, tiles and SIMD pat
     eo.parallel = false, eo.tile_size = 16, eo.use_avx2 = false;
     const Frame b = render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, nullptr, eo);
     CHECK(std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)) == 0);
+}
+
+TEST_CASE("a perspective workspace reused across frames and views changes no bits",
+          "[render][perspective][determinism]") {
+    PerspectiveCase pc;
+    sim::LayerSimulator s(pc.process, nullptr, {}, pc.kernel.radius());
+    PerspectiveCamera other = pc.camera;
+    other.width = 200, other.height = 240, other.pitch_deg = 35.0, other.heading_deg = 30.0;
+    AntiAlias coarse;
+    coarse.cutoff = 0.05;
+    auto same = [](const Frame& a, const Frame& b) {
+        return a.data.size() == b.data.size() &&
+               std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)) == 0;
+    };
+    render::PerspectiveStats st;
+    const Frame a = render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, &st);
+    REQUIRE(st.far > 10000);
+    const Frame b = render_frame(pc.pyramid, s, other, coarse);
+    render::PerspectiveWorkspace ws;
+    render::PerspectiveStats sw;
+    // a large frame, a smaller and different one (stale memory of the first must not leak in),
+    // the first again
+    CHECK(same(render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, &sw, {}, &ws), a));
+    CHECK(sw.far == st.far);
+    CHECK(sw.culled == st.culled);
+    CHECK(same(render_frame(pc.pyramid, s, other, coarse, nullptr, {}, &ws), b));
+    CHECK(same(render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, nullptr, {}, &ws), a));
+    // a workspace held by another call is not shared: the call uses memory of its own
+    REQUIRE(ws.acquire() != nullptr);
+    CHECK(same(render_frame(pc.pyramid, s, other, coarse, nullptr, {}, &ws), b));
+    ws.release();
 }
