@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -120,11 +121,20 @@ struct Scene {
     }();
 };
 
-void time_ortho(const Scene& sc, sim::LayerSimulator& s, FrameTimes& t) {
-    const render::View view{kWidth, kHeight, 0.0, 0.0, 1.0};
+/// What a renderer keeps from frame to frame for a layer (scenes/renderer.cpp: the impulses and
+/// the frame; scenes/camera_render.cpp: the perspective workspace), one per row so every row's
+/// frames are timed as frames of a sequence.
+struct Buffers {
     render::Frame f;
-    f.resize(kWidth, kHeight);
     sim::Impulses imp;
+    render::PerspectiveWorkspace ws;
+};
+
+void time_ortho(const Scene& sc, sim::LayerSimulator& s, Buffers& buf, FrameTimes& t) {
+    const render::View view{kWidth, kHeight, 0.0, 0.0, 1.0};
+    render::Frame& f = buf.f;
+    f.resize(kWidth, kHeight);
+    sim::Impulses& imp = buf.imp;
     const double c0 = own_cpu_s();
     auto t0 = Clock::now();
     s.impulses_at(0, view.box(), imp);
@@ -138,14 +148,14 @@ void time_ortho(const Scene& sc, sim::LayerSimulator& s, FrameTimes& t) {
     t.impulses = imp.size();
 }
 
-/// Times one perspective frame; `ws` is reused from frame to frame, as a renderer keeps one per
-/// layer.
+/// Times one perspective frame; `buf` is reused from frame to frame, as a renderer keeps its
+/// buffers per layer.
 void time_perspective(const kernels::KernelPyramid& pyr, sim::LayerSimulator& s,
                       const render::PerspectiveCamera& cam, const render::AntiAlias& aa,
-                      render::PerspectiveWorkspace& ws, FrameTimes& t) {
-    render::Frame f;
+                      Buffers& buf, FrameTimes& t) {
+    render::Frame& f = buf.f;
     f.resize(kWidth, kHeight);
-    sim::Impulses imp;
+    sim::Impulses& imp = buf.imp;
     const double c0 = own_cpu_s();
     auto t0 = Clock::now();
     const render::PerspectiveView view(cam);
@@ -156,7 +166,7 @@ void time_perspective(const kernels::KernelPyramid& pyr, sim::LayerSimulator& s,
     s.impulses_at(0, box, imp);
     const double g = ms_since(t0);
     t0 = Clock::now();
-    render::accumulate_perspective(pyr, imp, view, pc, f, aa, {}, &t.stats, &ws);
+    render::accumulate_perspective(pyr, imp, view, pc, f, aa, {}, &t.stats, &buf.ws);
     const double e = ms_since(t0);
     t.cpu.v.push_back(1e3 * (own_cpu_s() - c0));
     t.setup.v.push_back(su), t.generate.v.push_back(g), t.evaluate.v.push_back(e);
@@ -205,16 +215,20 @@ int run(const Options& o) {
 
     arena.execute([&] {
         sim::LayerSimulator s(sc.process, nullptr, {}, sc.kernel.radius());
-        render::PerspectiveWorkspace ws;
-        // warm-up (untimed)
+        Buffers ortho_buf;
+        std::vector<std::unique_ptr<Buffers>> row_buf;
+        for (size_t i = 0; i < rows.size(); ++i) row_buf.push_back(std::make_unique<Buffers>());
+        // warm-up (untimed): every row once, so its buffers hold a frame already
         {
             FrameTimes w;
-            time_ortho(sc, s, w);
-            time_perspective(pyr, s, cam, rows.front().aa, ws, w);
+            time_ortho(sc, s, ortho_buf, w);
+            for (size_t i = 0; i < rows.size(); ++i)
+                time_perspective(pyr, s, cam, rows[i].aa, *row_buf[i], w);
         }
         for (int rep = 0; rep < o.reps; ++rep) {
-            time_ortho(sc, s, ortho);
-            for (auto& r : rows) time_perspective(pyr, s, cam, r.aa, ws, r.t);
+            time_ortho(sc, s, ortho_buf, ortho);
+            for (size_t i = 0; i < rows.size(); ++i)
+                time_perspective(pyr, s, cam, rows[i].aa, *row_buf[i], rows[i].t);
         }
     });
 

@@ -56,6 +56,9 @@ private:
     render::AntiAlias m_aa;
     std::vector<std::unique_ptr<kernels::KernelPyramid>> m_pyramids;
     std::vector<render::PerspectiveStats> m_stats;
+    /// Per layer: the perspective evaluation's memory, kept from frame to frame (tens of MB that
+    /// would otherwise be new to the process, page fault by page fault, every frame).
+    std::vector<std::unique_ptr<render::PerspectiveWorkspace>> m_workspaces;
     // perspective geometry of the frame at m_t
     std::optional<double> m_t;
     std::unique_ptr<render::PerspectiveView> m_view;

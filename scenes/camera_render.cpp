@@ -20,8 +20,10 @@ CameraPipeline::CameraPipeline(const Scene& scene, const std::vector<kernels::Ke
     kernels::PyramidParams pp;
     // Levels below a quarter of the cut-off are never drawn (faded out).
     pp.min_sd_fraction = std::min(1e-3, 0.25 * m_aa.cutoff);
-    for (const auto& k : kernels)
+    for (const auto& k : kernels) {
         m_pyramids.push_back(std::make_unique<kernels::KernelPyramid>(k, pp));
+        m_workspaces.push_back(std::make_unique<render::PerspectiveWorkspace>());
+    }
 }
 
 CameraPipeline::~CameraPipeline() = default;
@@ -86,7 +88,7 @@ void CameraPipeline::accumulate(size_t layer, const sim::Impulses& impulses,
     if (m_scene->camera.type == CameraConfig::Type::Perspective) {
         prepare(t);
         render::accumulate_perspective(pyr, impulses, *m_view, m_coords, out, m_aa, options,
-                                       &m_stats.at(layer));
+                                       &m_stats.at(layer), m_workspaces.at(layer).get());
         return;
     }
     render::accumulate_filtered(pyr, impulses, view, out, m_aa, options);
