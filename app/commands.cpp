@@ -316,7 +316,7 @@ int run_info(const InfoOptions& opt) {
     for (size_t i = 0; i < scene.layers.size(); ++i) {
         const auto& l = scene.layers[i];
         const auto lt = scenes::layer_theory(l);
-        std::printf("layer[%zu]   %s r=%g density=%g lambda=%.4g/unit^2 variance=%.6g%s%s\n", i,
+        std::printf("layer[%zu]   %s r=%g density=%g lambda=%.4g/unit^2 variance=%.6g%s%s%s\n", i,
                     std::string(kernels::to_string(l.kernel.type)).c_str(), l.kernel.radius,
                     l.density.value(0.0), l.process.intensity, lt.variance,
                     l.process.lifetime_s > 0 ? " (animated)" : " (still)",

@@ -255,4 +255,9 @@ TEST_CASE("scenes and info report on the built-in and given scenes", "[cli]") {
     char var[64];
     std::snprintf(var, sizeof var, "variance   %.6g", impulse::scenes::scene_theory(loaded).variance);
     CHECK_THAT(info.out, Contains(loaded.hash) && Contains(var));
+    // A composed built-in scene: each layer's line ends with its composition.
+    const Result veins = run(dir, "info veins");
+    CHECK(veins.status == 0);
+    CHECK_THAT(veins.out, Contains("name=\"wx\" hidden") && Contains("warp=layer[0],layer[1]") &&
+                              Contains("blend=multiply"));
 }
