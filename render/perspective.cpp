@@ -732,8 +732,10 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
             view.image_point(x, y, sx, sy);
             it.sx = static_cast<float>(sx), it.sy = static_cast<float>(sy);
             it.w = static_cast<float>(static_cast<double>(imp.weight[i]) * p.fade);
-            const double th = orient + static_cast<double>(imp.theta[i]);
-            it.cs = static_cast<float>(std::cos(th)), it.sn = static_cast<float>(std::sin(th));
+            if (!lk.radial) {  // only grid levels are turned (a radial kernel has no angle)
+                const double th = orient + static_cast<double>(imp.theta[i]);
+                it.cs = static_cast<float>(std::cos(th)), it.sn = static_cast<float>(std::sin(th));
+            }
             it.lo = static_cast<int16_t>(p.blend.lo), it.hi = static_cast<int16_t>(p.blend.hi);
             it.a = static_cast<float>(p.blend.weight);
             it.mode = p.mode;
