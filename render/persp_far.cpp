@@ -613,8 +613,9 @@ size_t FarField::render(const Impulses& in, Frame& out, const PerspLoops& loops,
 
     // Deposit by bands of sub-rows: impulses sorted by band in canonical order (a counting sort
     // of their indices, 4 bytes each: a frame has millions, and memory new to the process costs
-    // a page fault per 4 KiB), each band's items made and summed by one task into its rows, the
-    // row after the band into a halo added afterwards.
+    // a page fault per 4 KiB), each band's items made (from the sub-row coordinates the
+    // preparation computed) and summed by one task into its rows, the row after the band into a
+    // halo added afterwards.
     const sim::Impulses& imp = *in.imp;
     const size_t n = imp.size();
     const int bands = this->bands();
@@ -639,7 +640,7 @@ size_t FarField::render(const Impulses& in, Frame& out, const PerspLoops& loops,
                                  start.begin() + ptrdiff_t(c + 1) * bands);
         const size_t i1 = std::min(n, (size_t(c) + 1) * in.chunk);
         for (size_t i = size_t(c) * in.chunk; i < i1; ++i)
-            if (in.band[i] >= 0) order[fill[size_t(in.band[i])]++] = static_cast<uint32_t>(i);
+            if (in.q[i] >= 0.0) order[fill[size_t(band_of(in.q[i]))]++] = static_cast<uint32_t>(i);
     });
     std::vector<std::vector<float>> halo(static_cast<size_t>(bands));
     std::vector<size_t> drawn_in(static_cast<size_t>(bands), 0);
@@ -651,12 +652,11 @@ size_t FarField::render(const Impulses& in, Frame& out, const PerspLoops& loops,
         const size_t hn = last < rows ? size_t(m_rows[size_t(last)].nodes) : 0;
         if (hn) halo[size_t(b)].assign(size_t(B) * hn, 0.0f);
         size_t drawn = 0;
-        // Items are made kItemBlock at a time: the place and image column of a block first (a
-        // square root and two divides per impulse, whose latency dominated, in a loop the
-        // compiler vectorises; the same operations in the same order, so the same bits), then
-        // the rest per impulse.
+        // Items are made kItemBlock at a time: the image column of a block first (a divide per
+        // impulse, whose latency dominated, in a loop the compiler vectorises; the same
+        // operations in the same order, so the same bits), then the rest per impulse.
         constexpr int kItemBlock = 8;
-        std::array<double, kItemBlock> rx{}, ry{}, depth{}, qr{}, sx{};
+        std::array<double, kItemBlock> rx{}, ry{}, sx{};
         const size_t k0 = band_start[size_t(b)], k1 = band_start[size_t(b) + 1];
         for (size_t kb = k0; kb < k1; kb += kItemBlock) {
             const int m = static_cast<int>(std::min<size_t>(kItemBlock, k1 - kb));
@@ -664,14 +664,11 @@ size_t FarField::render(const Impulses& in, Frame& out, const PerspLoops& loops,
                 const size_t i = order[kb + size_t(j)];
                 rx[size_t(j)] = imp.x[i] - in.cam_x, ry[size_t(j)] = imp.y[i] - in.cam_y;
             }
-            for (int j = 0; j < kItemBlock; ++j) {
-                place(rx[size_t(j)], ry[size_t(j)], depth[size_t(j)], qr[size_t(j)]);
-                sx[size_t(j)] = column(rx[size_t(j)], ry[size_t(j)], depth[size_t(j)]);
-            }
+            for (int j = 0; j < kItemBlock; ++j) sx[size_t(j)] = column(rx[size_t(j)], ry[size_t(j)]);
             for (int j = 0; j < m; ++j) {
                 const size_t i = order[kb + size_t(j)];
                 FarItem it;
-                if (!item(rx[size_t(j)], ry[size_t(j)], qr[size_t(j)], sx[size_t(j)], imp.weight[i],
+                if (!item(rx[size_t(j)], ry[size_t(j)], in.q[i], sx[size_t(j)], imp.weight[i],
                           in.orient + static_cast<double>(imp.theta[i]), it))
                     continue;
                 ++drawn;

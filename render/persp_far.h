@@ -56,33 +56,37 @@ public:
     bool active() const { return m_active; }
     /// Whether the impulse at (rx, ry) from the camera's foot belongs to the far field.
     bool contains(double rx, double ry) const {
-        return m_active && rx * rx + ry * ry >= m_rho_far2 &&
-               m_P[6] * rx + m_P[7] * ry + m_P[8] >= m_depth_min;
+        return m_active && rx * rx + ry * ry >= m_rho_far2 && depth(rx, ry) >= m_depth_min;
     }
     /// Bands of sub-rows, the unit of the deposit (render).
     int bands() const {
         return m_active ? (static_cast<int>(m_rows.size()) + kBand - 1) / kBand : 0;
     }
-    /// The band whose deposit takes a far impulse at (rx, ry) from the foot, -1 when it adds
-    /// nothing (behind the camera, or beyond the sub-rows). item() may still drop it.
-    int band(double rx, double ry) const {
-        double q;
-        return place_row(rx, ry, q) ? static_cast<int>(q) / kBand : -1;
+    /// The sub-row coordinate q of a far impulse at (rx, ry) from the foot (sub-row floor(q),
+    /// weight q - floor(q) on the next), -1 when it adds nothing (behind the camera, or beyond
+    /// the sub-rows). item() may still drop it.
+    double row_coordinate(double rx, double ry) const {
+        const double q = (y_of(std::sqrt(rx * rx + ry * ry)) - m_y0) * m_inv_dy;
+        return depth(rx, ry) > 0.0 && q >= 0.0 && q < static_cast<double>(m_rows.size() - 1)
+                   ? q
+                   : -1.0;
     }
-    /// The item of a far impulse at (rx, ry) from the foot (band() >= 0), at sub-row coordinate
-    /// q and image column sx (place()), turned by theta (radians, the kernel's own orientation
-    /// included; unused for radial kernels); false when it adds nothing (faded out, too far
-    /// off the image).
+    /// The band whose deposit takes the impulse at sub-row coordinate q >= 0.
+    static int band_of(double q) { return static_cast<int>(q) / kBand; }
+    /// The item of a far impulse at (rx, ry) from the foot, at sub-row coordinate q
+    /// (row_coordinate() >= 0) and image column sx (column()), turned by theta (radians, the
+    /// kernel's own orientation included; unused for radial kernels); false when it adds nothing
+    /// (faded out, too far off the image).
     bool item(double rx, double ry, double q, double sx, float weight, double theta,
               FarItem& it) const;
     /// The impulses of a frame as the far field reads them. Impulse i of `imp` lies at
-    /// (x[i] - cam_x, y[i] - cam_y) from the foot, turned by orient + theta[i]; band[i]: band()
-    /// of it, or -1 when it is not far; counts[c * bands() + b]: how many impulses of chunk c
-    /// (impulses [c * chunk, (c + 1) * chunk)) are in band b.
+    /// (x[i] - cam_x, y[i] - cam_y) from the foot, turned by orient + theta[i]; q[i]:
+    /// row_coordinate() of it, or -1 when it is not far; counts[c * bands() + b]: how many
+    /// impulses of chunk c (impulses [c * chunk, (c + 1) * chunk)) are in band b (band_of).
     struct Impulses {
         const sim::Impulses* imp = nullptr;
         double cam_x = 0, cam_y = 0, orient = 0;
-        const int32_t* band = nullptr;
+        const double* q = nullptr;
         const uint32_t* counts = nullptr;
         size_t chunk = 1;
     };
@@ -133,22 +137,11 @@ private:
     /// Sub-rows per deposit task (a band); the halo between bands fixes the order of the sums,
     /// so it is part of the output's bits.
     static constexpr int kBand = 16;
-    /// The sub-row coordinate q (row floor(q), weight q - floor(q) on the next) of an impulse at
-    /// (rx, ry) from the foot; false behind the camera or beyond the sub-rows.
-    bool place_row(double rx, double ry, double& q) const {
-        double depth;
-        place(rx, ry, depth, q);
-        return depth > 0.0 && q >= 0.0 && q < static_cast<double>(m_rows.size() - 1);
-    }
-    /// The depth and sub-row coordinate q of an impulse at (rx, ry) from the foot (the
-    /// arithmetic of place_row, branch-free so that loops over impulses vectorise).
-    void place(double rx, double ry, double& depth, double& q) const {
-        depth = m_P[6] * rx + m_P[7] * ry + m_P[8];
-        q = (y_of(std::sqrt(rx * rx + ry * ry)) - m_y0) * m_inv_dy;
-    }
-    /// The image column of an impulse at (rx, ry) from the foot and depth `depth`.
-    double column(double rx, double ry, double depth) const {
-        return (m_P[0] * rx + m_P[1] * ry + m_P[2]) / depth;
+    /// The depth of a point at (rx, ry) from the foot.
+    double depth(double rx, double ry) const { return m_P[6] * rx + m_P[7] * ry + m_P[8]; }
+    /// The image column of an impulse at (rx, ry) from the foot.
+    double column(double rx, double ry) const {
+        return (m_P[0] * rx + m_P[1] * ry + m_P[2]) / depth(rx, ry);
     }
     // Inlined into item (called for every far impulse; the calls cost more than the bodies).
     [[gnu::always_inline]] inline float row_weight(const Row& row, double sx) const;

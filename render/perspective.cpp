@@ -635,7 +635,7 @@ struct PerspScratch {
     std::vector<std::vector<PerspProbe>> chunk_probes;
     std::vector<PerspItem> items;
     std::vector<PerspProbe> probes;
-    std::vector<int32_t> far_band;
+    std::vector<double> far_q;
     std::vector<uint32_t> far_counts;
     FarField far_field;
     FarScratch far;
@@ -692,12 +692,12 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
     auto& chunk_probes = scratch->chunk_probes;
     if (chunk_items.size() < chunks) chunk_items.resize(chunks), chunk_probes.resize(chunks);
     std::vector<std::array<size_t, 6>> chunk_counts(chunks);
-    // Far impulses: their band per impulse and counts per chunk and band, from which the far
-    // field sorts them (the items themselves are made there: stored, they would be tens of
-    // megabytes of memory new to every frame).
+    // Far impulses: their sub-row coordinate per impulse and counts per chunk and band, from
+    // which the far field sorts them (the items themselves are made there: stored, they would
+    // be tens of megabytes of memory new to every frame).
     const int far_bands = far.bands();
-    std::vector<int32_t>& far_band = scratch->far_band;
-    if (far.active()) far_band.resize(n);
+    std::vector<double>& far_q = scratch->far_q;
+    if (far.active()) far_q.resize(n);
     std::vector<uint32_t>& far_counts = scratch->far_counts;
     far_counts.assign(chunks * size_t(far_bands), 0);
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
@@ -712,13 +712,14 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
         std::array<double, 2 * kMaxProbeHalf + 1> t{}, w{};
         for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
             const double x = imp.x[i], y = imp.y[i];
-            if (far.active()) far_band[i] = -1;
+            if (far.active()) far_q[i] = -1.0;
             if (aa.max_distance > 0.0 && std::hypot(x - cam.x, y - cam.y) > aa.max_distance)
                 continue;
             if (far.contains(x - cam.x, y - cam.y)) {
-                const int b = far.band(x - cam.x, y - cam.y);
-                far_band[i] = b;
-                if (b >= 0) ++far_counts[c * size_t(far_bands) + size_t(b)];
+                const double q = far.row_coordinate(x - cam.x, y - cam.y);
+                far_q[i] = q;
+                if (q >= 0.0)
+                    ++far_counts[c * size_t(far_bands) + size_t(detail::FarField::band_of(q))];
                 continue;
             }
             if (!(view.depth(x, y) > 0.0)) continue;
@@ -898,7 +899,7 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
     const auto t3 = Clock::now();
     const size_t far_count =
         far.active()
-            ? far.render({&imp, cam.x, cam.y, orient, far_band.data(), far_counts.data(), kChunk},
+            ? far.render({&imp, cam.x, cam.y, orient, far_q.data(), far_counts.data(), kChunk},
                          out, loops, options.parallel, scratch->far)
             : 0;
     if (stats) {
