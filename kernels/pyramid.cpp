@@ -285,7 +285,8 @@ void axial_tables(const Kernel& k, RadialLevelTables& t) {
                 const double* hm = h.data() + size_t(m) * nv;
                 for (int j = 0; j < nv; ++j) col[size_t(j)] += g * hm[j];
             }
-            for (int j = 0; j + 1 < nv; ++j) slice[size_t(j) * nu + i] = static_cast<float>(col[size_t(j)]);
+            for (int j = 0; j + 1 < nv; ++j)
+                slice[size_t(j) * nu + i] = static_cast<float>(col[size_t(j)]);
         }
     }
 }

@@ -664,7 +664,8 @@ size_t FarField::render(const Impulses& in, Frame& out, const PerspLoops& loops,
                 const size_t i = order[kb + size_t(j)];
                 rx[size_t(j)] = imp.x[i] - in.cam_x, ry[size_t(j)] = imp.y[i] - in.cam_y;
             }
-            for (int j = 0; j < kItemBlock; ++j) sx[size_t(j)] = column(rx[size_t(j)], ry[size_t(j)]);
+            for (int j = 0; j < kItemBlock; ++j)
+                sx[size_t(j)] = column(rx[size_t(j)], ry[size_t(j)]);
             for (int j = 0; j < m; ++j) {
                 const size_t i = order[kb + size_t(j)];
                 FarItem it;

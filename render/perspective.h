@@ -39,9 +39,9 @@
 // however close the horizon is.
 //
 // Determinism: every pixel sums its impulses in canonical order (and an impulse's probes or
-// table slices in order), each pixel is written by one task, and the per-pixel code uses only + - * / sqrt and
-// the polynomial exp of the evaluator, compiled for baseline x86-64 and AVX2 without FMA
-// contraction: the bits do not depend on threads, tiles or the CPU.
+// table slices in order), each pixel is written by one task, and the per-pixel code uses only
+// + - * / sqrt and the polynomial exp of the evaluator, compiled for baseline x86-64 and AVX2
+// without FMA contraction: the bits do not depend on threads, tiles or the CPU.
 
 #include <atomic>
 #include <cstdint>
