@@ -36,6 +36,7 @@ constexpr double kSegmentRad = 0.05;
 constexpr int kAcrossNodes = 16;  // nodes across the narrowest profile of a sub-row
 constexpr int kProfiles = kFarProfiles;
 constexpr double kAlongReach = 4.75;  // the along Gaussian is summed to 4.75 sd
+constexpr int kAlongPiece = 64;       // columns per piece of a row's along reach
 
 double sq(double v) { return v * v; }
 
@@ -708,31 +709,38 @@ size_t FarField::render(const Impulses& in, Frame& out, const PerspLoops& loops,
     // convolved across with its segments' profiles and sampled at the pixel centres (linear
     // between nodes), then added to every pixel of the band it reaches through the along filter
     // of that bin. Sub-rows are visited in order, so every pixel sums them in the same order.
+    // Each pixel sums the sub-rows within kAlongReach sd of its own y' only. The reach is kept
+    // per piece of kAlongPiece columns: sub-rows follow circles, which bend across the image, so
+    // the reach of a whole row is several times that of any of its pixels.
     const size_t np = m_yp.size();
     const int nrow = m_j1 - m_j0;
-    std::vector<int> reach0(static_cast<size_t>(nrow), rows), reach1(static_cast<size_t>(nrow), 0);
+    const int pieces = (W + kAlongPiece - 1) / kAlongPiece;
+    std::vector<int> reach0(size_t(nrow) * pieces, rows), reach1(size_t(nrow) * pieces, 0);
     for (int jj = 0; jj < nrow; ++jj) {
-        double lo = 1e300, hi = -1e300;
-        for (int i = 0; i < W; ++i) {
-            const size_t p = size_t(jj) * W + i;
-            if (m_ik[p] == 0.0f) continue;
-            double smax = 0.0;
-            for (int b = 0; b < B; ++b)
-                smax = std::max(smax, 1.0 / double(m_is[size_t(b) * np + p]));
-            const double reach = kAlongReach * std::sqrt(smax) / m_ik[p];
-            lo = std::min(lo, m_yp[p] - reach), hi = std::max(hi, m_yp[p] + reach);
+        for (int c = 0; c < pieces; ++c) {
+            double lo = 1e300, hi = -1e300;
+            for (int i = c * kAlongPiece; i < std::min(W, (c + 1) * kAlongPiece); ++i) {
+                const size_t p = size_t(jj) * W + i;
+                if (m_ik[p] == 0.0f) continue;
+                double smax = 0.0;
+                for (int b = 0; b < B; ++b)
+                    smax = std::max(smax, 1.0 / double(m_is[size_t(b) * np + p]));
+                const double reach = kAlongReach * std::sqrt(smax) / m_ik[p];
+                lo = std::min(lo, m_yp[p] - reach), hi = std::max(hi, m_yp[p] + reach);
+            }
+            if (!(lo <= hi)) continue;
+            const size_t e = size_t(jj) * pieces + c;
+            reach0[e] = std::max(0, static_cast<int>(std::floor((lo - m_y0) / m_dy)));
+            reach1[e] = std::min(rows, static_cast<int>(std::ceil((hi - m_y0) / m_dy)) + 1);
         }
-        if (!(lo <= hi)) continue;
-        reach0[size_t(jj)] = std::max(0, static_cast<int>(std::floor((lo - m_y0) / m_dy)));
-        reach1[size_t(jj)] = std::min(rows, static_cast<int>(std::ceil((hi - m_y0) / m_dy)) + 1);
     }
     constexpr int kRowsPerTask = 32;
     const int tasks = (nrow + kRowsPerTask - 1) / kRowsPerTask;
     run(tasks, [&](int task) {
         const int ja = task * kRowsPerTask, jb = std::min(nrow, ja + kRowsPerTask);
         int ra = rows, rb = 0;
-        for (int jj = ja; jj < jb; ++jj)
-            ra = std::min(ra, reach0[size_t(jj)]), rb = std::max(rb, reach1[size_t(jj)]);
+        for (size_t e = size_t(ja) * pieces; e < size_t(jb) * pieces; ++e)
+            ra = std::min(ra, reach0[e]), rb = std::max(rb, reach1[e]);
         std::vector<float> acc(size_t(jb - ja) * W, 0.0f), x;
         std::vector<float> zeros(static_cast<size_t>(W), 0.0f), frac(static_cast<size_t>(W));
         std::vector<int> node(static_cast<size_t>(W));
@@ -776,11 +784,25 @@ size_t FarField::render(const Impulses& in, Frame& out, const PerspLoops& loops,
                     if (m) terms |= m == 1 || m == 3 ? 2 : 1;
                 }
                 for (int jj = ja; jj < jb; ++jj) {
-                    if (r < reach0[size_t(jj)] || r >= reach1[size_t(jj)]) continue;
-                    const size_t p = size_t(jj) * W, pb = size_t(bin) * np + p;
-                    loops.far_along(m_yp.data() + p, m_ik.data() + p, m_is.data() + pb,
-                                    m_rs.data() + pb, W, yr, xp.data(), terms,
-                                    acc.data() + size_t(jj - ja) * W);
+                    // Runs of consecutive pieces that the sub-row reaches.
+                    const int* r0 = reach0.data() + size_t(jj) * pieces;
+                    const int* r1 = reach1.data() + size_t(jj) * pieces;
+                    for (int c = 0; c < pieces;) {
+                        if (r < r0[c] || r >= r1[c]) {
+                            ++c;
+                            continue;
+                        }
+                        const int c0 = c;
+                        while (c < pieces && r >= r0[c] && r < r1[c]) ++c;
+                        const int i0 = c0 * kAlongPiece, i1 = std::min(W, c * kAlongPiece);
+                        const size_t p = size_t(jj) * W + i0, pb = size_t(bin) * np + p;
+                        std::array<const float*, kProfiles> xq;
+                        for (int m = 0; m < kProfiles; ++m)
+                            xq[size_t(m)] = xp[size_t(m)] + i0;
+                        loops.far_along(m_yp.data() + p, m_ik.data() + p, m_is.data() + pb,
+                                        m_rs.data() + pb, i1 - i0, yr, xq.data(), terms,
+                                        acc.data() + size_t(jj - ja) * W + i0);
+                    }
                 }
             }
         }
