@@ -3,6 +3,7 @@
 // at half-octave scales, with the tables the perspective evaluator reads.
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <complex>
 #include <numbers>
@@ -399,6 +400,8 @@ Kernel low_pass(const Kernel& base, double sigma) {
 }
 
 KernelPyramid::KernelPyramid(const Kernel& base, const PyramidParams& params) {
+    static std::atomic<uint64_t> next_serial{1};
+    m_serial = next_serial.fetch_add(1, std::memory_order_relaxed);
     if (!(params.sigma0 >= 0.0) || !std::isfinite(params.sigma0))
         throw ValueError("pyramid: sigma0 must be >= 0 (0: derived)");
     if (!(params.level0_tolerance > 0.0 && params.level0_tolerance <= 0.5))

@@ -134,8 +134,12 @@ public:
     }
     /// Whether level l is >= 0 everywhere (to within 1e-4 of its peak).
     bool nonnegative(int l) const { return m_nonnegative[size_t(l)]; }
+    /// A number no other pyramid built by this process has (copies share it: they hold the same
+    /// levels). Lets a renderer tell that what it derived from a pyramid is still valid.
+    uint64_t serial() const { return m_serial; }
 
 private:
+    uint64_t m_serial = 0;
     bool m_radial = false;
     std::vector<Kernel> m_levels;
     std::vector<double> m_sigma, m_sd;

@@ -237,6 +237,14 @@ PerspectiveCamera PerspectiveCamera::window(int x0, int y0, int w, int h, int sa
     return c;
 }
 
+bool PerspectiveCamera::same_rays(const PerspectiveCamera& o) const {
+    auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
+    return width == o.width && height == o.height && x == o.x && y == o.y &&
+           altitude == o.altitude && pitch_deg == o.pitch_deg && heading_deg == o.heading_deg &&
+           fov_deg == o.fov_deg && plane == o.plane && focal_px == o.focal_px &&
+           same(principal_x, o.principal_x) && same(principal_y, o.principal_y);
+}
+
 PerspectiveView::PerspectiveView(const PerspectiveCamera& cam) : m_cam(cam) {
     auto num = [](double v) {
         std::ostringstream s;
@@ -639,6 +647,14 @@ struct PerspScratch {
     std::vector<uint32_t> far_counts;
     FarField far_field;
     FarScratch far;
+    /// What far_field was set up for (a camera that does not move keeps it: a few ms a frame).
+    struct FarKey {
+        uint64_t pyramid = 0;  ///< KernelPyramid::serial(), 0: not set up
+        PerspectiveCamera camera;
+        AntiAlias aa;
+        int coords_width = 0, coords_height = 0;
+        double origin_x = 0, origin_y = 0;
+    } far_key;
 };
 }  // namespace detail
 
@@ -680,7 +696,18 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
     if (!scratch) own = std::make_unique<detail::PerspScratch>(), scratch = own.get();
     const auto t0 = Clock::now();
     detail::FarField& far = scratch->far_field;
-    far.setup(pyr, view, coords, aa);
+    {
+        // The set-up is a function of these alone (coords are the view's pixel_coords).
+        auto& key = scratch->far_key;
+        if (!(key.pyramid == pyr.serial() && key.camera.same_rays(cam) && key.aa == aa &&
+              key.coords_width == coords.width && key.coords_height == coords.height &&
+              key.origin_x == coords.origin_x && key.origin_y == coords.origin_y)) {
+            key.pyramid = 0;  // not valid while set up (an exception leaves it so)
+            far.setup(pyr, view, coords, aa);
+            key = {pyr.serial(), cam, aa, coords.width, coords.height, coords.origin_x,
+                   coords.origin_y};
+        }
+    }
     const auto t1 = Clock::now();
 
     // Prepare the impulses in chunks (each writes its own items; probes go to per-chunk lists

@@ -72,6 +72,8 @@ struct AntiAlias {
     double footprint_scale = 1.0;
     /// false: no far field; the line form draws every impulse it applies to (tests, benchmarks).
     bool far_field = true;
+
+    bool operator==(const AntiAlias&) const = default;
 };
 
 /// Fade factor in [0, 1] for a remaining standard deviation fraction `sd` (0 at or below
@@ -124,6 +126,9 @@ struct PerspectiveCamera {
     /// The camera that renders image rectangle [x0, x0 + w) x [y0, y0 + h) of this one with
     /// `samples` x `samples` pixels per pixel (same rays: a supersampled or cropped copy).
     PerspectiveCamera window(int x0, int y0, int w, int h, int samples = 1) const;
+    /// Whether the two cameras see the same rays: every field equal, NaN principal points ("from
+    /// the image centre") equal to each other.
+    bool same_rays(const PerspectiveCamera& other) const;
 };
 
 /// Geometry of a perspective camera: rays, projection, pixel footprints. Image coordinates are

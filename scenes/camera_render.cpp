@@ -32,21 +32,6 @@ const kernels::KernelPyramid* CameraPipeline::pyramid(size_t layer) const {
     return m_active ? m_pyramids.at(layer).get() : nullptr;
 }
 
-namespace {
-
-/// Whether two cameras see the same rays (every field that PerspectiveView reads; NaN
-/// principal points, "from the image centre", compare equal to each other).
-bool same_camera(const render::PerspectiveCamera& a, const render::PerspectiveCamera& b) {
-    auto same = [](double x, double y) { return x == y || (std::isnan(x) && std::isnan(y)); };
-    return a.width == b.width && a.height == b.height && a.x == b.x && a.y == b.y &&
-           a.altitude == b.altitude && a.pitch_deg == b.pitch_deg &&
-           a.heading_deg == b.heading_deg && a.fov_deg == b.fov_deg && a.plane == b.plane &&
-           a.focal_px == b.focal_px && same(a.principal_x, b.principal_x) &&
-           same(a.principal_y, b.principal_y);
-}
-
-}  // namespace
-
 void CameraPipeline::prepare(double t) {
     if (m_t && *m_t == t) return;
     const auto& o = m_scene->output;
@@ -54,7 +39,7 @@ void CameraPipeline::prepare(double t) {
     m_t = t;
     // A camera without keys (or between equal keys) sees the same rays frame after frame: its
     // per-pixel texture coordinates (a few ms at 1080p) are kept.
-    if (m_view && same_camera(m_view->camera(), cam)) return;
+    if (m_view && m_view->camera().same_rays(cam)) return;
     m_view = std::make_unique<render::PerspectiveView>(cam);
     m_coords = render::pixel_coords(*m_view);
 }

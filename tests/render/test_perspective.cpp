@@ -991,4 +991,28 @@ TEST_CASE("a perspective workspace reused across frames and views changes no bit
     REQUIRE(ws.acquire() != nullptr);
     CHECK(same(render_frame(pc.pyramid, s, other, coarse, nullptr, {}, &ws), b));
     ws.release();
+
+    // The far field's set-up is kept while its inputs are unchanged: any one of them changed
+    // alone must set it up again (the camera moved a little, the anti-aliasing options, another
+    // pyramid seen by the same camera).
+    CHECK(same(render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, nullptr, {}, &ws), a));
+    PerspectiveCamera moved = pc.camera;
+    moved.x += 3.0;
+    const Frame c = render_frame(pc.pyramid, s, moved, AntiAlias{});
+    CHECK(!same(c, a));
+    CHECK(same(render_frame(pc.pyramid, s, moved, AntiAlias{}, nullptr, {}, &ws), c));
+    const Frame d = render_frame(pc.pyramid, s, moved, coarse);
+    CHECK(!same(d, c));
+    CHECK(same(render_frame(pc.pyramid, s, moved, coarse, nullptr, {}, &ws), d));
+    Kernel wider_kernel = [] {
+        KernelParams p;
+        p.type = KernelType::Cosine;
+        p.radius = 24.0;
+        return Kernel(p);
+    }();
+    const KernelPyramid wider(wider_kernel);
+    const Frame e = render_frame(wider, s, moved, coarse);
+    CHECK(!same(e, d));
+    CHECK(same(render_frame(wider, s, moved, coarse, nullptr, {}, &ws), e));
+    CHECK(same(render_frame(pc.pyramid, s, moved, coarse, nullptr, {}, &ws), d));
 }
