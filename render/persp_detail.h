@@ -104,8 +104,8 @@ struct PerspLoops {
     void (*tile)(const PerspKernel& k, const PerspItem* items, const PerspProbe* probes,
                  const uint32_t* idx, size_t n, const float* X, const float* Y, int stride, int tx0,
                  int ty0, int tw, int th, float* acc);
-    /// Far field, across: X[n] += sum_{k = -m..m} D[n - k] T[k] for n in [n0, n1) (D readable
-    /// on [n0 - m, n1 + m), T on [-m, m]), summed in order of k.
+    /// Far field, across: X[n] = sum_{k = -m..m} D[n - k] T[k] for n in [n0, n1) (D readable
+    /// on [n0 - m, n1 + m), T on [-m, m]), summed from 0 in order of k.
     void (*far_across)(const float* D, const float* T, int m, int n0, int n1, float* X);
     /// Far field, along: for pixels i in [0, n) of a row, from the sub-row at y' = yr,
     /// acc[i] += sum_q g_q(u) x[q][i], g_q the q-th derivative (q = 0 .. 4) of

@@ -772,7 +772,7 @@ size_t FarField::render(const Impulses& in, Frame& out, const PerspLoops& loops,
                         const float* t =
                             row.tables.data() +
                             ((size_t(g) * B + size_t(bin)) * kProfiles + size_t(m)) * T;
-                        loops.far_across(d, t + row.taps, row.taps, n0, n1, x.data());
+                        loops.far_across(d, t + row.taps, row.taps, n0, n1, x.data());  // writes
                     }
                     auto& v = px[size_t(m)];
                     v.resize(size_t(W));
