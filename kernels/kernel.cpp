@@ -61,7 +61,7 @@ std::optional<KernelType> kernel_type_from_string(std::string_view name) {
 
 void validate(const KernelParams& p) {
     require_positive("radius", p.radius);
-    if (p.radius > 1e6) {
+    if (p.radius > kMaxKernelRadius) {
         std::ostringstream s;
         s << "radius = " << p.radius << ": must be at most 1e6 texture units";
         throw ValueError(s.str());

@@ -418,6 +418,7 @@ KernelPyramid::KernelPyramid(const Kernel& base, const PyramidParams& params) {
     m_sd.push_back(1.0);
     for (int l = 1; l < params.max_levels; ++l) {
         const double s = s0 * std::exp2(0.5 * l);
+        if (base.radius() + kSupportSigmas * s > kMaxKernelRadius) break;  // low_pass: R + 4 sigma
         m_levels.push_back(low_pass(base, s));
         m_sigma.push_back(s);
         m_sd.push_back(std::sqrt(std::max(0.0, m_levels.back().integral_sq() / v0)));

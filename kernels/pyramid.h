@@ -27,7 +27,9 @@ struct PyramidParams {
     /// rms change allowed between the kernel and its sigma_0 low-pass, when derived; (0, 0.5].
     double level0_tolerance = 0.01;
     /// Levels are added until the remaining standard deviation sqrt(int h_l^2 / int h^2)
-    /// falls below this (or `max_levels` is reached); (0, 1).
+    /// falls below this, `max_levels` is reached, or the next level's support would exceed
+    /// kMaxKernelRadius (a large kernel and a small fraction); (0, 1). Beyond the top level
+    /// sd_fraction extrapolates.
     double min_sd_fraction = 1e-3;
     int max_levels = 48;  ///< >= 2
 };

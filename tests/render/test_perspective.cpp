@@ -432,6 +432,27 @@ TEST_CASE("pyramid: levels low-pass the kernel by the stated Gaussian",
     CHECK(b.weight == Approx(0.25));
 }
 
+TEST_CASE("pyramid: a large kernel and a small fraction stop at the largest kernel support",
+          "[render][perspective][kernels]") {
+    // clouds' kernel with camera.cutoff = 3e-4 asks for levels down to 7.5e-5 of its sd, which
+    // lie beyond a support of 1e6 texture units: the pyramid stops below that (it had thrown
+    // "radius = 1.00096e+06: must be at most 1e6"), and sd_fraction extrapolates past the top.
+    KernelParams p;
+    p.type = KernelType::Gaussian, p.radius = 72.0, p.sigma = 24.0;
+    const Kernel k(p);
+    impulse::kernels::PyramidParams pp;
+    pp.min_sd_fraction = 7.5e-5;
+    const KernelPyramid pyr(k, pp);
+    const int L = pyr.levels() - 1;
+    CHECK(pyr.radius(L) <= impulse::kernels::kMaxKernelRadius);
+    CHECK(72.0 + 4.0 * pyr.sigma(L) * std::sqrt(2.0) > impulse::kernels::kMaxKernelRadius);
+    CHECK(pyr.sd_fraction(pyr.sigma(L)) > pp.min_sd_fraction);
+    // beyond the top: sigma_L / sigma times the top's fraction (the 1 / sigma decay of a kernel
+    // with a non-zero integral)
+    const double top = pyr.sd_fraction(pyr.sigma(L));
+    CHECK(pyr.sd_fraction(4.0 * pyr.sigma(L)) == Approx(0.25 * top).epsilon(1e-9));
+}
+
 TEST_CASE("pyramid: axial tables hold the levels blurred along one axis",
           "[render][perspective][kernels]") {
     // Against the convolution done here by a fine trapezoid rule: h_l(sqrt(s^2 + v^2)) times a
