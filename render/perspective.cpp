@@ -237,6 +237,15 @@ PerspectiveCamera PerspectiveCamera::window(int x0, int y0, int w, int h, int sa
     return c;
 }
 
+PixelBudgetError::PixelBudgetError(double n, double b)
+    : BudgetError([&] {
+          std::ostringstream s;
+          s << "the frame needs " << n << " pixel evaluations, over the budget of " << b;
+          return s.str();
+      }()),
+      needed(n),
+      budget(b) {}
+
 bool PerspectiveCamera::same_rays(const PerspectiveCamera& o) const {
     auto same = [](double a, double b) { return a == b || (std::isnan(a) && std::isnan(b)); };
     return width == o.width && height == o.height && x == o.x && y == o.y &&
@@ -872,6 +881,12 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
                 items.push_back(it);
             }
         }
+    }
+    if (options.max_pixel_evaluations > 0.0) {
+        double pixels = 0.0;
+        for (const auto& c : chunk_counts) pixels += double(c[4]);
+        if (pixels > options.max_pixel_evaluations)
+            throw PixelBudgetError(pixels, options.max_pixel_evaluations);
     }
     if (stats) {
         *stats = {};

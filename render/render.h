@@ -13,6 +13,7 @@
 #include "render/shading.h"
 #include "render/video.h"
 #include "sim/sim.h"
+#include "util/errors.h"
 
 namespace impulse::render {
 
@@ -39,6 +40,18 @@ struct EvalOptions {
     int tile_size = 128;  ///< square tiles in pixels, >= 8; the result does not depend on it
     bool parallel = true;  ///< false: the serial path through the same code (debugging)
     bool use_avx2 = true;  ///< false: baseline SSE2 loops (bit-identical; for tests)
+    /// > 0: a perspective frame (accumulate_perspective) whose impulses' pixel boxes add up to
+    /// more than this is refused with render::PixelBudgetError before any pixel is evaluated.
+    /// The impulse count alone does not bound the work: a footprint blurred isotropically
+    /// (anisotropic = false) spreads a far impulse over a row of hundreds of pixels.
+    double max_pixel_evaluations = 0.0;
+};
+
+/// Thrown by accumulate_perspective when EvalOptions::max_pixel_evaluations is exceeded.
+class PixelBudgetError : public BudgetError {
+public:
+    PixelBudgetError(double needed, double budget);
+    double needed, budget;
 };
 
 /// Adds sum_k w_k h_{theta_k}(x - x_k) to `out` (sized to the view; not cleared) for every

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <set>
+#include <sstream>
 
 #include "scenes/camera_detail.h"
 
@@ -72,8 +73,19 @@ void CameraPipeline::accumulate(size_t layer, const sim::Impulses& impulses,
     const kernels::KernelPyramid& pyr = *m_pyramids.at(layer);
     if (m_scene->camera.type == CameraConfig::Type::Perspective) {
         prepare(t);
-        render::accumulate_perspective(pyr, impulses, *m_view, m_coords, out, m_aa, options,
-                                       &m_stats.at(layer), m_workspaces.at(layer).get());
+        render::EvalOptions o = options;
+        o.max_pixel_evaluations = m_scene->limits.max_pixel_evaluations;
+        try {
+            render::accumulate_perspective(pyr, impulses, *m_view, m_coords, out, m_aa, o,
+                                           &m_stats.at(layer), m_workspaces.at(layer).get());
+        } catch (const render::PixelBudgetError& e) {
+            std::ostringstream s;
+            s << m_scene->path << ": layer[" << layer << "] at t = " << t << " s needs "
+              << e.needed << " pixel evaluations, over the budget of " << e.budget
+              << " (limits.max_pixel_evaluations; raise camera.cutoff, set camera.anisotropic "
+                 "= true, or raise the limit)";
+            throw BudgetError(s.str());
+        }
         return;
     }
     render::accumulate_filtered(pyr, impulses, view, out, m_aa, options);

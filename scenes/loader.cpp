@@ -664,6 +664,8 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
     if (auto l = top.table("limits")) {
         s.limits.max_impulses = l->number("max_impulses", s.limits.max_impulses, kPositive, "a count > 0");
         s.limits.max_memory_mib = l->number("max_memory_mib", s.limits.max_memory_mib, kPositive, "MiB > 0");
+        s.limits.max_pixel_evaluations = l->number(
+            "max_pixel_evaluations", s.limits.max_pixel_evaluations, kPositive, "a count > 0");
         l->finish();
     }
 

@@ -68,6 +68,9 @@ struct CameraConfig {
 struct Limits {
     double max_impulses = 5e7;    ///< live impulses per frame, all layers
     double max_memory_mib = 8192; ///< estimated peak memory of one frame
+    /// Pixel evaluations of a perspective frame's near field, per layer (the sum of its
+    /// impulses' pixel boxes), checked on every frame before they are evaluated.
+    double max_pixel_evaluations = 1e10;
 };
 
 /// How a layer enters the picture: its blend onto the result of the layers before it

@@ -983,6 +983,27 @@ TEST_CASE("far-field frames are bit-identical across threads, tiles and SIMD pat
     CHECK(std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)) == 0);
 }
 
+TEST_CASE("a perspective frame over its pixel budget is refused before any pixel is drawn",
+          "[render][perspective][errors]") {
+    PerspectiveCase pc;
+    sim::LayerSimulator s(pc.process, nullptr, {}, pc.kernel.radius());
+    render::PerspectiveStats st;
+    const Frame a = render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, &st);
+    REQUIRE(st.pixels > 1000);
+    render::EvalOptions eo;
+    eo.max_pixel_evaluations = double(st.pixels);  // exactly enough: drawn, same bits
+    const Frame b = render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, nullptr, eo);
+    CHECK(std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)) == 0);
+    eo.max_pixel_evaluations = double(st.pixels) - 1.0;
+    try {
+        render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, nullptr, eo);
+        FAIL("no PixelBudgetError");
+    } catch (const render::PixelBudgetError& e) {
+        CHECK(e.needed == double(st.pixels));
+        CHECK(e.budget == double(st.pixels) - 1.0);
+    }
+}
+
 TEST_CASE("a perspective workspace reused across frames and views changes no bits",
           "[render][perspective][determinism]") {
     PerspectiveCase pc;

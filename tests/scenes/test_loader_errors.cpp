@@ -267,3 +267,26 @@ TEST_CASE("a scene over the impulse or memory budget is refused with the estimat
     CHECK_THROWS_WITH(impulse::scenes::Renderer(tight),
                       Contains("MiB per frame, over the budget of 1 MiB (limits.max_memory_mib)"));
 }
+
+TEST_CASE("a perspective frame over the pixel-evaluation budget is refused before it is drawn",
+          "[scenes][errors]") {
+    // The impulse count does not bound a perspective frame's work: the near field's pixel boxes
+    // are counted on every frame before any pixel is evaluated.
+    const std::vector<std::string> camera = {"camera.type=\"perspective\"", "camera.height=16",
+                                             "camera.pitch=20", "camera.fov=60"};
+    auto with = [&](std::vector<std::string> extra) {
+        extra.insert(extra.begin(), camera.begin(), camera.end());
+        return load_scene_string(kValid, "pixels.toml", extra);
+    };
+    impulse::render::Frame f;
+    impulse::scenes::Renderer ok(with({}));
+    CHECK_NOTHROW(ok.render(0, f));
+    impulse::scenes::Renderer tight(with({"limits.max_pixel_evaluations=1000"}));
+    CHECK_THROWS_AS(tight.render(0, f), BudgetError);
+    CHECK_THROWS_WITH(tight.render(0, f),
+                      StartsWith("pixels.toml: layer[0] at t = 0 s needs ") &&
+                          Contains("pixel evaluations, over the budget of 1000 "
+                                   "(limits.max_pixel_evaluations"));
+    CHECK_THAT(error_of(with_line(9, "radius = 8.0\n[limits]\nmax_pixel_evaluations = -1")),
+               Contains("limits.max_pixel_evaluations = -1") && Contains("a count > 0"));
+}
