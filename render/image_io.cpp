@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <sstream>
 #include <system_error>
 
 #include "render/render.h"
@@ -115,6 +116,14 @@ Frame read_image(const std::string& path) {
     if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, px.data()))
         throw IoError(path + ": cannot read: " + in->geterror());
     in->close();
+    for (size_t i = 0; i < px.size(); ++i)
+        if (!std::isfinite(px[i])) {
+            const size_t p = i / size_t(nc);
+            std::ostringstream s;
+            s << path << ": expected finite pixel values, found " << px[i] << " at pixel ("
+              << p % size_t(w) << ", " << p / size_t(w) << ") channel " << i % size_t(nc);
+            throw IoError(s.str());
+        }
     Frame f;
     f.resize(w, h);
     for (size_t i = 0; i < size_t(w) * h; ++i) {

@@ -254,7 +254,11 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
             g.spacing = f.number("spacing", 1.0, kPositive, "texture units per image pixel, > 0");
             if (auto o = f.pair("origin", "[x, y] in texture units"))
                 g.origin_x = (*o)[0], g.origin_y = (*o)[1];
-            field = sim::make_grid_orientation(std::move(g));
+            try {
+                field = sim::make_grid_orientation(std::move(g));
+            } catch (const ValueError& e) {
+                f.fail(pn, "path", e.what());
+            }
             break;
         }
         case 10:  // another layer's field: the renderer sets the field for each frame

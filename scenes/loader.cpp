@@ -251,7 +251,11 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
                 g.spacing = f.number("spacing", 1.0, kPositive, "texture units per image pixel, > 0");
                 if (auto o = f.pair("origin", "[x, y] in texture units")) g.origin_x = (*o)[0], g.origin_y = (*o)[1];
                 auto gain = f.keyframed("gain", 1.0);
-                sum->push(sim::make_grid_flow(std::move(g), gain));
+                try {
+                    sum->push(sim::make_grid_flow(std::move(g), gain));
+                } catch (const ValueError& e) {
+                    f.fail(pn, "path", e.what());
+                }
                 break;
             }
             case 6:  // another layer's field as stream function (scenes/compose_config.cpp)

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <sstream>
 
 #include "scenes/reader.h"
 #include "scenes/scenes.h"
@@ -47,6 +48,16 @@ bool read_rgb_pixels(const std::string& path, std::vector<float>& px, int& chann
         error = "cannot read: " + in->geterror();
         return false;
     }
+    for (size_t i = 0; i < px.size(); ++i)
+        if (!std::isfinite(px[i])) {  // a NaN would break the sort by luminance
+            const size_t p = i / size_t(channels);
+            std::ostringstream s;
+            s << "expected finite pixel values, found " << px[i] << " at pixel ("
+              << p % size_t(spec.width) << ", " << p / size_t(spec.width) << ") channel "
+              << i % size_t(channels);
+            error = s.str();
+            return false;
+        }
     return true;
 }
 

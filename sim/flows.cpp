@@ -8,11 +8,13 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <sstream>
 
 #include "sim/curl_detail.h"
 #include "sim/layout.h"
 #include "sim/rng.h"
 #include "sim/sim.h"
+#include "util/errors.h"
 
 namespace impulse::sim {
 
@@ -428,6 +430,19 @@ std::unique_ptr<Flow> make_curl_noise_flow(uint64_t seed, double scale, Keyframe
     return std::make_unique<CurlNoiseFlow>(seed, scale, std::move(speed), period);
 }
 std::unique_ptr<Flow> make_grid_flow(VectorGrid grid, Keyframed gain) {
+    const size_t n = size_t(std::max(grid.width, 0)) * size_t(std::max(grid.height, 0));
+    if (grid.width < 1 || grid.height < 1 || grid.vx.size() != n || grid.vy.size() != n ||
+        !(grid.spacing > 0.0) || !std::isfinite(grid.spacing) || !std::isfinite(grid.origin_x) ||
+        !std::isfinite(grid.origin_y))
+        throw ValueError(
+            "grid flow: expected width, height >= 1, width * height velocities and spacing > 0");
+    for (size_t i = 0; i < n; ++i)
+        if (!std::isfinite(grid.vx[i]) || !std::isfinite(grid.vy[i])) {
+            std::ostringstream s;
+            s << "grid flow: expected finite velocities, found (" << grid.vx[i] << ", "
+              << grid.vy[i] << ") at pixel (" << i % grid.width << ", " << i / grid.width << ")";
+            throw ValueError(s.str());
+        }
     return std::make_unique<GridFlow>(std::move(grid), std::move(gain));
 }
 

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <sstream>
 
 #include "sim/sim.h"
 #include "util/errors.h"
@@ -142,6 +143,14 @@ public:
             throw ValueError(
                 "orientation grid: expected width, height >= 1, 1 or 2 channels and "
                 "width * height * channels values");
+        for (size_t i = 0; i < m_g.values.size(); ++i)
+            if (!std::isfinite(m_g.values[i])) {
+                std::ostringstream s;
+                const size_t p = i / m_g.channels;
+                s << "orientation grid: expected finite values, found " << m_g.values[i]
+                  << " at pixel (" << p % m_g.width << ", " << p / m_g.width << ")";
+                throw ValueError(s.str());
+            }
         m_vx.resize(n), m_vy.resize(n);
         for (size_t i = 0; i < n; ++i) {
             if (m_g.channels == 1) {

@@ -166,6 +166,7 @@ struct VectorGrid {
     std::vector<float> vx, vy;
     double origin_x = 0, origin_y = 0, spacing = 1.0;
 };
+/// Throws ValueError for a malformed grid or a velocity that is not finite (naming its pixel).
 std::unique_ptr<Flow> make_grid_flow(VectorGrid grid, Keyframed gain);
 
 // ---------------------------------------------------------------------------------------------
@@ -212,6 +213,7 @@ struct OrientationGrid {
     std::vector<float> values;  ///< width * height * channels, row-major, interleaved
     double origin_x = 0, origin_y = 0, spacing = 1.0;
 };
+/// Throws ValueError for a malformed grid or a value that is not finite (naming its pixel).
 std::shared_ptr<OrientationField> make_grid_orientation(OrientationGrid grid);
 
 // ---------------------------------------------------------------------------------------------

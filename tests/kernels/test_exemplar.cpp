@@ -238,6 +238,11 @@ TEST_CASE("bad exemplars are refused with a clear message", "[kernels][errors]")
     CHECK_THROWS_WITH(K::kernel_from_exemplar(small.data(), 4, 4),
                       Contains("expected at least 8x8 pixels"));
     CHECK_THROWS_AS(impulse::render::read_image(kExemplars + "missing.png"), impulse::IoError);
+    // A NaN or infinity in an input image is refused, naming the pixel (a NaN would break the
+    // sorts and sums every image input goes through).
+    CHECK_THROWS_WITH(impulse::render::read_image(std::string(IMPULSE_SOURCE_DIR) +
+                                                  "/tests/scenes/errors/images/colours_nan.pfm"),
+                      Contains("expected finite pixel values, found nan at pixel (1, 2) channel 2"));
 
     namespace S = impulse::scenes;
     const std::string head =

@@ -14,6 +14,7 @@
 #include <cstring>
 #include <filesystem>
 #include <functional>
+#include <limits>
 #include <numbers>
 #include <sstream>
 #include <string>
@@ -105,6 +106,20 @@ TEST_CASE("orientation fields: sampled angles and directions", "[sim][orientatio
     CHECK(angle_at(*fd, 15, 5) == Approx(-kPi / 2));
     d.channels = 3;
     CHECK_THROWS_AS(sim::make_grid_orientation(d), impulse::ValueError);
+    d.channels = 2;
+    d.values[3] = std::numeric_limits<float>::quiet_NaN();
+    CHECK_THROWS_WITH(sim::make_grid_orientation(d),
+                      Catch::Contains("expected finite values, found nan at pixel (1, 0)"));
+    // the same for image flows (a NaN velocity crashed the simulator)
+    sim::VectorGrid v;
+    v.width = 2, v.height = 2;
+    v.vx = {1.0f, 1.0f, 1.0f, 1.0f}, v.vy = {0.0f, 0.0f, std::numeric_limits<float>::infinity(), 0.0f};
+    CHECK_THROWS_WITH(sim::make_grid_flow(v, 1.0),
+                      Catch::Contains("expected finite velocities, found (1, inf) at pixel (0, 1)"));
+    v.vy[2] = 0.0f;
+    CHECK_NOTHROW(sim::make_grid_flow(v, 1.0));
+    v.vx.pop_back();
+    CHECK_THROWS_AS(sim::make_grid_flow(v, 1.0), impulse::ValueError);
 }
 
 TEST_CASE("orientation fields in the simulator: current positions and jitter and random access",
