@@ -88,12 +88,17 @@ void read_camera_view(Reader& r, CameraConfig& c, int width, int height) {
         c.position_x = sim::Keyframed(width / 2.0);
         c.position_y = sim::Keyframed(height / 2.0);
         if (r.node("position")) {
-            auto p = r.pair("position", "[x, y]: the camera's foot on the plane, texture units");
+            auto p = r.pair("position",
+                            "[x, y]: the camera's foot on the plane, texture units, each within "
+                            "+-1e12",
+                            on_plane);
             c.position_x = sim::Keyframed((*p)[0]);
             c.position_y = sim::Keyframed((*p)[1]);
         }
-        if (r.has("position_x")) c.position_x = r.keyframed("position_x", width / 2.0);
-        if (r.has("position_y")) c.position_y = r.keyframed("position_y", height / 2.0);
+        if (r.has("position_x"))
+            c.position_x = r.keyframed("position_x", width / 2.0, on_plane, kOnPlane);
+        if (r.has("position_y"))
+            c.position_y = r.keyframed("position_y", height / 2.0, on_plane, kOnPlane);
         c.altitude =
             r.keyframed("height", 100.0, kPositive, "a height > 0 above the plane (texture units)");
         c.pitch = r.keyframed(
@@ -125,8 +130,8 @@ void read_camera_view(Reader& r, CameraConfig& c, int width, int height) {
     const std::array<std::string_view, 4> modes = {"auto", "blend", "nearest", "off"};
     c.antialias = static_cast<CameraConfig::AntiAliasMode>(r.choice("antialias", modes, 0));
     c.filter = r.number(
-        "filter", 0.5, [](double v) { return v > 0.0 && v <= 8.0; },
-        "a pixel filter standard deviation in (0, 8] pixels");
+        "filter", 0.5, [](double v) { return v >= 0.1 && v <= 8.0; },
+        "a pixel filter standard deviation in [0.1, 8] pixels");
     c.cutoff = r.number(
         "cutoff", 0.01, [](double v) { return v > 0.0 && v <= 0.5; },
         "a fraction in (0, 0.5] of the texture's standard deviation");

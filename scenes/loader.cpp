@@ -132,15 +132,17 @@ CameraConfig read_camera(std::optional<Reader> r, int width, int height) {
     r->refuse_keyframes("center");
     if (auto ct = r->node("center")) {
         if (ct->is_array()) {
-            auto p = r->pair("center", "[x, y] in texture units");
+            auto p = r->pair("center", "[x, y] in texture units, each within +-1e12", detail::on_plane);
             c.center_x = sim::Keyframed((*p)[0]);
             c.center_y = sim::Keyframed((*p)[1]);
         } else {
             r->fail(ct, "center", "expected [x, y] in texture units");
         }
     }
-    if (r->has("center_x")) c.center_x = r->keyframed("center_x", width / 2.0);
-    if (r->has("center_y")) c.center_y = r->keyframed("center_y", height / 2.0);
+    if (r->has("center_x"))
+        c.center_x = r->keyframed("center_x", width / 2.0, detail::on_plane, detail::kOnPlane);
+    if (r->has("center_y"))
+        c.center_y = r->keyframed("center_y", height / 2.0, detail::on_plane, detail::kOnPlane);
     c.zoom = r->keyframed("zoom", 1.0, kPositive, "a number > 0 (pixels per texture unit)");
     detail::read_camera_view(*r, c, width, height);  // type, perspective, anti-aliasing
     r->finish();

@@ -7,6 +7,7 @@
 #include <toml++/toml.h>
 
 #include <array>
+#include <cmath>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -21,6 +22,13 @@
 #include "sim/sim.h"
 
 namespace impulse::scenes::detail {
+
+/// Camera centres and positions lie within this distance of the origin on each axis (texture
+/// units): doubles there still resolve points 2e-4 apart, and the seeding cells' indices stay
+/// exact. Beyond, pixels would collapse onto the same texture point.
+inline constexpr double kMaxPlaneCoordinate = 1e12;
+inline bool on_plane(double v) { return std::abs(v) <= kMaxPlaneCoordinate; }
+inline constexpr const char* kOnPlane = "a coordinate in texture units within +-1e12";
 
 /// Where values came from: the file name and the `--set` overrides by key path.
 struct Source {
