@@ -53,6 +53,18 @@ render::Shading Scene::shading_at(double t) const {
 
 namespace {
 
+/// Runs f, naming the scene and layer i in a ValueError it throws: a flow too fast for the
+/// layer's max_travel is found only when a view's birth region is computed. Rethrown as a
+/// SceneError, so a layer read by another (an orientation source) is not named twice.
+template <class F>
+decltype(auto) in_layer(const Scene& scene, size_t i, F&& f) {
+    try {
+        return f();
+    } catch (const ValueError& e) {
+        throw SceneError(scene.path + ": layer[" + std::to_string(i) + "]: " + e.what());
+    }
+}
+
 /// (1/T) int_0^T s(t - a) w(a)^2 da for births thinned by s = process.density_scale (births at
 /// t - a, loop-reduced as the simulator reduces them), so that Var = lambda_max E[a^2] int h^2
 /// times this (Campbell's theorem for a Poisson process of rate beta(t_b) = lambda s(t_b) / T,
@@ -266,13 +278,17 @@ double Renderer::estimated_impulses() const {
         // A warp reads the layer up to its largest displacement beyond the view: about 5 sd of
         // the sources over a frame of a million pixels, 6 sd taken.
         if (c.warp) box = box.expanded(6.0 * c.warp->amount.max_abs());
-        n += sim::expected_impulses(S.sims[i].config(), S.sims[i].birth_region(box));
+        n += in_layer(S.scene, i, [&] {
+            return sim::expected_impulses(S.sims[i].config(), S.sims[i].birth_region(box));
+        });
         // The orientation source sampled where this layer's impulses are.
         if (c.orientation) {
             const size_t j = c.orientation->source;
-            n += sim::expected_impulses(
-                S.sims[j].config(),
-                S.sims[j].birth_region(box.expanded(S.scene.layers[i].kernel.radius)));
+            n += in_layer(S.scene, j, [&] {
+                return sim::expected_impulses(
+                    S.sims[j].config(),
+                    S.sims[j].birth_region(box.expanded(S.scene.layers[i].kernel.radius)));
+            });
         }
     }
     return n;
@@ -468,7 +484,7 @@ void Renderer::State::raw(size_t i, const Pass& pass, const render::View& v, Spa
 void Renderer::State::layer_impulses(size_t i, const Pass& pass, const sim::Region& box,
                                      sim::Impulses& out) {
     if (orientations[i]) orient(i, pass, box.bounds());
-    sims[i].impulses_at(pass.frame, box, out);
+    in_layer(scene, i, [&] { sims[i].impulses_at(pass.frame, box, out); });
     const LayerConfig& layer = scene.layers[i];
     const double tl = scene.layer_time(i, pass.frame);  // the layer's keys run on its own time
     const double gain = layer.gain.value(tl);

@@ -9,6 +9,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "sim/angle.h"
 #include "sim/sim.h"
 #include "util/errors.h"
 
@@ -21,7 +22,7 @@ class ConstantOrientation final : public OrientationField {
 public:
     explicit ConstantOrientation(Keyframed a) : m_angle(std::move(a)) {}
     void angles(double t, size_t n, const double*, const double*, float* theta) const override {
-        const float a = static_cast<float>(m_angle.value(t));
+        const float a = detail::theta_of(m_angle.value(t));
         std::fill(theta, theta + n, a);
     }
 
@@ -125,7 +126,7 @@ public:
         for (size_t i = 0; i < n; ++i) {
             const double u = (x[i] - m_ox) * c + (y[i] - m_oy) * s;
             // dw/du of w = A sin(k u + phase)
-            theta[i] = static_cast<float>(angle + std::atan(amp * k * std::cos(k * u + phase)));
+            theta[i] = detail::theta_of(angle + std::atan(amp * k * std::cos(k * u + phase)));
         }
     }
 

@@ -12,6 +12,7 @@
 #include <sstream>
 #include <tuple>
 
+#include "sim/angle.h"
 #include "sim/layout.h"
 #include "sim/normal.h"
 #include "sim/rng.h"
@@ -331,7 +332,7 @@ void LayerSimulator::State::field_orientation(int64_t target, const std::vector<
     if (jitter != 0.0) {
         constexpr double kInvPi = 1.0 / 3.14159265358979323846;
         for (size_t j = 0; j < out.size(); ++j)
-            out.theta[j] = static_cast<float>(out.theta[j] + jitter * (th0[j] * kInvPi - 1.0));
+            out.theta[j] = detail::theta_of(out.theta[j] + jitter * (th0[j] * kInvPi - 1.0));
     }
 }
 
@@ -481,7 +482,7 @@ void LayerSimulator::impulses_at(int64_t frame, const Region& view, Impulses& ou
         out.x.push_back(P.x[i]);
         out.y.push_back(P.y[i]);
         out.weight.push_back(static_cast<float>(w));
-        out.theta.push_back(static_cast<float>(P.th[i]));
+        out.theta.push_back(detail::theta_of(P.th[i]));
         emitted.push_back(i);
     }
     if (c.orientation == OrientationMode::Flow && S.flow && !still) {

@@ -290,3 +290,17 @@ TEST_CASE("a perspective frame over the pixel-evaluation budget is refused befor
     CHECK_THAT(error_of(with_line(9, "radius = 8.0\n[limits]\nmax_pixel_evaluations = -1")),
                Contains("limits.max_pixel_evaluations = -1") && Contains("a count > 0"));
 }
+
+TEST_CASE("a flow too fast for max_travel is refused naming the scene and the layer",
+          "[scenes][errors]") {
+    // Found only when a view's birth region is computed (the renderer's estimate), not by the
+    // loader: the message carries the scene and the layer all the same.
+    const auto scene = load_scene_string(
+        with_line(6, "density = 16.0\nlifetime = 1.0\n[[layer.flow]]\ntype = \"uniform\"\n"
+                     "velocity = [1e5, 0.0]"),
+        "fast.toml");
+    CHECK_THROWS_AS(impulse::scenes::Renderer(scene), impulse::SceneError);
+    CHECK_THROWS_WITH(impulse::scenes::Renderer(scene),
+                      StartsWith("fast.toml: layer[0]: flow speed bound 100000 units/s") &&
+                          Contains("beyond max_travel = 4096"));
+}

@@ -87,6 +87,16 @@ TEST_CASE("orientation fields: analytic angles", "[sim][orientation]") {
     CHECK(angle_at(*sine, 50, 0) == Approx(-std::atan(2 * kPi * A / L)));
     const auto tilted = sim::make_sine_orientation(A, L, 0.0, kPi / 2, 5.0, 0.0);
     CHECK(angle_at(*tilted, 5.0, 25.0) == Approx(kPi / 2));  // a crest of the rotated family
+
+    // Angles beyond +-64 rad are wrapped into [-pi, pi] before they become a float theta: 1e300
+    // rad had become an infinite theta, and the renderer crashed on its cosine.
+    for (double a : {1e300, -1e300, 1e10, 100.0}) {
+        const float th = angle_at(*sim::make_constant_orientation(sim::Keyframed{a}), 0, 0);
+        CHECK(th == static_cast<float>(std::remainder(a, 2.0 * kPi)));
+        CHECK(std::abs(th) <= kPi + 1e-6);
+        CHECK(std::isfinite(angle_at(*sim::make_sine_orientation(A, L, 0.0, a, 0.0, 0.0), 3, 4)));
+    }
+    CHECK(angle_at(*sim::make_constant_orientation(sim::Keyframed{60.0}), 0, 0) == 60.0f);
 }
 
 TEST_CASE("orientation fields: sampled angles and directions", "[sim][orientation]") {
@@ -163,6 +173,13 @@ TEST_CASE("orientation fields in the simulator: current positions and jitter and
     }
     // uniform on [-0.3, 0.3): sd 0.3 / sqrt(3) = 0.173
     CHECK(std::sqrt(spread / double(jit.size())) == Approx(0.3 / std::sqrt(3.0)).epsilon(0.15));
+
+    // A huge jitter gives finite thetas in [-pi, pi] (it gave infinities, and a crash).
+    c.orientation_jitter = 1e300;
+    sim::LayerSimulator s4(c, flow, {}, 16.0);
+    s4.impulses_at(20, view, jit);
+    REQUIRE(jit.size() == seq.size());
+    for (float th : jit.theta) CHECK(std::abs(th) <= kPi + 1e-6);
 }
 
 TEST_CASE("orientation modes: only vorticity integrates the spin", "[sim][orientation]") {
