@@ -61,9 +61,9 @@ std::optional<KernelType> kernel_type_from_string(std::string_view name) {
 
 void validate(const KernelParams& p) {
     require_positive("radius", p.radius);
-    if (p.radius > kMaxKernelRadius) {
+    if (p.radius > kMaxKernelRadius || p.radius < kMinKernelRadius) {
         std::ostringstream s;
-        s << "radius = " << p.radius << ": must be at most 1e6 texture units";
+        s << "radius = " << p.radius << ": must be in [1e-6, 1e6] texture units";
         throw ValueError(s.str());
     }
     require_finite("orientation", p.orientation);

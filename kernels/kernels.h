@@ -56,8 +56,9 @@ struct KernelParams {
     std::shared_ptr<const SampledKernel> sampled;
 };
 
-/// The largest support radius a kernel may have, texture units.
-inline constexpr double kMaxKernelRadius = 1e6;
+/// The largest and smallest support radius a kernel may have, texture units (below, its low-passed
+/// levels underflow).
+inline constexpr double kMaxKernelRadius = 1e6, kMinKernelRadius = 1e-6;
 
 /// Throws impulse::ValueError naming the first invalid field ("radius = -1: must be > 0").
 void validate(const KernelParams& params);

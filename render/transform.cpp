@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <sstream>
 #include <vector>
 
 #include "render/render.h"
@@ -25,12 +26,27 @@ double ring_uniform(uint64_t seed, uint64_t k) {
     return static_cast<double>(z >> 11) * 0x1.0p-53;
 }
 
+/// More rings than this out to the view's far corner are refused (a ring_width far below the
+/// view's size, or a centre far from the view): the table would take minutes and gigabytes.
+constexpr double kMaxRings = 1e7;
+
 /// Ring boundaries R_0 = 0 < R_1 < ... covering [0, r_max] for growth > 0.
 std::vector<double> ring_radii(const FieldTransform& t, double r_max) {
+    auto refuse = [&](double count) {
+        std::ostringstream s;
+        s << "wood: rings of width " << t.ring_width << " out to the view's far corner, " << r_max
+          << " texture units from the centre, would number about " << count
+          << ", over the limit of " << kMaxRings
+          << " (widen ring_width, or bring the centre nearer the view)";
+        throw ValueError(s.str());
+    };
+    if (!(r_max / t.ring_width <= kMaxRings)) refuse(r_max / t.ring_width);  // on average
     std::vector<double> radii{0.0};
-    for (uint64_t k = 0; radii.back() <= r_max; ++k)
+    for (uint64_t k = 0; radii.back() <= r_max; ++k) {
+        if (radii.size() > kMaxRings) refuse(r_max / t.ring_width);  // narrow rings by chance
         radii.push_back(radii.back() +
                         t.ring_width * (1.0 + t.growth * (2.0 * ring_uniform(t.seed, k) - 1.0)));
+    }
     return radii;
 }
 

@@ -52,7 +52,8 @@ double wood_profile(double s, double sharpness);
 
 /// Replaces every pixel's value f of `field` by the transform at the pixel's centre in texture
 /// space under the orthographic `view` (same size as the field), with z = (f - mean) / sd,
-/// sd > 0. Pure per-pixel work, deterministic for any thread count.
+/// sd > 0. Pure per-pixel work, deterministic for any thread count. Throws ValueError when wood
+/// rings with growth > 0 would number over 1e7 out to the view's far corner.
 void apply_transform(const FieldTransform& transform, const View& view, double mean, double sd,
                      Frame& field);
 

@@ -133,8 +133,8 @@ void read_camera_view(Reader& r, CameraConfig& c, int width, int height) {
         "filter", 0.5, [](double v) { return v >= 0.1 && v <= 8.0; },
         "a pixel filter standard deviation in [0.1, 8] pixels");
     c.cutoff = r.number(
-        "cutoff", 0.01, [](double v) { return v > 0.0 && v <= 0.5; },
-        "a fraction in (0, 0.5] of the texture's standard deviation");
+        "cutoff", 0.01, [](double v) { return v >= 1e-6 && v <= 0.5; },
+        "a fraction in [1e-6, 0.5] of the texture's standard deviation");
     c.anisotropic = r.boolean("anisotropic", true);
 }
 

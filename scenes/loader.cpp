@@ -220,7 +220,10 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
                 break;
             }
             case 4: {  // curl noise
-                const double scale = f.number("scale", 64.0, kPositive, "a length > 0");
+                const double scale = f.number(
+                    "scale", 64.0,
+                    [](double v) { return v >= sim::kMinCurlScale && v <= sim::kMaxCurlScale; },
+                    "a length in [1e-3, 1e9] texture units");
                 auto speed = f.keyframed("speed", 10.0, kNonNegative, "a speed >= 0");
                 const uint64_t seed = static_cast<uint64_t>(f.integer("seed", 1, 0, INT64_MAX));
                 sum->push(sim::make_curl_noise_flow(mix_seed(process.seed, seed), scale, speed, process.period));

@@ -405,7 +405,12 @@ void Renderer::render(int64_t frame, render::Frame& out, const render::EvalOptio
     if (S.scene.transform.type != render::FieldTransform::Type::None) {
         // Marble and wood (Lewis 1989 §5.1) of the field in standard deviations.
         const Theory th = scene_theory(S.scene, t);
-        render::apply_transform(S.scene.transform, view, th.mean, std::sqrt(th.variance), out);
+        try {
+            render::apply_transform(S.scene.transform, view, th.mean, std::sqrt(th.variance),
+                                    out);
+        } catch (const ValueError& e) {
+            throw SceneError(S.scene.path + ": shading.transform: " + e.what());
+        }
     }
 }
 

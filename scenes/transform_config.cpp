@@ -35,7 +35,8 @@ render::FieldTransform read_transform(std::optional<Reader> r, const CameraConfi
         t.phase = r->number("phase", 0.0);
     } else {
         t.center_x = width / 2.0, t.center_y = height / 2.0;
-        if (auto c = r->pair("center", "[x, y] in texture units")) t.center_x = (*c)[0], t.center_y = (*c)[1];
+        if (auto c = r->pair("center", "[x, y] in texture units, each within +-1e12", on_plane))
+            t.center_x = (*c)[0], t.center_y = (*c)[1];
         t.ring_width = r->number(
             "ring_width", t.ring_width, [](double v) { return v > 0.0; },
             "a ring width > 0 (texture units)");

@@ -181,9 +181,17 @@ class CurlNoiseFlow final : public Flow {
 public:
     static constexpr double kPerCell = 4.0;  // impulses per s x s cell: 4 pi per kernel area
     static constexpr int kNodesPerCell = 8;
+    /// Potential lattices larger than this are refused (8 bytes a node: 800 MB).
+    static constexpr double kMaxNodes = 1e8;
     CurlNoiseFlow(uint64_t seed, double scale, Keyframed speed,
                   std::optional<std::array<double, 2>> period)
         : m_speed(std::move(speed)) {
+        if (!(scale >= kMinCurlScale && scale <= kMaxCurlScale)) {
+            std::ostringstream s;
+            s << "curl flow: scale = " << scale << ": expected a length in [" << kMinCurlScale
+              << ", " << kMaxCurlScale << "] texture units";
+            throw ValueError(s.str());
+        }
         m_config.seed = seed;
         m_config.layer = 0x40000000u;  // a stream of its own, apart from every layer's births
         m_config.cell_size = scale;
@@ -199,6 +207,18 @@ public:
     }
 
     void prepare(const Box& region) override {
+        // The lattice covers the region with nodes scale / 8 apart: refuse one too large for
+        // memory (a small scale over a perspective view's region) before allocating it.
+        const double nodes = ((region.x1 - region.x0) / m_hx + 6.0) *
+                             ((region.y1 - region.y0) / m_hy + 6.0);
+        if (!(nodes <= kMaxNodes)) {
+            std::ostringstream s;
+            s << "curl flow: scale = " << m_config.cell_size << " over a region of "
+              << region.x1 - region.x0 << " x " << region.y1 - region.y0
+              << " texture units needs a potential lattice of " << nodes
+              << " nodes, over the limit of " << kMaxNodes << " (raise the scale)";
+            throw ValueError(s.str());
+        }
         const int64_t i0 = static_cast<int64_t>(std::floor(region.x0 / m_hx)) - 2;
         const int64_t j0 = static_cast<int64_t>(std::floor(region.y0 / m_hy)) - 2;
         const int64_t i1 = static_cast<int64_t>(std::floor(region.x1 / m_hx)) + 3;

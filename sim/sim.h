@@ -157,8 +157,11 @@ std::unique_ptr<Flow> make_source_flow(Keyframed cx, Keyframed cy, Keyframed rat
 /// with compact kernel (1 - r^2/s^2)^3 of radius `scale`; consistent (counter-based per cell)
 /// and periodic when `period` is given (a multiple of the cell size is chosen). `speed` is the
 /// RMS speed.
+/// Throws ValueError for a scale outside [kMinCurlScale, kMaxCurlScale]; prepare() throws
+/// ValueError when the lattice over its region would exceed 1e8 nodes.
 std::unique_ptr<Flow> make_curl_noise_flow(uint64_t seed, double scale, Keyframed speed,
                                            std::optional<std::array<double, 2>> period);
+inline constexpr double kMinCurlScale = 1e-3, kMaxCurlScale = 1e9;
 /// A field sampled from a 2-channel grid (vx, vy in units per second), bilinear, clamped at the
 /// edges; grid pixel (i, j) sits at texture point origin + (i + 0.5, j + 0.5) * spacing.
 struct VectorGrid {

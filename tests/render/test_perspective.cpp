@@ -904,7 +904,7 @@ TEST_CASE("camera scene keys: perspective cameras load and bad cameras get one l
     CHECK_THAT(error_of("antialias = \"fast\""),
                Contains("expected one of auto, blend, nearest, off"));
     CHECK_THAT(error_of("cutoff = 0.0"),
-               Contains("camera.cutoff = 0: expected a fraction in (0, 0.5]"));
+               Contains("camera.cutoff = 0: expected a fraction in [1e-6, 0.5]"));
 }
 
 TEST_CASE("perspective frames stay bounded however close the horizon", "[render][perspective]") {

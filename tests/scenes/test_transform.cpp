@@ -228,3 +228,24 @@ TEST_CASE("the display range follows the transform", "[scenes][transform]") {
     CHECK(none.hi == Approx(-none.lo));
     CHECK(none.hi > 3.0);  // mean +- 3 sd of the untransformed field
 }
+
+TEST_CASE("wood rings too many for the view are refused, not tabulated for minutes",
+          "[scenes][transform][errors]") {
+    // 64 x 64 view centred on the trunk: the far corner is 45 units out. Rings of width 1e-6 with
+    // growth (their boundaries tabulated) would number 4.5e7, over the limit of 1e7; a
+    // ring_width of 1e-6 had run for minutes. Growth near 1 makes some rings thin, not many.
+    const std::string head = "[output]\nsize = [64, 64]\n[[layer]]\n[shading.transform]\n"
+                             "type = \"wood\"\n";
+    Frame f;
+    impulse::scenes::Renderer many(
+        load_scene_string(head + "ring_width = 1e-6\ngrowth = 0.5\n", "w.toml"));
+    CHECK_THROWS_AS(many.render(0, f), impulse::SceneError);
+    CHECK_THROWS_WITH(many.render(0, f),
+                      Catch::StartsWith("w.toml: shading.transform: wood: rings of width 1e-06") &&
+                          Catch::Contains("over the limit of 1e+07"));
+    impulse::scenes::Renderer thin(
+        load_scene_string(head + "ring_width = 8.0\ngrowth = 0.99999999\n", "w.toml"));
+    CHECK_NOTHROW(thin.render(0, f));
+    impulse::scenes::Renderer periodic(load_scene_string(head + "ring_width = 1e-6\n", "w.toml"));
+    CHECK_NOTHROW(periodic.render(0, f));  // no table without growth
+}

@@ -14,6 +14,7 @@
 
 #include "sim/curl_detail.h"
 #include "sim/sim.h"
+#include "util/errors.h"
 
 namespace {
 
@@ -136,6 +137,20 @@ TEST_CASE("curl noise: the baseline and AVX2 inner loops give the same bits", "[
     size_t moved = 0;
     for (size_t i = 0; i < n; ++i) moved += vx[0][i] != 1.0 && vy[0][i] != -1.0 && curl[0][i] != 0.5;
     CHECK(moved > n * 9 / 10);
+}
+
+TEST_CASE("curl noise: scales outside [1e-3, 1e9] and lattices over 1e8 nodes are refused",
+          "[sim][flows][errors]") {
+    // A scale of 1 over a perspective view's region of 1e4 units needs (1e4 / 0.125)^2 = 6.4e9
+    // nodes: it failed with std::bad_alloc; 1e-300 overflowed the node indices.
+    CHECK_THROWS_WITH(sim::make_curl_noise_flow(1, 1e-300, 16.0, std::nullopt),
+                      Catch::Contains("scale = 1e-300: expected a length in [0.001, 1e+09]"));
+    CHECK_THROWS_AS(sim::make_curl_noise_flow(1, 1e300, 16.0, std::nullopt), impulse::ValueError);
+    auto flow = sim::make_curl_noise_flow(1, 1.0, 16.0, std::nullopt);
+    CHECK_THROWS_WITH(flow->prepare({0.0, 0.0, 1e4, 1e4}),
+                      Catch::Contains("needs a potential lattice of") &&
+                          Catch::Contains("over the limit of 1e+08 (raise the scale)"));
+    CHECK_NOTHROW(flow->prepare({0.0, 0.0, 100.0, 100.0}));  // 800 x 800 nodes
 }
 
 TEST_CASE("curl noise: v is divergence-free and the curl output is its vorticity", "[sim][flows]") {
