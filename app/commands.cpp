@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <atomic>
+#include <charconv>
 #include <chrono>
 #include <cmath>
 #include <csignal>
@@ -58,8 +59,19 @@ private:
     std::chrono::steady_clock::time_point m_start;
 };
 
+/// A whole number of `option`'s value `text` in [0, 2^63 - 1]; out of range is an error, not
+/// clamped (strtoll and CLI11 clamp).
+long long whole_number(const std::string& option, const std::string& text, const std::string& digits,
+                       const std::string& expected) {
+    long long v = 0;
+    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), v);
+    if (ec != std::errc() || end != digits.data() + digits.size() || v < 0)
+        throw ValueError(option + " " + text + ": expected " + expected);
+    return v;
+}
+
 std::vector<std::string> overrides_for(const std::vector<std::string>& sets, const std::string& size,
-                                       long long seed) {
+                                       const std::string& seed) {
     std::vector<std::string> o = sets;
     if (!size.empty()) {
         static const std::regex re(R"((\d+)x(\d+))");
@@ -68,7 +80,9 @@ std::vector<std::string> overrides_for(const std::vector<std::string>& sets, con
             throw ValueError("--size " + size + ": expected WxH in pixels, e.g. 1920x1080");
         o.push_back("output.size=[" + m[1].str() + "," + m[2].str() + "]");
     }
-    if (seed >= 0) o.push_back("seed=" + std::to_string(seed));
+    if (!seed.empty())
+        o.push_back("seed=" + std::to_string(whole_number(
+                                  "--seed", seed, seed, "an integer in [0, 9223372036854775807]")));
     return o;
 }
 
@@ -112,8 +126,9 @@ std::pair<long long, long long> parse_frame_range(const std::string& text, long 
     std::smatch m;
     if (!std::regex_match(text, m, re))
         throw ValueError("--frames " + text + ": expected A-B or A (inclusive, 0-based frame numbers)");
-    const long long a = std::stoll(m[1].str());
-    const long long b = m[2].matched ? std::stoll(m[2].str()) : a;
+    const std::string expected = "frame numbers in [0, 9223372036854775807]";
+    const long long a = whole_number("--frames", text, m[1].str(), expected);
+    const long long b = m[2].matched ? whole_number("--frames", text, m[2].str(), expected) : a;
     if (a > b) throw ValueError("--frames " + text + ": expected A <= B");
     if (b >= frames)
         throw ValueError("--frames " + text + ": outside [0, " + std::to_string(frames) +
@@ -299,7 +314,7 @@ std::string composition_text(const scenes::LayerConfig& l) {
 
 int run_info(const InfoOptions& opt) {
     const std::string path = scenes::resolve_scene(opt.scene);
-    scenes::Scene scene = scenes::load_scene(path, overrides_for(opt.sets, opt.size, -1));
+    scenes::Scene scene = scenes::load_scene(path, overrides_for(opt.sets, opt.size, ""));
     for (const auto& w : scene.warnings) std::cerr << w << "\n";
     scenes::Renderer r(scene);
     const auto t = scenes::scene_theory(scene);

@@ -10,7 +10,7 @@ namespace impulse::app {
 struct RenderOptions {
     std::string scene, output, frames, size, codec;
     std::vector<std::string> sets;
-    long long seed = -1;  ///< -1: the scene's own
+    std::string seed;  ///< --seed as given ("": the scene's own); checked to be in [0, 2^63 - 1]
     int threads = 0;
     int tile = 128;
     bool resume = false;

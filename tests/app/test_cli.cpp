@@ -143,6 +143,22 @@ TEST_CASE("bad output paths and frame ranges are refused before rendering", "[cl
         CHECK_THAT(run(dir, "render " + quote(scene) + " -o " + quote(dir / "o.png") + " --frames 0 --size 12by4").err,
                    Contains("--size 12by4"));
     }
+    SECTION("seeds and frame numbers out of range are refused, not clamped") {
+        // CLI11 and strtoll clamp 1e23 to 2^63 - 1, and a negative seed meant "the scene's own".
+        for (const char* seed : {"-5", "99999999999999999999999", "1.5"}) {
+            const Result r = run(dir, "render " + quote(scene) + " -o " + quote(dir / "o.png") +
+                                          " --frames 0 --seed " + seed);
+            CHECK(r.status != 0);
+            REQUIRE(r.err_lines().size() == 1);
+            CHECK_THAT(r.err_lines()[0],
+                       Contains(std::string("--seed ") + seed +
+                                ": expected an integer in [0, 9223372036854775807]"));
+        }
+        const Result f = run(dir, "render " + quote(scene) + " -o " + quote(dir / "f_####.png") +
+                                      " --frames 0-99999999999999999999999");
+        CHECK(f.status != 0);
+        CHECK_THAT(f.err, Contains("--frames 0-99999999999999999999999: expected frame numbers"));
+    }
     const auto left = dir.files();
     CHECK((left == std::vector<std::string>{"one.toml", "scene.toml"} ||
            left == std::vector<std::string>{"scene.toml"}));
