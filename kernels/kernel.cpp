@@ -41,7 +41,9 @@ double hankel(const G& g, double radius, double k) {
     return 2.0 * kPi *
            detail::integrate(
                [&](double r) {
-                   const double j0 = k == 0.0 ? 1.0 : std::cyl_bessel_j(0.0, 2.0 * kPi * k * r);
+                   // detail::bessel_j0: libstdc++'s cyl_bessel_j is ~1000x slower at large
+                   // arguments (a scene's spectrum over a wide band took minutes).
+                   const double j0 = k == 0.0 ? 1.0 : detail::bessel_j0(2.0 * kPi * k * r);
                    return g(r) * j0 * r;
                },
                0.0, radius, panels);

@@ -797,6 +797,6 @@ std::vector<std::vector<float>> decode_video_luma(const std::string& path, int& 
     return frames;
 }
 
-void quiet_video_logs() { av_log_set_level(AV_LOG_ERROR); }
+void quiet_video_logs() { av_log_set_level(AV_LOG_QUIET); }
 
 }  // namespace impulse::render

@@ -79,8 +79,9 @@ private:
     std::unique_ptr<Impl> m_impl;
 };
 
-/// Limit libav's console logging to errors (x264 and the muxers are chatty at info level).
-/// Process-wide; the CLI calls it once at start.
+/// Silence libav's console logging (x264 and the muxers are chatty at info level, and its own
+/// error lines would come before ours): its failures reach the user as our one-line errors, with
+/// av_strerror's text. Process-wide; the CLI calls it once at start.
 void quiet_video_logs();
 
 /// What `probe_video` found in a file (used by tests and `impulse analyze`).

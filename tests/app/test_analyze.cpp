@@ -622,4 +622,11 @@ TEST_CASE("impulse analyze on the command line", "[app][analyze][cli]") {
 
     CHECK(run("'" + image + "' --report '" + (dir / "no/such/dir/r.html") + "'") == 1);
     CHECK_THAT(read_file(err), Contains("does not exist"));
+
+    // A corrupt video: one line, ours (libav's own "moov atom not found" line came first).
+    std::ofstream(dir / "broken.mp4") << "this is not an MP4 file, no moov atom here\n";
+    CHECK(run("'" + (dir / "broken.mp4") + "'") == 1);
+    const std::string v = read_file(err);
+    CHECK_THAT(v, Catch::StartsWith("error: ") && Contains("broken.mp4"));
+    CHECK(count(v, "\n") == 1);
 }
