@@ -107,6 +107,19 @@ void write_rgb_image(const std::string& path, int width, int height, const std::
     write_pixels(path, width, height, 3, rgb.data(), metadata, bits16);
 }
 
+std::string nonfinite_pixel(const float* px, size_t count, int width, int channels) {
+    for (size_t i = 0; i < count; ++i)
+        if (!std::isfinite(px[i])) {
+            const size_t p = i / size_t(channels);
+            std::ostringstream s;
+            s << "expected finite pixel values, found " << px[i] << " at pixel ("
+              << p % size_t(width) << ", " << p / size_t(width) << ") channel "
+              << i % size_t(channels);
+            return s.str();
+        }
+    return "";
+}
+
 Frame read_image(const std::string& path) {
     auto in = OIIO::ImageInput::open(path);
     if (!in) throw IoError(path + ": cannot read: " + OIIO::geterror());
@@ -116,14 +129,8 @@ Frame read_image(const std::string& path) {
     if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, px.data()))
         throw IoError(path + ": cannot read: " + in->geterror());
     in->close();
-    for (size_t i = 0; i < px.size(); ++i)
-        if (!std::isfinite(px[i])) {
-            const size_t p = i / size_t(nc);
-            std::ostringstream s;
-            s << path << ": expected finite pixel values, found " << px[i] << " at pixel ("
-              << p % size_t(w) << ", " << p / size_t(w) << ") channel " << i % size_t(nc);
-            throw IoError(s.str());
-        }
+    if (const std::string bad = nonfinite_pixel(px.data(), px.size(), w, nc); !bad.empty())
+        throw IoError(path + ": " + bad);
     Frame f;
     f.resize(w, h);
     for (size_t i = 0; i < size_t(w) * h; ++i) {

@@ -98,6 +98,10 @@ void write_rgb_image(const std::string& path, int width, int height, const std::
 /// Reads an image as single-channel float (luminance of RGB; raw floats for EXR, [0,1] for
 /// integer formats). Throws IoError.
 Frame read_image(const std::string& path);
+/// "" when every value of an image's pixels (`channels` interleaved, rows of `width`) is finite,
+/// else "expected finite pixel values, found nan at pixel (x, y) channel c" for the first that
+/// is not: image inputs are refused with it (a NaN breaks the sorts and sums they go through).
+std::string nonfinite_pixel(const float* px, size_t count, int width, int channels);
 
 /// True for extensions OIIO writes here (.exr .png .tif .tiff .jpg .jpeg).
 bool is_image_path(const std::string& path);

@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
-#include <sstream>
 
 #include "scenes/reader.h"
 #include "scenes/scenes.h"
@@ -48,17 +47,8 @@ bool read_rgb_pixels(const std::string& path, std::vector<float>& px, int& chann
         error = "cannot read: " + in->geterror();
         return false;
     }
-    for (size_t i = 0; i < px.size(); ++i)
-        if (!std::isfinite(px[i])) {  // a NaN would break the sort by luminance
-            const size_t p = i / size_t(channels);
-            std::ostringstream s;
-            s << "expected finite pixel values, found " << px[i] << " at pixel ("
-              << p % size_t(spec.width) << ", " << p / size_t(spec.width) << ") channel "
-              << i % size_t(channels);
-            error = s.str();
-            return false;
-        }
-    return true;
+    error = render::nonfinite_pixel(px.data(), px.size(), spec.width, channels);
+    return error.empty();  // a NaN would break the sort by luminance
 }
 
 /// A colour: [r, g, b] or [r, g, b, a] with components in [0, 1], or "#rrggbb".
