@@ -657,12 +657,11 @@ struct PerspScratch {
     FarField far_field;
     FarScratch far;
     /// What far_field was set up for (a camera that does not move keeps it: a few ms a frame).
+    /// The pixel coordinates are the camera's (pixel_coords), so the camera stands for them.
     struct FarKey {
         uint64_t pyramid = 0;  ///< KernelPyramid::serial(), 0: not set up
         PerspectiveCamera camera;
         AntiAlias aa;
-        int coords_width = 0, coords_height = 0;
-        double origin_x = 0, origin_y = 0;
     } far_key;
 };
 }  // namespace detail
@@ -706,15 +705,12 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
     const auto t0 = Clock::now();
     detail::FarField& far = scratch->far_field;
     {
-        // The set-up is a function of these alone (coords are the view's pixel_coords).
+        // The set-up is a function of these alone.
         auto& key = scratch->far_key;
-        if (!(key.pyramid == pyr.serial() && key.camera.same_rays(cam) && key.aa == aa &&
-              key.coords_width == coords.width && key.coords_height == coords.height &&
-              key.origin_x == coords.origin_x && key.origin_y == coords.origin_y)) {
+        if (!(key.pyramid == pyr.serial() && key.camera.same_rays(cam) && key.aa == aa)) {
             key.pyramid = 0;  // not valid while set up (an exception leaves it so)
             far.setup(pyr, view, coords, aa);
-            key = {pyr.serial(), cam, aa, coords.width, coords.height, coords.origin_x,
-                   coords.origin_y};
+            key = {pyr.serial(), cam, aa};
         }
     }
     const auto t1 = Clock::now();
@@ -882,19 +878,17 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
             }
         }
     }
-    if (options.max_pixel_evaluations > 0.0) {
-        double pixels = 0.0;
-        for (const auto& c : chunk_counts) pixels += double(c[4]);
-        if (pixels > options.max_pixel_evaluations)
-            throw PixelBudgetError(pixels, options.max_pixel_evaluations);
-    }
+    size_t pixels = 0;  // the impulses' pixel boxes
+    for (const auto& c : chunk_counts) pixels += c[4];
+    if (options.max_pixel_evaluations > 0.0 && double(pixels) > options.max_pixel_evaluations)
+        throw PixelBudgetError(double(pixels), options.max_pixel_evaluations);
     if (stats) {
         *stats = {};
-        stats->impulses = n;
+        stats->impulses = n, stats->pixels = pixels;
         for (const auto& c : chunk_counts) {
             stats->single += c[0], stats->probes += c[1], stats->line += c[2],
                 stats->probe_count += c[3];
-            stats->pixels += c[4], stats->axial += c[5];
+            stats->axial += c[5];
         }
     }
 
