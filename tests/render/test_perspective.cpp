@@ -74,6 +74,12 @@ struct PerspectiveCase {
     double sd0() const { return std::sqrt(process.intensity * kernel.integral_sq()); }
 };
 
+/// Whether two frames hold the same bits.
+bool same_bits(const Frame& a, const Frame& b) {
+    return a.data.size() == b.data.size() &&
+           std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)) == 0;
+}
+
 Frame render_frame(const KernelPyramid& pyr, sim::LayerSimulator& s, const PerspectiveCamera& cam,
                    const AntiAlias& aa, render::PerspectiveStats* stats = nullptr,
                    const render::EvalOptions& eo = {},
@@ -980,7 +986,7 @@ TEST_CASE("far-field frames are bit-identical across threads, tiles and SIMD pat
     render::EvalOptions eo;
     eo.parallel = false, eo.tile_size = 16, eo.use_avx2 = false;
     const Frame b = render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, nullptr, eo);
-    CHECK(std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)) == 0);
+    CHECK(same_bits(a, b));
 }
 
 TEST_CASE("a perspective frame over its pixel budget is refused before any pixel is drawn",
@@ -993,7 +999,7 @@ TEST_CASE("a perspective frame over its pixel budget is refused before any pixel
     render::EvalOptions eo;
     eo.max_pixel_evaluations = double(st.pixels);  // exactly enough: drawn, same bits
     const Frame b = render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, nullptr, eo);
-    CHECK(std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)) == 0);
+    CHECK(same_bits(a, b));
     eo.max_pixel_evaluations = double(st.pixels) - 1.0;
     try {
         render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, nullptr, eo);
@@ -1012,10 +1018,6 @@ TEST_CASE("a perspective workspace reused across frames and views changes no bit
     other.width = 200, other.height = 240, other.pitch_deg = 35.0, other.heading_deg = 30.0;
     AntiAlias coarse;
     coarse.cutoff = 0.05;
-    auto same = [](const Frame& a, const Frame& b) {
-        return a.data.size() == b.data.size() &&
-               std::memcmp(a.data.data(), b.data.data(), a.data.size() * sizeof(float)) == 0;
-    };
     render::PerspectiveStats st;
     const Frame a = render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, &st);
     REQUIRE(st.far > 10000);
@@ -1024,28 +1026,28 @@ TEST_CASE("a perspective workspace reused across frames and views changes no bit
     render::PerspectiveStats sw;
     // a large frame, a smaller and different one (stale memory of the first must not leak in),
     // the first again
-    CHECK(same(render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, &sw, {}, &ws), a));
+    CHECK(same_bits(render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, &sw, {}, &ws), a));
     CHECK(sw.far == st.far);
     CHECK(sw.culled == st.culled);
-    CHECK(same(render_frame(pc.pyramid, s, other, coarse, nullptr, {}, &ws), b));
-    CHECK(same(render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, nullptr, {}, &ws), a));
+    CHECK(same_bits(render_frame(pc.pyramid, s, other, coarse, nullptr, {}, &ws), b));
+    CHECK(same_bits(render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, nullptr, {}, &ws), a));
     // a workspace held by another call is not shared: the call uses memory of its own
     REQUIRE(ws.acquire() != nullptr);
-    CHECK(same(render_frame(pc.pyramid, s, other, coarse, nullptr, {}, &ws), b));
+    CHECK(same_bits(render_frame(pc.pyramid, s, other, coarse, nullptr, {}, &ws), b));
     ws.release();
 
     // The far field's set-up is kept while its inputs are unchanged: any one of them changed
     // alone must set it up again (the camera moved a little, the anti-aliasing options, another
     // pyramid seen by the same camera).
-    CHECK(same(render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, nullptr, {}, &ws), a));
+    CHECK(same_bits(render_frame(pc.pyramid, s, pc.camera, AntiAlias{}, nullptr, {}, &ws), a));
     PerspectiveCamera moved = pc.camera;
     moved.x += 3.0;
     const Frame c = render_frame(pc.pyramid, s, moved, AntiAlias{});
-    CHECK(!same(c, a));
-    CHECK(same(render_frame(pc.pyramid, s, moved, AntiAlias{}, nullptr, {}, &ws), c));
+    CHECK(!same_bits(c, a));
+    CHECK(same_bits(render_frame(pc.pyramid, s, moved, AntiAlias{}, nullptr, {}, &ws), c));
     const Frame d = render_frame(pc.pyramid, s, moved, coarse);
-    CHECK(!same(d, c));
-    CHECK(same(render_frame(pc.pyramid, s, moved, coarse, nullptr, {}, &ws), d));
+    CHECK(!same_bits(d, c));
+    CHECK(same_bits(render_frame(pc.pyramid, s, moved, coarse, nullptr, {}, &ws), d));
     Kernel wider_kernel = [] {
         KernelParams p;
         p.type = KernelType::Cosine;
@@ -1054,7 +1056,7 @@ TEST_CASE("a perspective workspace reused across frames and views changes no bit
     }();
     const KernelPyramid wider(wider_kernel);
     const Frame e = render_frame(wider, s, moved, coarse);
-    CHECK(!same(e, d));
-    CHECK(same(render_frame(wider, s, moved, coarse, nullptr, {}, &ws), e));
-    CHECK(same(render_frame(pc.pyramid, s, moved, coarse, nullptr, {}, &ws), d));
+    CHECK(!same_bits(e, d));
+    CHECK(same_bits(render_frame(wider, s, moved, coarse, nullptr, {}, &ws), e));
+    CHECK(same_bits(render_frame(pc.pyramid, s, moved, coarse, nullptr, {}, &ws), d));
 }
