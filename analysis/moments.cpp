@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "analysis/analysis.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::analysis {
 

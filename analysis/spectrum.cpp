@@ -1,97 +1,20 @@
 // SPDX-License-Identifier: Apache-2.0
 // Second-order statistics in the frequency domain: periodogram, averages over frames, radial
 // profiles, and the autocovariance through the Wiener–Khinchine theorem. FFTW (double) does
-// the transforms; sums are in double in a fixed order, so results are deterministic.
-
-#include <fftw3.h>
+// the transforms (numeric::RealFft2d); sums are in double in a fixed order, so results are deterministic.
 
 #include <algorithm>
 #include <cmath>
-#include <mutex>
-
-#include "util/fftw_lock.h"
 #include <numbers>
 #include <string>
 #include <vector>
 
 #include "analysis/analysis.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
+#include "numeric/fft.h"
 
 namespace impulse::analysis {
 namespace {
-
-// FFTW's planner (plan creation and destruction) is not thread-safe; fftw_execute is. Every
-// planner call goes through the process-wide lock shared with kernels/ (util/fftw_lock.h).
-std::mutex& planner_mutex() { return fftw_planner_mutex(); }
-
-// A real-to-complex 2-D transform of a height x width array and its inverse, with buffers from
-// fftw_alloc_* so the SIMD alignment (and hence the plan FFTW_ESTIMATE picks and its rounding)
-// is the same on every call. Plans are made before the input is written: safe whatever the
-// planner flags do to the arrays.
-class RealFft2d {
-public:
-    RealFft2d(int width, int height, bool with_inverse)
-        : m_width(width), m_height(height), m_half_width(width / 2 + 1) {
-        m_in = fftw_alloc_real(real_size());
-        m_out = fftw_alloc_complex(complex_size());
-        if (m_in == nullptr || m_out == nullptr) {
-            release_buffers();
-            throw Error("fftw: cannot allocate " + std::to_string(width) + "x" +
-                        std::to_string(height) + " transform buffers");
-        }
-        std::lock_guard<std::mutex> lock(planner_mutex());
-        // FFTW's 2-D arrays are row-major with n0 = rows: (height, width) matches Image.
-        m_forward = fftw_plan_dft_r2c_2d(height, width, m_in, m_out, FFTW_ESTIMATE);
-        if (with_inverse) {
-            m_inverse = fftw_plan_dft_c2r_2d(height, width, m_out, m_in, FFTW_ESTIMATE);
-        }
-        if (m_forward == nullptr || (with_inverse && m_inverse == nullptr)) {
-            destroy_plans();
-            release_buffers();
-            throw Error("fftw: cannot plan a " + std::to_string(width) + "x" +
-                        std::to_string(height) + " transform");
-        }
-    }
-    ~RealFft2d() {
-        {
-            std::lock_guard<std::mutex> lock(planner_mutex());
-            destroy_plans();
-        }
-        release_buffers();
-    }
-    RealFft2d(const RealFft2d&) = delete;
-    RealFft2d& operator=(const RealFft2d&) = delete;
-
-    double* real() { return m_in; }
-    fftw_complex* spectrum() { return m_out; }
-    int half_width() const { return m_half_width; }
-    /// real() -> spectrum(), unnormalised: F(k) = sum_x f(x) exp(-2 pi i k.x / n).
-    void forward() { fftw_execute(m_forward); }
-    /// spectrum() -> real(), unnormalised (a forward + inverse pair multiplies by w*h); the
-    /// spectrum buffer is destroyed, as for every FFTW c2r transform.
-    void inverse() { fftw_execute(m_inverse); }
-
-private:
-    size_t real_size() const { return static_cast<size_t>(m_width) * m_height; }
-    size_t complex_size() const { return static_cast<size_t>(m_half_width) * m_height; }
-    void destroy_plans() {
-        if (m_forward != nullptr) fftw_destroy_plan(m_forward);
-        if (m_inverse != nullptr) fftw_destroy_plan(m_inverse);
-        m_forward = m_inverse = nullptr;
-    }
-    void release_buffers() {
-        fftw_free(m_in);
-        fftw_free(m_out);
-        m_in = nullptr;
-        m_out = nullptr;
-    }
-
-    int m_width, m_height, m_half_width;
-    double* m_in = nullptr;
-    fftw_complex* m_out = nullptr;
-    fftw_plan m_forward = nullptr;
-    fftw_plan m_inverse = nullptr;
-};
 
 void check_image(const Image& image, const char* what) {
     if (image.width <= 0 || image.height <= 0) {
@@ -159,7 +82,7 @@ Periodogram periodogram(const Image& image, Window window) {
                          std::to_string(w) + "x" + std::to_string(h));
     }
 
-    RealFft2d fft(w, h, false);
+    numeric::RealFft2d fft(h, w, numeric::FftPlans::Forward);
     const double mean = mean_of(image.data);
     double* in = fft.real();
     for (int y = 0; y < h; ++y) {
@@ -177,15 +100,16 @@ Periodogram periodogram(const Image& image, Window window) {
     p.width = w;
     p.height = h;
     p.power.resize(static_cast<size_t>(w) * h);
-    const fftw_complex* spec = fft.spectrum();
-    const int hw = fft.half_width();
+    const std::complex<double>* spec = fft.spectrum();
+    const int hw = fft.half_cols();
     for (int ky = 0; ky < h; ++ky) {
         for (int kx = 0; kx < w; ++kx) {
             const bool stored = kx < hw;
             const int sy = stored ? ky : (h - ky) % h;
             const int sx = stored ? kx : w - kx;
-            const fftw_complex& c = spec[static_cast<size_t>(sy) * hw + sx];
-            p.power[static_cast<size_t>(ky) * w + kx] = (c[0] * c[0] + c[1] * c[1]) / window_energy;
+            const std::complex<double> c = spec[static_cast<size_t>(sy) * hw + sx];
+            p.power[static_cast<size_t>(ky) * w + kx] =
+                (c.real() * c.real() + c.imag() * c.imag()) / window_energy;
         }
     }
     // Without a window the DC term is rounding noise; with one it is sum w (f - mean), the
@@ -275,7 +199,7 @@ std::vector<double> autocovariance(const Image& image) {
     const int w = image.width, h = image.height;
     const size_t n = static_cast<size_t>(w) * h;
 
-    RealFft2d fft(w, h, true);
+    numeric::RealFft2d fft(h, w, numeric::FftPlans::Both);
     const double mean = mean_of(image.data);
     double* in = fft.real();
     for (size_t i = 0; i < n; ++i) in[i] = image.data[i] - mean;
@@ -285,13 +209,11 @@ std::vector<double> autocovariance(const Image& image) {
     // unnormalised transforms, so acov = IDFT(|F|^2) / n^2 is (1/n) sum_x g(x) g(x + tau).
     // |F|^2 is real and even, so the c2r inverse of the half spectrum is exact. Zeroing the DC
     // term removes the rounding residue of the mean.
-    fftw_complex* spec = fft.spectrum();
-    const size_t half = static_cast<size_t>(fft.half_width()) * h;
-    for (size_t i = 0; i < half; ++i) {
-        spec[i][0] = spec[i][0] * spec[i][0] + spec[i][1] * spec[i][1];
-        spec[i][1] = 0.0;
-    }
-    spec[0][0] = 0.0;
+    std::complex<double>* spec = fft.spectrum();
+    const size_t half = static_cast<size_t>(fft.half_cols()) * h;
+    for (size_t i = 0; i < half; ++i)
+        spec[i] = {spec[i].real() * spec[i].real() + spec[i].imag() * spec[i].imag(), 0.0};
+    spec[0] = 0.0;
     fft.inverse();
 
     const double inv = 1.0 / (static_cast<double>(n) * static_cast<double>(n));

@@ -9,7 +9,7 @@
 #include <vector>
 
 #include "analysis/analysis.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::analysis {
 namespace {

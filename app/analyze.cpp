@@ -18,10 +18,12 @@
 
 #include "app/commands.h"
 #include "kernels/kernels.h"
+#include "output/output.h"
 #include "render/render.h"
 #include "scenes/scenes.h"
 #include "sim/sim.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
+#include "numeric/gaussian.h"
 
 namespace impulse::app {
 namespace {
@@ -57,18 +59,8 @@ std::string one_line(std::string s) {
     return s;
 }
 
-double normal_upper_tail(double z) { return 0.5 * std::erfc(z / std::numbers::sqrt2); }
-
-/// z with P(Z > z) = p, 0 < p < 0.5, by bisection on erfc (monotone; 200 halvings reach the
-/// double resolution of the bracket).
-double normal_upper_quantile(double p) {
-    double lo = 0.0, hi = 40.0;
-    for (int i = 0; i < 200; ++i) {
-        const double mid = 0.5 * (lo + hi);
-        (normal_upper_tail(mid) > p ? lo : hi) = mid;
-    }
-    return 0.5 * (lo + hi);
-}
+/// z with P(Z > z) = p, 0 < p < 0.5.
+double normal_upper_quantile(double p) { return -numeric::normal_quantile_lower(p); }
 
 /// Two-sided Bonferroni threshold for the maximum of m |z| values at family-wise level alpha.
 double bonferroni_threshold(int m, double alpha) {
@@ -111,15 +103,15 @@ std::string unknown_type_message(const std::string& path) {
 
 Image read_frame(const std::string& path) {
     try {
-        return to_image(render::read_image(path));
+        return to_image(output::read_image(path));
     } catch (const IoError& e) {
         throw IoError(one_line(e.what()));
     }
 }
 
-render::ImageInfo probe(const std::string& path) {
+output::ImageInfo probe(const std::string& path) {
     try {
-        return render::probe_image(path);
+        return output::probe_image(path);
     } catch (const IoError& e) {
         throw IoError(one_line(e.what()));
     }
@@ -138,13 +130,13 @@ Loaded load_input(const AnalyzeOptions& opt) {
     L.first = a;
     std::error_code ec;
 
-    if (render::is_video_path(in)) {
+    if (output::is_video_path(in)) {
         if (!fs::exists(in, ec)) throw IoError(in + ": no such file");
-        render::quiet_video_logs();
+        output::quiet_video_logs();
         int w = 0, h = 0;
         std::vector<std::vector<float>> luma;
         try {
-            luma = render::decode_video_luma(in, w, h);
+            luma = output::decode_video_luma(in, w, h);
         } catch (const IoError& e) {
             throw IoError(one_line(e.what()));
         }
@@ -172,8 +164,8 @@ Loaded load_input(const AnalyzeOptions& opt) {
         if (!fs::exists(first_name, ec))
             throw IoError(first_name + ": no such file (frame " + std::to_string(a) + " of " + in +
                           ")");
-        if (!render::is_readable_image_path(first_name)) throw ValueError(unknown_type_message(in));
-        const render::ImageInfo info = probe(first_name);
+        if (!output::is_readable_image_path(first_name)) throw ValueError(unknown_type_message(in));
+        const output::ImageInfo info = probe(first_name);
         for (long long f = a; f <= b && static_cast<long long>(L.frames.size()) < cap; ++f) {
             const std::string name = expand_pattern(in, f);
             if (!fs::exists(name, ec)) break;  // the sequence ends at the first missing frame
@@ -192,10 +184,10 @@ Loaded load_input(const AnalyzeOptions& opt) {
     }
 
     if (!fs::exists(in, ec)) throw IoError(in + ": no such file");
-    if (!render::is_readable_image_path(in)) throw ValueError(unknown_type_message(in));
+    if (!output::is_readable_image_path(in)) throw ValueError(unknown_type_message(in));
     if (ranged && (a != 0 || b != 0))
         throw ValueError("--frames " + opt.frames + ": " + in + " is one image (frame 0)");
-    const render::ImageInfo info = probe(in);
+    const output::ImageInfo info = probe(in);
     L.frames.push_back(read_frame(in));
     L.kind = "image";
     L.raw = info.is_float;
@@ -458,11 +450,8 @@ struct Censored {
     double gain = 1.0;  ///< P(a < Z < b): the linear gain of the clip (Price's theorem)
 };
 Censored censored_normal(double a, double b) {
-    const auto phi = [](double z) {
-        return std::exp(-0.5 * z * z) / std::sqrt(2 * std::numbers::pi);
-    };
-    const auto cdf = [](double z) { return 0.5 * std::erfc(-z / std::numbers::sqrt2); };
-    const double Pa = cdf(a), Pb = cdf(b), pa = phi(a), pb = phi(b);
+    const double Pa = numeric::normal_cdf(a), Pb = numeric::normal_cdf(b);
+    const double pa = numeric::normal_pdf(a), pb = numeric::normal_pdf(b);
     Censored c;
     c.mean = a * Pa + (pa - pb) + b * (1 - Pb);
     const double m2 = a * a * Pa + (Pb - Pa + a * pa - b * pb) + b * b * (1 - Pb);
@@ -746,7 +735,7 @@ TheoryComparison compare_with_theory(const scenes::Scene& scene, const std::stri
             "sampling errors of mean and variance use the zoom at t = 0");
     // The closed forms are those of the stationary sum of layers: a transform or a birth region
     // makes the texture something else, and the comparison below says so by disagreeing.
-    if (scene.transform.type != render::FieldTransform::Type::None)
+    if (scene.transform.type != output::FieldTransform::Type::None)
         R.notes.push_back(
             "the scene has a [shading.transform] (marble or wood): the theory describes the "
             "field before the transform, not this texture");
@@ -950,7 +939,7 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
         scene = scenes::load_scene(scene_path, opt.sets);
         for (const auto& wmsg : scene->warnings) R.notes.push_back(wmsg);
         if (!raw) {
-            const render::ValueMapping m = scenes::Renderer(*scene).mapping();
+            const output::ValueMapping m = scenes::Renderer(*scene).mapping();
             lo = m.lo, hi = m.hi;
             mapped = true;
             size_t at_edge = 0;

@@ -14,7 +14,7 @@
 #include <sstream>
 
 #include "app/analyze.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::app {
 namespace {

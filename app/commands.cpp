@@ -19,9 +19,10 @@
 #include <regex>
 #include <sstream>
 
+#include "output/output.h"
 #include "render/render.h"
 #include "scenes/scenes.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::app {
 namespace {
@@ -145,10 +146,10 @@ int run_render(const RenderOptions& opt) {
     long long first = 0, last = scene.output.frames - 1;
     if (!opt.frames.empty()) std::tie(first, last) = parse_frame_range(opt.frames, scene.output.frames);
 
-    const bool video = render::is_video_path(opt.output);
+    const bool video = output::is_video_path(opt.output);
     const bool sequence = !video && !expand_pattern(opt.output, 0).empty();
     if (!video && !sequence) {
-        if (!render::is_image_path(opt.output))
+        if (!output::is_image_path(opt.output))
             throw ValueError(opt.output + ": unknown output type: expected an image (.exr .png .tif), "
                              "a pattern (frame_####.png) or a video (.mp4 .mov .mkv .webm)");
         if (last != first)
@@ -164,25 +165,25 @@ int run_render(const RenderOptions& opt) {
     const scenes::Scene& sc = renderer->scene();
     const scenes::OutputConfig& out = sc.output;
     const int width = out.width, height = out.height;
-    const render::ValueMapping mapping = renderer->mapping();
+    const output::ValueMapping mapping = renderer->mapping();
     render::EvalOptions eo;
     eo.tile_size = opt.tile;
 
     std::string layer_seeds;
     for (const auto& l : sc.layers) layer_seeds += (layer_seeds.empty() ? "" : " ") + std::to_string(l.process.seed);
-    render::Metadata meta = {{"seed", std::to_string(sc.seed)},
+    output::Metadata meta = {{"seed", std::to_string(sc.seed)},
                              {"layer_seeds", layer_seeds},
                              {"scene", sc.path},
                              {"scene_hash", sc.hash},
                              {"fps", std::to_string(out.fps)},
                              {"range", std::to_string(mapping.lo) + " " + std::to_string(mapping.hi)}};
 
-    render::VideoWriter writer;
+    output::VideoWriter writer;
     if (video) {
-        render::quiet_video_logs();
-        render::VideoOptions vo;
+        output::quiet_video_logs();
+        output::VideoOptions vo;
         vo.width = out.width, vo.height = out.height, vo.fps = out.fps;
-        vo.codec = render::video_codec_from_string(out.codec);
+        vo.codec = output::video_codec_from_string(out.codec);
         vo.crf = out.crf, vo.preset = out.preset;
         vo.metadata = meta;
         writer.open(opt.output, vo);
@@ -207,17 +208,17 @@ int run_render(const RenderOptions& opt) {
                                                     opt.threads);
     auto emit = [&](const render::Frame& frame, long long f, const std::string& target) {
         const double t = sc.frame_time(f);
-        const render::Shading shading = sc.shading_at(t);  // keyframed shading at the frame time
-        render::Metadata m = meta;
+        const output::Shading shading = sc.shading_at(t);  // keyframed shading at the frame time
+        output::Metadata m = meta;
         m.emplace_back("frame", std::to_string(f));
         m.emplace_back("time", std::to_string(t));
         // EXR keeps the raw field; display formats get the shading (grey by default).
         const bool exr = fs::path(target).extension() == ".exr";
         if (!exr && colour_shading(sc)) {
-            render::shade(frame, mapping, shading, rgb);
-            render::write_rgb_image(target, out.width, out.height, rgb, m, out.bits == 16);
+            output::shade(frame, mapping, shading, rgb);
+            output::write_rgb_image(target, out.width, out.height, rgb, m, out.bits == 16);
         } else {
-            render::write_image(target, frame, mapping, m, out.bits == 16);
+            output::write_image(target, frame, mapping, m, out.bits == 16);
         }
     };
     std::future<void> pending;  // the previous frame's output
@@ -239,7 +240,7 @@ int run_render(const RenderOptions& opt) {
         finish_pending();
         if (video) {
             const render::Frame& frame = frames[slot];
-            const render::Shader shader(mapping, sc.shading_at(sc.frame_time(f)));
+            const output::Shader shader(mapping, sc.shading_at(sc.frame_time(f)));
             writer.stage_frame([&](int y0, int y1, float* band) { shader.rows(frame, y0, y1, band); });
             pending = std::async(std::launch::async, [&] { writer.encode_staged(); });
             continue;  // the frame is free again: f + 1 renders into it

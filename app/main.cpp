@@ -8,7 +8,7 @@
 
 #include "app/analyze.h"
 #include "app/commands.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 int main(int argc, char** argv) {
     CLI::App app{

@@ -38,6 +38,7 @@
 
 #include "bench/common.h"
 #include "kernels/kernels.h"
+#include "output/output.h"
 #include "render/render.h"
 #include "scenes/scenes.h"
 #include "sim/sim.h"
@@ -319,24 +320,24 @@ struct Variant {
 };
 
 /// One run: frames 0 .. n-1 of the default scene on a fresh Renderer, as `impulse render`
-/// does for a video (app/commands.cpp): render frame f, stage it (render::Shader rows
+/// does for a video (app/commands.cpp): render frame f, stage it (output::Shader rows
 /// quantised into the encoder's input by VideoWriter::stage_frame), then encode it on another
 /// thread (VideoWriter::encode_staged) while frame f + 1 renders. Returns frames per second
 /// over the whole run (open and close included).
 void run_e2e(Variant& v, int n, const std::string& path) {
     scenes::Renderer renderer(load_default());
     const scenes::OutputConfig& out = renderer.scene().output;
-    const render::Shader shader(renderer.mapping(), renderer.scene().shading);
+    const output::Shader shader(renderer.mapping(), renderer.scene().shading);
     render::Frame frame;
-    render::VideoWriter writer;
+    output::VideoWriter writer;
     double render_ms = 0, stage_ms = 0, encode_ms = 0, wait_ms = 0, oc_ms = 0;
     std::future<void> pending;  // the previous frame's encode
     const auto start = Clock::now();
     const double cpu0 = own_cpu_s();
     if (v.preset) {
-        render::VideoOptions vo;
+        output::VideoOptions vo;
         vo.width = out.width, vo.height = out.height, vo.fps = out.fps;
-        vo.codec = render::VideoCodec::H264;
+        vo.codec = output::VideoCodec::H264;
         vo.crf = out.crf, vo.preset = v.preset;
         const auto t0 = Clock::now();
         writer.open(path, vo);
@@ -511,7 +512,7 @@ int main(int argc, char** argv) {
         const auto wall0 = Clock::now();
         const double busy0 = machine_busy_s(), own0 = own_cpu_s();
         const std::string load0 = loadavg();
-        render::quiet_video_logs();
+        output::quiet_video_logs();
         TempDir tmp;
         // Before anything else grows this process: see measure_memory.
         const Memory mem = measure_memory(o, tmp);

@@ -18,7 +18,7 @@
 
 #include "bench/common.h"
 #include "sim/normal.h"
-#include "sim/rng.h"
+#include "numeric/rng.h"
 
 namespace {
 
@@ -40,7 +40,7 @@ int main(int argc, char** argv) {
     std::printf(
         "impulse_bench_normal: %zu amplitudes per run, %d timed runs per row, load average %s\n\n",
         kN, reps, loadavg().c_str());
-    const sim::detail::CounterRng rng(1, 0);
+    const numeric::CounterRng rng(1, 0);
     std::vector<double> u(kN), v(kN);
     for (size_t j = 0; j < kN; ++j) {
         const auto r = rng.uniforms(int64_t(j), 0, 0, 0);
@@ -59,7 +59,7 @@ int main(int argc, char** argv) {
              for (size_t j = 0; j < kN; ++j)
                  out[j] = static_cast<float>(sim::detail::normal_from_uniforms(u[j], v[j]));
          }}};
-    if (sim::detail::cpu_has_avx2())
+    if (numeric::cpu_has_avx2())
         rows.push_back(
             {"own, AVX2",
              [&] { sim::detail::normals_from_uniforms_avx2(kN, u.data(), v.data(), out.data()); }});
@@ -74,6 +74,6 @@ int main(int argc, char** argv) {
         }
     std::printf("%-14s %24s\n", "row", "cpu ns per amplitude");
     for (auto& r : rows) std::printf("%-14s %24s\n", r.name.c_str(), cell(summarise(r.ns)).c_str());
-    if (!sim::detail::cpu_has_avx2()) std::printf("(no AVX2 on this CPU)\n");
+    if (!numeric::cpu_has_avx2()) std::printf("(no AVX2 on this CPU)\n");
     std::printf("(checksum %g)\n", sink);
 }

@@ -159,7 +159,7 @@ void time_perspective(const kernels::KernelPyramid& pyr, sim::LayerSimulator& s,
     const double c0 = own_cpu_s();
     auto t0 = Clock::now();
     const render::PerspectiveView view(cam);
-    const sim::Region box = render::perspective_region(pyr, view, aa);
+    const numeric::Region box = render::perspective_region(pyr, view, aa);
     const render::PixelCoords pc = render::pixel_coords(view);
     const double su = ms_since(t0);
     t0 = Clock::now();

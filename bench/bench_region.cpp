@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "bench/common.h"
+#include "output/output.h"
 #include "render/render.h"
 #include "sim/sim.h"
 
@@ -61,7 +62,7 @@ int main(int argc, char** argv) {
     c.seed = 1;
     c.cell_size = 16.0;
     c.intensity = 16.0 / (std::numbers::pi * 256.0);
-    const sim::Box view{0, 0, 4096, 4096};
+    const numeric::Box view{0, 0, 4096, 4096};
     const auto region =
         sim::make_shape_region(sim::make_circle_shape(2048, 2048, 256), 32.0, false);
     sim::ProcessConfig culled = c, unculled = c;
@@ -97,16 +98,16 @@ int main(int argc, char** argv) {
     for (size_t i = 0; i < field.data.size(); ++i)
         field.data[i] = static_cast<float>((i * 2654435761u % 1000) / 500.0 - 1.0);
     render::Frame work = field;
-    render::FieldTransform marble, wood, growth;
-    marble.type = render::FieldTransform::Type::Marble;
-    wood.type = growth.type = render::FieldTransform::Type::Wood;
+    output::FieldTransform marble, wood, growth;
+    marble.type = output::FieldTransform::Type::Marble;
+    wood.type = growth.type = output::FieldTransform::Type::Wood;
     wood.center_x = growth.center_x = 400, wood.center_y = growth.center_y = 500;
     growth.growth = 0.4;
     tbb::task_arena one(1);  // on the calling thread, so its CPU time is the transform's
-    auto transform = [&](const render::FieldTransform& t) {
+    auto transform = [&](const output::FieldTransform& t) {
         return [&, t]() {
             work.data = field.data;  // same input each run (copy inside the timer for every row)
-            one.execute([&] { render::apply_transform(t, v, 0.0, 1.0, work); });
+            one.execute([&] { output::apply_transform(t, v, 0.0, 1.0, work); });
             return size_t(0);
         };
     };

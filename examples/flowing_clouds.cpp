@@ -9,6 +9,7 @@
 #include <exception>
 #include <string>
 
+#include "output/output.h"
 #include "render/render.h"
 #include "scenes/scenes.h"
 
@@ -22,8 +23,8 @@ int main(int argc, char** argv) {
         scene.output.height = 540;
         scene.output.frames = 90;
         scene.output.fps = 30;
-        scene.camera.center_x = sim::Keyframed(480.0);
-        scene.camera.center_y = sim::Keyframed(270.0);
+        scene.camera.center_x = numeric::Keyframed(480.0);
+        scene.camera.center_y = numeric::Keyframed(270.0);
 
         scenes::LayerConfig layer;
         layer.kernel.type = kernels::KernelType::Gaussian;
@@ -36,9 +37,9 @@ int main(int argc, char** argv) {
         auto flow = std::make_shared<sim::FlowSum>();
         flow->push(sim::make_uniform_flow(30.0, 4.0));  // wind, pixels per second
         // Speed rises from 6 to 14 px/s over the clip: any numeric parameter can be keyframed.
-        sim::Keyframed gusts;
+        numeric::Keyframed gusts;
         gusts.keys = {{0.0, 6.0}, {3.0, 14.0}};
-        gusts.ease = sim::Ease::Smooth;
+        gusts.ease = numeric::Ease::Smooth;
         flow->push(sim::make_curl_noise_flow(7, 240.0, gusts, std::nullopt));
         layer.flow = flow;
         scenes::prepare_layer(layer);
@@ -47,19 +48,19 @@ int main(int argc, char** argv) {
         scene.shading.ramp = {{0.0, 1, 1, 1, 0}, {0.45, 1, 1, 1, 0}, {0.8, 1, 1, 1, 1}, {1.0, 1, 1, 1, 1}};
 
         scenes::Renderer renderer(scene);
-        render::VideoOptions vo;
+        output::VideoOptions vo;
         vo.width = scene.output.width;
         vo.height = scene.output.height;
         vo.fps = scene.output.fps;
         vo.preset = "veryfast";
-        render::quiet_video_logs();
-        render::VideoWriter video;
+        output::quiet_video_logs();
+        output::VideoWriter video;
         video.open(out, vo);
         render::Frame field;
         std::vector<float> rgb;
         for (int64_t f = 0; f < scene.output.frames; ++f) {
             renderer.render(f, field);  // frame f into a float buffer
-            render::shade(field, renderer.mapping(), scene.shading, rgb);
+            output::shade(field, renderer.mapping(), scene.shading, rgb);
             video.write_frame(rgb.data());
         }
         video.close();

@@ -6,7 +6,7 @@
 #include <string_view>
 
 #include "scenes/scenes.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     const std::string_view text(reinterpret_cast<const char*>(data), size);

@@ -9,9 +9,9 @@
 #include <numbers>
 #include <sstream>
 
-#include "kernels/fft.h"
+#include "numeric/fft.h"
 #include "kernels/kernels.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::kernels {
 namespace {
@@ -85,7 +85,7 @@ ExemplarKernel kernel_from_exemplar(const float* pixels, int width, int height,
     const int x0 = (width - P) / 2, y0 = (height - P) / 2;
 
     // Mean-removed, windowed sample (radial window, zero beyond the radius m).
-    detail::RealFft2d fwd(P, P, true);
+    numeric::RealFft2d fwd(P, P, numeric::FftPlans::Forward);
     double crop_mean = 0.0;
     for (int y = 0; y < P; ++y)
         for (int x = 0; x < P; ++x) crop_mean += pixels[size_t(y0 + y) * width + (x0 + x)];
@@ -110,7 +110,7 @@ ExemplarKernel kernel_from_exemplar(const float* pixels, int width, int height,
             fwd.real()[size_t(y) * P + x] =
                 w * (pixels[size_t(y0 + y) * width + (x0 + x)] - crop_mean);
         }
-    fwd.execute();
+    fwd.forward();
 
     // Resample at half-pixel spacing by zero-padding the spectrum to 2P x 2P (band-limited
     // interpolation: P is odd, so there is no Nyquist bin to split), dividing by the bilinear
@@ -118,7 +118,7 @@ ExemplarKernel kernel_from_exemplar(const float* pixels, int width, int height,
     // half-pixel grid then has |H|^2 = |DFT of the sample|^2 for |k| < 1/2 cycle per pixel, and
     // its images sit at |k| >= 3/2, where sinc^2 has fallen below 0.05.
     const int Q = 2 * P, hp = P / 2 + 1, hq = Q / 2 + 1;
-    detail::RealFft2d inv(Q, Q, false);
+    numeric::RealFft2d inv(Q, Q, numeric::FftPlans::Inverse);
     for (int j = 0; j < P; ++j) {
         const int sj = j <= m ? j : j - P;  // signed frequency index, |sj| <= m
         for (int i = 0; i < hp; ++i) {
@@ -128,7 +128,7 @@ ExemplarKernel kernel_from_exemplar(const float* pixels, int width, int height,
                 fwd.spectrum()[size_t(j) * hp + i] / comp;
         }
     }
-    inv.execute();
+    inv.inverse();
     // Half-pixel index I <-> x = I/2 pixels in the crop; the kernel sample I (0 .. 4m) sits at
     // x = I/2 - m from the centre, i.e. at crop coordinate I/2: the same index. 1/P^2 undoes the
     // unnormalised forward + inverse pair.

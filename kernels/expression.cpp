@@ -16,7 +16,7 @@
 #include <sstream>
 
 #include "kernels/kernels.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::kernels {
 namespace {

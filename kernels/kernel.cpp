@@ -7,7 +7,7 @@
 
 #include "kernels/kernels.h"
 #include "kernels/quadrature.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::kernels {
 namespace {

@@ -9,10 +9,10 @@
 #include <numbers>
 #include <sstream>
 
-#include "kernels/fft.h"
+#include "numeric/fft.h"
 #include "kernels/kernels.h"
 #include "kernels/quadrature.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::kernels {
 namespace {
@@ -201,10 +201,10 @@ double derive_sigma0(const Kernel& base, double tol) {
     const std::vector<double> h = sample_grid(k0, m);
     int N = 16;
     while (N < 2 * n) N *= 2;
-    detail::RealFft2d fft(N, N, true);
+    numeric::RealFft2d fft(N, N, numeric::FftPlans::Forward);
     for (int j = 0; j < n; ++j)
         for (int i = 0; i < n; ++i) fft.real()[size_t(j) * N + i] = h[size_t(j) * n + i];
-    fft.execute();
+    fft.forward();
     const int hc = fft.half_cols();
     std::vector<double> p2(size_t(N) * hc), k2(size_t(N) * hc);
     double total = 0.0;

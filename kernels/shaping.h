@@ -24,7 +24,7 @@
 #include <span>
 #include <utility>
 
-#include "kernels/kernels.h"
+#include "kernels/kernel.h"
 
 namespace impulse::kernels {
 

@@ -15,10 +15,10 @@
 #include <numbers>
 #include <sstream>
 
-#include "kernels/fft.h"
+#include "numeric/fft.h"
 #include "kernels/kernels.h"
 #include "kernels/quadrature.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::kernels {
 namespace {
@@ -399,7 +399,7 @@ DesignedKernel design_grid(const Spectrum& sp, const DesignOptions& o) {
     for (;;) {
         const double dk = 1.0 / (N * d);
         const int hw = N / 2 + 1;
-        detail::RealFft2d inv(N, N, false);
+        numeric::RealFft2d inv(N, N, numeric::FftPlans::Inverse);
         std::vector<double> target(size_t(N) * hw, 0.0);  // symmetrised S on the half grid
         std::vector<SpectrumSample> samples;
         double smax = 0.0;
@@ -431,7 +431,7 @@ DesignedKernel design_grid(const Spectrum& sp, const DesignOptions& o) {
             refuse_negative(samples, smax, false, 0.125 * K, sp.name + " is negative", true);
             checked = true;
         }
-        inv.execute();
+        inv.inverse();
         // h(x) = sum_k A(k) e^{2 pi i k.x} dk^2; index (i, j) <-> x = (si d, sj d).
         const double* raw = inv.real();
         std::vector<double> h(size_t(N) * N);
@@ -487,7 +487,7 @@ DesignedKernel design_grid(const Spectrum& sp, const DesignOptions& o) {
         sk->n = n;
         sk->values.assign(size_t(n) * n, 0.0);
         double kept = 0.0;
-        detail::RealFft2d fwd(N, N, true);  // the final kernel's transform, for the report
+        numeric::RealFft2d fwd(N, N, numeric::FftPlans::Forward);  // the final kernel's transform, for the report
         for (int y = -m; y <= m; ++y)
             for (int x = -m; x <= m; ++x) {
                 const double v =
@@ -512,7 +512,7 @@ DesignedKernel design_grid(const Spectrum& sp, const DesignOptions& o) {
         }
         // |H(k)|^2 of the bilinear interpolant: (d^2 sinc^2(kx d) sinc^2(ky d) |DFT|)^2, exact at
         // the grid frequencies. Both halves of the plane count (weights 2 except columns 0, N/2).
-        fwd.execute();
+        fwd.forward();
         double num2 = 0.0, den2 = 0.0, pmax = 0.0;
         for (double t : target) pmax = std::max(pmax, t);
         for (int j = 0; j < N; ++j) {

@@ -20,7 +20,7 @@
 #include <string_view>
 #include <vector>
 
-#include "kernels/kernels.h"
+#include "kernels/kernel.h"
 
 namespace impulse::kernels {
 

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "numeric/cpu.h"
 #include "render/eval_detail.h"
 #include "render/render.h"
 
@@ -16,12 +17,6 @@ namespace {
 
 using detail::LoopImpulses;
 using detail::LoopKernel;
-
-bool cpu_has_avx2() {
-    // The fast build uses AVX2 and FMA instructions.
-    static const bool has = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-    return has;
-}
 
 /// Impulses in pixel coordinates with their orientation, for one frame.
 struct Prepared {
@@ -88,7 +83,7 @@ Prepared prepare(const kernels::Kernel& k, const sim::Impulses& imp, const View&
 
 void eval_tile(const LoopKernel& k, const LoopImpulses& p, const uint32_t* idx, size_t n, int tx0,
                int ty0, int tw, int th, float* acc, bool avx2) {
-    if (avx2 && cpu_has_avx2())
+    if (avx2 && numeric::cpu_has_avx2_fma())
         detail::eval_tile_avx2(k, p, idx, n, tx0, ty0, tw, th, acc);
     else
         detail::eval_tile_base(k, p, idx, n, tx0, ty0, tw, th, acc);

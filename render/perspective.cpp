@@ -15,9 +15,10 @@
 #include <numbers>
 #include <sstream>
 
+#include "numeric/cpu.h"
 #include "render/persp_detail.h"
 #include "render/persp_far.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::render {
 namespace {
@@ -35,11 +36,6 @@ constexpr size_t kMaxPolyTerms = 12;
 // is within 1-3 % of a single impulse's filtered kernel from there on, better than probes,
 // whose texture-space Gaussian ignores the perspective bend of the footprint).
 constexpr double kLineFrom = 0.25;
-
-bool cpu_has_avx2() {
-    static const bool has = __builtin_cpu_supports("avx2");
-    return has;
-}
 
 void require(bool ok, const std::string& what) {
     if (!ok) throw ValueError(what);
@@ -518,7 +514,7 @@ std::vector<detail::PerspLevel> loop_levels(const kernels::KernelPyramid& pyr) {
 
 }  // namespace
 
-sim::Region perspective_region(const kernels::KernelPyramid& pyr, const PerspectiveView& view,
+numeric::Region perspective_region(const kernels::KernelPyramid& pyr, const PerspectiveView& view,
                                const AntiAlias& aa) {
     const auto& cam = view.camera();
     const int W = cam.width, H = cam.height;
@@ -580,7 +576,7 @@ sim::Region perspective_region(const kernels::KernelPyramid& pyr, const Perspect
     // Cells of the sample grid (rows j, j + 1 and samples k, k + 1): the box of the corners
     // that see the plane (a corner past the cut-off moved back to it), expanded by the largest
     // extent among the kept ones.
-    auto cell_box = [&](int j, int k, sim::Box& b) {
+    auto cell_box = [&](int j, int k, numeric::Box& b) {
         b = {1e300, 1e300, -1e300, -1e300};
         double e = -1.0;
         const int rows = H > 1 ? 2 : 1;
@@ -607,16 +603,16 @@ sim::Region perspective_region(const kernels::KernelPyramid& pyr, const Perspect
     // boxes is the wedge; its bounding box would be about twice as large).
     constexpr double kWaste = 0.1;
     struct Merged {
-        sim::Box box, last;
+        numeric::Box box, last;
         double covered = 0.0;
     };
-    auto overlap = [](const sim::Box& a, const sim::Box& b) {
+    auto overlap = [](const numeric::Box& a, const numeric::Box& b) {
         const double w = std::min(a.x1, b.x1) - std::max(a.x0, b.x0);
         const double h = std::min(a.y1, b.y1) - std::max(a.y0, b.y0);
         return w > 0.0 && h > 0.0 ? w * h : 0.0;
     };
-    auto try_merge = [&](Merged& m, const sim::Box& b) {
-        const sim::Box u{std::min(m.box.x0, b.x0), std::min(m.box.y0, b.y0),
+    auto try_merge = [&](Merged& m, const numeric::Box& b) {
+        const numeric::Box u{std::min(m.box.x0, b.x0), std::min(m.box.y0, b.y0),
                          std::max(m.box.x1, b.x1), std::max(m.box.y1, b.y1)};
         const double covered = m.covered + b.area() - overlap(m.last, b);
         if (u.area() > (1.0 + kWaste) * covered) return false;
@@ -628,7 +624,7 @@ sim::Region perspective_region(const kernels::KernelPyramid& pyr, const Perspect
     tbb::parallel_for(0, cell_rows, [&](int j) {
         auto& out = rows[size_t(j)];
         for (int k = 0; k < kSamples; ++k) {
-            sim::Box b;
+            numeric::Box b;
             if (!cell_box(j, k, b)) continue;
             if (out.empty() || !try_merge(out.back(), b)) out.push_back({b, b, b.area()});
         }
@@ -639,7 +635,7 @@ sim::Region perspective_region(const kernels::KernelPyramid& pyr, const Perspect
         if (r.size() == 1 && !all.empty() && try_merge(all.back(), r.front().box)) continue;
         all.insert(all.end(), r.begin(), r.end());
     }
-    sim::Region region;
+    numeric::Region region;
     region.boxes.reserve(all.size());
     for (const Merged& m : all) region.boxes.push_back(m.box);
     return region;
@@ -911,7 +907,7 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
     }
 
     const detail::PerspLoops& loops =
-        options.use_avx2 && cpu_has_avx2() ? detail::kPerspLoopsAvx2 : detail::kPerspLoopsBase;
+        options.use_avx2 && numeric::cpu_has_avx2() ? detail::kPerspLoopsAvx2 : detail::kPerspLoopsBase;
     auto do_tile = [&](int t) {
         const int a = t % ntx, b = t / ntx;
         const int x0 = a * T, y0 = b * T;

@@ -50,7 +50,7 @@
 #include <vector>
 
 #include "kernels/kernels.h"
-#include "render/render.h"
+#include "render/evaluate.h"
 #include "sim/sim.h"
 
 namespace impulse::render {
@@ -205,7 +205,7 @@ PixelCoords pixel_coords(const PerspectiveView& view);
 /// have there, as a union of boxes that follows the visible wedge of the plane (its bounding box
 /// is about twice its area). Pass it to sim::LayerSimulator::impulses_at. Empty when nothing is
 /// visible.
-sim::Region perspective_region(const kernels::KernelPyramid& pyramid, const PerspectiveView& view,
+numeric::Region perspective_region(const kernels::KernelPyramid& pyramid, const PerspectiveView& view,
                                const AntiAlias& aa);
 
 /// Counts of the last perspective evaluation (for benchmarks and tests).

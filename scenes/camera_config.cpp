@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "scenes/camera_detail.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::scenes {
 
@@ -85,15 +85,15 @@ void read_camera_view(Reader& r, CameraConfig& c, int width, int height) {
                 r.fail(r.node(k), k,
                        "applies to orthographic cameras; a perspective camera is placed with "
                        "position, height, pitch, heading and fov");
-        c.position_x = sim::Keyframed(width / 2.0);
-        c.position_y = sim::Keyframed(height / 2.0);
+        c.position_x = numeric::Keyframed(width / 2.0);
+        c.position_y = numeric::Keyframed(height / 2.0);
         if (r.node("position")) {
             auto p = r.pair("position",
                             "[x, y]: the camera's foot on the plane, texture units, each within "
                             "+-1e12",
                             on_plane);
-            c.position_x = sim::Keyframed((*p)[0]);
-            c.position_y = sim::Keyframed((*p)[1]);
+            c.position_x = numeric::Keyframed((*p)[0]);
+            c.position_y = numeric::Keyframed((*p)[1]);
         }
         if (r.has("position_x"))
             c.position_x = r.keyframed("position_x", width / 2.0, on_plane, kOnPlane);
@@ -161,11 +161,11 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
                "missing: expected one of constant, radial, circular, polyline, sine, image, fixed, "
                "random, flow, vorticity, layer");
     const size_t type = f.choice("type", types, 0);
-    auto center = [&](sim::Keyframed& x, sim::Keyframed& y) {
+    auto center = [&](numeric::Keyframed& x, numeric::Keyframed& y) {
         if (f.node("center")) {
             auto c = f.pair("center", "[x, y] in texture units");
-            x = sim::Keyframed((*c)[0]);
-            y = sim::Keyframed((*c)[1]);
+            x = numeric::Keyframed((*c)[0]);
+            y = numeric::Keyframed((*c)[1]);
         } else if (f.has("center_x") || f.has("center_y")) {
             x = f.keyframed("center_x", 0.0);
             y = f.keyframed("center_y", 0.0);
@@ -181,7 +181,7 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
             break;
         case 1:
         case 2: {  // radial, circular
-            sim::Keyframed cx, cy;
+            numeric::Keyframed cx, cy;
             center(cx, cy);
             if (type == 1)
                 field = sim::make_radial_orientation(cx, cy);
@@ -207,18 +207,18 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
                     f.fail(pn, "points", kPoints);
                 pts.push_back(v);
             }
-            const sim::Keyframed smooth = f.keyframed(
+            const numeric::Keyframed smooth = f.keyframed(
                 "smooth", 0.0, [](double v) { return v >= 0.0; },
                 "a distance >= 0 in texture units (0: nearest segment)");
             field = sim::make_polyline_orientation(std::move(pts), smooth);
             break;
         }
         case 4: {  // sine
-            const sim::Keyframed amp = f.keyframed("amplitude", 16.0);
-            const sim::Keyframed wl =
+            const numeric::Keyframed amp = f.keyframed("amplitude", 16.0);
+            const numeric::Keyframed wl =
                 f.keyframed("wavelength", 128.0, kPositive, "a wavelength > 0 (texture units)");
-            const sim::Keyframed phase = f.keyframed("phase", 0.0);
-            const sim::Keyframed angle = f.keyframed("angle", 0.0);
+            const numeric::Keyframed phase = f.keyframed("phase", 0.0);
+            const numeric::Keyframed angle = f.keyframed("angle", 0.0);
             double ox = 0.0, oy = 0.0;
             if (auto o = f.pair("origin", "[x, y] in texture units")) ox = (*o)[0], oy = (*o)[1];
             field = sim::make_sine_orientation(amp, wl, phase, angle, ox, oy);

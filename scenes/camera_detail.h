@@ -36,13 +36,13 @@ public:
     bool active() const { return m_active; }
     /// Texture region layer `layer`'s impulses must cover at time t_s (`view`: the orthographic
     /// view; its box when nothing applies). A point when the layer is faded to its mean.
-    sim::Region region(size_t layer, const render::View& view, double t_s);
+    numeric::Region region(size_t layer, const render::View& view, double t_s);
     /// Adds the layer's impulses to `out` (frame size) as the camera sees them at time t_s.
     void accumulate(size_t layer, const sim::Impulses& impulses, const render::View& view,
                     double t_s, render::Frame& out, const render::EvalOptions& options);
     /// The largest region over the camera's keys (for budget estimates); `view0`: the
     /// orthographic view at its widest.
-    sim::Region estimate_region(size_t layer, const render::View& view0) const;
+    numeric::Region estimate_region(size_t layer, const render::View& view0) const;
     /// The layer's pyramid (null when not active).
     const kernels::KernelPyramid* pyramid(size_t layer) const;
     /// Counts of the last perspective evaluation of a layer.

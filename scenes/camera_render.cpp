@@ -45,21 +45,21 @@ void CameraPipeline::prepare(double t) {
     m_coords = render::pixel_coords(*m_view);
 }
 
-sim::Region CameraPipeline::region(size_t layer, const render::View& view, double t) {
+numeric::Region CameraPipeline::region(size_t layer, const render::View& view, double t) {
     if (!m_active) return view.box();
     const kernels::KernelPyramid& pyr = *m_pyramids.at(layer);
     if (m_scene->camera.type == CameraConfig::Type::Perspective) {
         prepare(t);
-        sim::Region r = render::perspective_region(pyr, *m_view, m_aa);
+        numeric::Region r = render::perspective_region(pyr, *m_view, m_aa);
         if (!r.empty()) return r;
         const auto& c = m_view->camera();
-        return sim::Box{c.x, c.y, c.x, c.y};  // nothing to draw: a point (a few impulses, no work)
+        return numeric::Box{c.x, c.y, c.x, c.y};  // nothing to draw: a point (a few impulses, no work)
     }
     if (!(render::filtered_fade(pyr, view, m_aa) > 0.0)) {
         // The layer is its mean: ask for next to nothing (a point, never an inverted box).
-        const sim::Box v = view.box();
+        const numeric::Box v = view.box();
         const double cx = 0.5 * (v.x0 + v.x1), cy = 0.5 * (v.y0 + v.y1);
-        return sim::Box{cx, cy, cx, cy};
+        return numeric::Box{cx, cy, cx, cy};
     }
     // The simulator adds the kernel's own radius; the blended levels reach further.
     return view.box().expanded(
@@ -91,7 +91,7 @@ void CameraPipeline::accumulate(size_t layer, const sim::Impulses& impulses,
     render::accumulate_filtered(pyr, impulses, view, out, m_aa, options);
 }
 
-sim::Region CameraPipeline::estimate_region(size_t layer, const render::View& view0) const {
+numeric::Region CameraPipeline::estimate_region(size_t layer, const render::View& view0) const {
     if (!m_active) return view0.box();
     const kernels::KernelPyramid& pyr = *m_pyramids.at(layer);
     const CameraConfig& c = m_scene->camera;
@@ -102,10 +102,10 @@ sim::Region CameraPipeline::estimate_region(size_t layer, const render::View& vi
     for (const auto* k : {&c.position_x, &c.position_y, &c.altitude, &c.pitch, &c.heading, &c.fov})
         for (const auto& key : k->keys) times.insert(key.first);
     const auto& o = m_scene->output;
-    sim::Region best = sim::Box{0, 0, 0, 0};
+    numeric::Region best = numeric::Box{0, 0, 0, 0};
     for (double t : times) {
         const render::PerspectiveView v(c.perspective(o.width, o.height, t));
-        sim::Region r = render::perspective_region(pyr, v, m_aa);
+        numeric::Region r = render::perspective_region(pyr, v, m_aa);
         if (r.area() > best.area()) best = std::move(r);
     }
     return best;

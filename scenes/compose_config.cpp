@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "scenes/compose_detail.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::scenes::detail {
 namespace {
@@ -25,11 +25,11 @@ public:
              double* div, double* curl) const override {
         m_flow->add(t, n, x, y, vx, vy, div, curl);
     }
-    double max_speed(const sim::Box& region) const override { return m_flow->max_speed(region); }
-    std::array<double, 4> velocity_bounds(const sim::Box& region) const override {
+    double max_speed(const numeric::Box& region) const override { return m_flow->max_speed(region); }
+    std::array<double, 4> velocity_bounds(const numeric::Box& region) const override {
         return m_flow->velocity_bounds(region);
     }
-    void prepare(const sim::Box& region) override { m_flow->prepare(region); }
+    void prepare(const numeric::Box& region) override { m_flow->prepare(region); }
 
 private:
     std::unique_ptr<sim::Flow> m_flow;
@@ -61,7 +61,7 @@ struct CompositionReader::Ref {
 
 struct CompositionReader::PendingFlow {
     DeferredFlow* term;
-    sim::Keyframed speed;
+    numeric::Keyframed speed;
 };
 
 CompositionReader::CompositionReader() = default;

@@ -10,7 +10,8 @@
 #include <numbers>
 
 #include "scenes/compose_detail.h"
-#include "sim/catmull_rom.h"
+#include "numeric/gaussian.h"
+#include "numeric/spline.h"
 
 namespace impulse::scenes::detail {
 namespace {
@@ -88,8 +89,8 @@ void warp_resample(const render::Frame& src, int margin, const std::vector<float
                 const int x0 = stencil_cell(i + margin + double(dx[p]), W, tx);
                 const int y0 = stencil_cell(j + margin + double(dy[p]), H, ty);
                 double wx[4], wy[4], d[4], dd[4];
-                sim::catmull_rom(tx, wx, d, dd);
-                sim::catmull_rom(ty, wy, d, dd);
+                numeric::catmull_rom(tx, wx, d, dd);
+                numeric::catmull_rom(ty, wy, d, dd);
                 double sum = 0.0;
                 for (int b = 0; b < 4; ++b) {
                     const float* row = src.data.data() + size_t(y0 - 1 + b) * W + (x0 - 1);
@@ -114,8 +115,8 @@ void LatticeOrientation::angles(double, size_t n, const double* x, const double*
         const int a0 = stencil_cell(x[k] / m_h - double(m_i0), W, tx);
         const int b0 = stencil_cell(y[k] / m_h - double(m_j0), H, ty);
         double wx[4], dx[4], ddx[4], wy[4], dy[4], ddy[4];
-        sim::catmull_rom(tx, wx, dx, ddx);
-        sim::catmull_rom(ty, wy, dy, ddy);
+        numeric::catmull_rom(tx, wx, dx, ddx);
+        numeric::catmull_rom(ty, wy, dy, ddy);
         double gx = 0.0, gy = 0.0;
         for (int b = 0; b < 4; ++b) {
             const float* row = m_values.data.data() + size_t(b0 - 1 + b) * W + (a0 - 1);
@@ -132,8 +133,8 @@ void LatticeOrientation::angles(double, size_t n, const double* x, const double*
 
 namespace {
 
-double normal_cdf(double z) { return 0.5 * std::erfc(-z / std::numbers::sqrt2); }
-double normal_pdf(double z) { return std::exp(-0.5 * z * z) / std::sqrt(2.0 * std::numbers::pi); }
+using numeric::normal_cdf;
+using numeric::normal_pdf;
 
 /// E[f(L)] over the layer's marginal: the target distribution of a shaped layer (midpoint rule
 /// in probability, 4096 quantiles), else a Gaussian with the layer's mean and variance

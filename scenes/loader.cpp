@@ -19,7 +19,7 @@
 #include "scenes/marginal.h"
 #include "scenes/reader.h"
 #include "scenes/scenes.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::scenes {
 namespace {
@@ -126,15 +126,15 @@ void apply_override(toml::table& root, const std::string& text, Source& src) {
 
 CameraConfig read_camera(std::optional<Reader> r, int width, int height) {
     CameraConfig c;
-    c.center_x = sim::Keyframed(width / 2.0);
-    c.center_y = sim::Keyframed(height / 2.0);
+    c.center_x = numeric::Keyframed(width / 2.0);
+    c.center_y = numeric::Keyframed(height / 2.0);
     if (!r) return c;
     r->refuse_keyframes("center");
     if (auto ct = r->node("center")) {
         if (ct->is_array()) {
             auto p = r->pair("center", "[x, y] in texture units, each within +-1e12", detail::on_plane);
-            c.center_x = sim::Keyframed((*p)[0]);
-            c.center_y = sim::Keyframed((*p)[1]);
+            c.center_x = numeric::Keyframed((*p)[0]);
+            c.center_y = numeric::Keyframed((*p)[1]);
         } else {
             r->fail(ct, "center", "expected [x, y] in texture units");
         }
@@ -165,7 +165,7 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
             f.fail(nullptr, "type",
                    "missing: expected one of uniform, shear, vortex, source, curl, image, layer");
         const size_t type = f.choice("type", types, 0);
-        auto center = [&](sim::Keyframed& x, sim::Keyframed& y) {
+        auto center = [&](numeric::Keyframed& x, numeric::Keyframed& y) {
             const toml::node* n = f.node("center");
             if (!n) {
                 x = f.keyframed("center_x", 0.0);
@@ -173,17 +173,17 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
                 return;
             }
             auto p = f.pair("center", "[x, y] in texture units");
-            x = sim::Keyframed((*p)[0]);
-            y = sim::Keyframed((*p)[1]);
+            x = numeric::Keyframed((*p)[0]);
+            y = numeric::Keyframed((*p)[1]);
             f.node("center_x"), f.node("center_y");
         };
         switch (type) {
             case 0: {  // uniform
-                sim::Keyframed vx(0.0), vy(0.0);
+                numeric::Keyframed vx(0.0), vy(0.0);
                 if (f.node("velocity")) {
                     auto v = f.pair("velocity", "[vx, vy] in units per second");
-                    vx = sim::Keyframed((*v)[0]);
-                    vy = sim::Keyframed((*v)[1]);
+                    vx = numeric::Keyframed((*v)[0]);
+                    vy = numeric::Keyframed((*v)[1]);
                 }
                 if (f.has("vx")) vx = f.keyframed("vx", 0.0);
                 if (f.has("vy")) vy = f.keyframed("vy", 0.0);
@@ -192,14 +192,14 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
             }
             case 1: {  // shear
                 auto rate = f.keyframed("rate", 0.1);
-                sim::Keyframed cx, cy;
+                numeric::Keyframed cx, cy;
                 center(cx, cy);
                 auto angle = f.keyframed("angle", 0.0);
                 sum->push(sim::make_shear_flow(rate, cx, cy, angle));
                 break;
             }
             case 2: {  // vortex
-                sim::Keyframed cx, cy;
+                numeric::Keyframed cx, cy;
                 center(cx, cy);
                 auto gamma = f.keyframed("circulation", 2000.0);
                 auto core = f.keyframed("core", 40.0, kPositive, "a radius > 0");
@@ -208,7 +208,7 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
                 break;
             }
             case 3: {  // source / sink
-                sim::Keyframed cx, cy;
+                numeric::Keyframed cx, cy;
                 center(cx, cy);
                 auto rate = f.keyframed("rate", 0.1);
                 auto radius = f.keyframed("radius", 0.0, kNonNegative, "a radius >= 0 (0: everywhere)");
@@ -303,8 +303,8 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
     const auto window = static_cast<K::DesignWindow>(r.choice("window", K::kDesignWindowNames, 1));
     const toml::node* radius_node = r.node("radius");
     const double radius = r.number("radius", 0.0, kPositive, "a radius > 0 (texture units)");
-    const sim::Keyframed orientation = r.keyframed("orientation", 0.0);
-    const sim::Keyframed aspect = r.keyframed(
+    const numeric::Keyframed orientation = r.keyframed("orientation", 0.0);
+    const numeric::Keyframed aspect = r.keyframed(
         "aspect", 1.0, [](double v) { return v >= 1.0; }, "a ratio >= 1");
     // The design is normalised at the largest density over time (docs/scenes.md "Keyframes").
     auto layer_density = [&] {
@@ -335,7 +335,7 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
             static_cast<sim::Amplitude>(layer.choice("amplitude", sim::kAmplitudeNames, 0)));
         render::Frame image;
         try {
-            image = render::read_image(path_of(pn, rel).string());
+            image = output::read_image(path_of(pn, rel).string());
         } catch (const Error& e) {
             r.fail(pn, "path", e.what());
         }
@@ -559,7 +559,7 @@ kernels::KernelParams read_kernel(std::optional<Reader> r, Reader& layer, const 
     const size_t type = r->choice("type", kSceneKernelTypes, 0);
     auto field = [&](const char* key, double K::KernelParams::*member, double fallback,
                      const std::function<bool(double)>& ok, const char* expected) {
-        const sim::Keyframed v = r->keyframed(key, fallback, ok, expected);
+        const numeric::Keyframed v = r->keyframed(key, fallback, ok, expected);
         k.*member = v.value(0.0);
         if (!v.is_constant()) keys.push_back({member, v});
     };
@@ -606,7 +606,7 @@ kernels::KernelParams read_kernel(std::optional<Reader> r, Reader& layer, const 
     // Combinations the per-key checks cannot see (radius / sigma, cycles across the radius) must
     // hold at every time.
     if (!keys.empty()) {
-        std::vector<const sim::Keyframed*> ks;
+        std::vector<const numeric::Keyframed*> ks;
         for (const auto& key : keys) ks.push_back(&key.value);
         LayerConfig probe;
         probe.kernel = k;
@@ -748,8 +748,8 @@ void prepare_layer(LayerConfig& layer) {
     p.density_scale = nullptr;
     const double area0 = K::Kernel(layer.kernel).support_area();
     // The kernel area pi R^2 / aspect varies when radius or aspect is keyframed.
-    const sim::Keyframed* radius = nullptr;
-    const sim::Keyframed* aspect = nullptr;
+    const numeric::Keyframed* radius = nullptr;
+    const numeric::Keyframed* aspect = nullptr;
     for (const auto& k : layer.kernel_keys) {
         if (k.field == &K::KernelParams::radius) radius = &k.value;
         if (k.field == &K::KernelParams::aspect) aspect = &k.value;
@@ -767,8 +767,8 @@ void prepare_layer(LayerConfig& layer) {
     if (aspect) smallest.aspect = aspect->max();
     p.intensity = layer.density.max() / K::Kernel(smallest).support_area();
     const double r0 = layer.kernel.radius, a0 = layer.kernel.aspect;
-    const sim::Keyframed R = radius ? *radius : sim::Keyframed(r0);
-    const sim::Keyframed A = aspect ? *aspect : sim::Keyframed(a0);
+    const numeric::Keyframed R = radius ? *radius : numeric::Keyframed(r0);
+    const numeric::Keyframed A = aspect ? *aspect : numeric::Keyframed(a0);
     p.density_scale = [density = layer.density, R, A, lambda_max = p.intensity](double t) {
         const double r = R.value(t);
         const double area = std::numbers::pi * r * r / A.value(t);  // Kernel::support_area

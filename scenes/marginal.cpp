@@ -9,8 +9,9 @@
 #include <functional>
 #include <sstream>
 
+#include "output/output.h"
 #include "render/render.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::scenes::detail {
 namespace {
@@ -46,7 +47,7 @@ void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base)
     using MP = kernels::MarginalParams;
     auto param = [&](const char* key, double MP::*member, double fallback,
                      const std::function<bool(double)>& ok, const char* expected) {
-        const sim::Keyframed v = m->keyframed(key, fallback, ok, expected);
+        const numeric::Keyframed v = m->keyframed(key, fallback, ok, expected);
         if (!v.is_constant() && !fixed_target.empty())
             m->fail(m->node(key), key, "cannot vary in time: " + fixed_target);
         P.*member = v.value(0.0);
@@ -98,7 +99,7 @@ void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base)
                 const std::string rel = m->string("image", "");
                 const std::filesystem::path p = resolve_path(in, rel, base);
                 try {
-                    const render::Frame img = render::read_image(p.string());
+                    const render::Frame img = output::read_image(p.string());
                     samples->assign(img.data.begin(), img.data.end());
                 } catch (const Error& e) {
                     m->fail(in, "image", std::string("cannot read: ") + e.what());
@@ -122,7 +123,7 @@ void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base)
         }
     if (P.type == kernels::MarginalType::Uniform) {
         // b > a at every time.
-        std::vector<const sim::Keyframed*> ks;
+        std::vector<const numeric::Keyframed*> ks;
         for (const auto& k : L.marginal_keys) ks.push_back(&k.value);
         for (double t : key_check_times(ks)) {
             double a = P.a, b = P.b;

@@ -7,7 +7,7 @@
 #include <map>
 #include <sstream>
 
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::scenes::detail {
 
@@ -280,10 +280,10 @@ std::optional<std::array<double, 2>> Reader::pair(std::string_view key, const ch
     return v;
 }
 
-sim::Keyframed Reader::keyframed(std::string_view key, double fallback,
+numeric::Keyframed Reader::keyframed(std::string_view key, double fallback,
                                  const std::function<bool(double)>& ok, const char* expected) {
     const toml::node* n = node(key);
-    if (!n) return sim::Keyframed(fallback);
+    if (!n) return numeric::Keyframed(fallback);
     // A bad value is reported at itself: the number, or the [t, v] key holding it.
     auto check = [&](double v, const Reader& at, const toml::node* where, std::string_view k) {
         if (!std::isfinite(v)) at.fail(where, k, "expected a finite number");
@@ -292,15 +292,15 @@ sim::Keyframed Reader::keyframed(std::string_view key, double fallback,
     if (n->is_number()) {
         const double v = n->value<double>().value_or(0);
         check(v, *this, n, key);
-        return sim::Keyframed(v);
+        return numeric::Keyframed(v);
     }
     const toml::table* t = n->as_table();
     if (!t)
         fail(n, key, "expected a number or keyframes { keys = [[t, v], ...] }, found " +
                          type_name(*n));
     Reader r(*t, key_path(key), m_source, n);
-    sim::Keyframed k;
-    k.ease = static_cast<sim::Ease>(r.choice("ease", sim::kEaseNames, 0));
+    numeric::Keyframed k;
+    k.ease = static_cast<numeric::Ease>(r.choice("ease", numeric::kEaseNames, 0));
     const toml::node* kn = r.node("keys");
     const toml::array* ka = kn ? kn->as_array() : nullptr;
     if (!ka || ka->empty()) r.fail(kn, "keys", "expected a non-empty array of [time_s, value] pairs");
@@ -349,7 +349,7 @@ std::vector<Reader> Reader::tables(std::string_view key) {
     return out;
 }
 
-std::vector<double> key_check_times(const std::vector<const sim::Keyframed*>& ks) {
+std::vector<double> key_check_times(const std::vector<const numeric::Keyframed*>& ks) {
     std::set<double> t = {0.0};
     double lo = 0.0, hi = 0.0;
     for (const auto* k : ks)

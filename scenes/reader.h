@@ -17,6 +17,7 @@
 #include <string_view>
 #include <vector>
 
+#include "output/output.h"
 #include "render/render.h"
 #include "scenes/scenes.h"
 #include "sim/sim.h"
@@ -71,7 +72,7 @@ public:
     std::optional<std::array<double, 2>> pair(std::string_view key, const char* expected,
                                               const std::function<bool(double)>& ok = {});
     /// A number, or { keys = [[t, v], ...], ease = "linear" } with increasing times.
-    sim::Keyframed keyframed(std::string_view key, double fallback,
+    numeric::Keyframed keyframed(std::string_view key, double fallback,
                              const std::function<bool(double)>& ok = {}, const char* expected = "");
     /// Reason given when a keyframe table is written for a structural key of this table (for
     /// tables whose numbers are all structural, e.g. a designed kernel); overrides the list in
@@ -105,13 +106,13 @@ private:
 
 /// The [shading] table (scenes/shading_config.cpp); `base` resolves relative paths. Keyframed
 /// numbers go to `keys` (their values at t = 0 into the result).
-render::Shading read_shading(std::optional<Reader> r, const std::filesystem::path& base,
+output::Shading read_shading(std::optional<Reader> r, const std::filesystem::path& base,
                              ShadingKeys& keys);
 
 /// Times at which combinations of keyframed values are checked: t = 0, every key, and 65
 /// times evenly over the keys' span (each value is monotone between its keys, but a
 /// combination of two need not be).
-std::vector<double> key_check_times(const std::vector<const sim::Keyframed*>& keyframed);
+std::vector<double> key_check_times(const std::vector<const numeric::Keyframed*>& keyframed);
 
 /// Why the key at `path` (a key path with the array indices removed: "layer.lifetime") cannot
 /// vary in time; completes "cannot vary in time: ...".
@@ -125,7 +126,7 @@ std::filesystem::path resolve_path(const toml::node* n, const std::string& rel,
 
 /// [shading.transform] (scenes/transform_config.cpp): marble or wood; refused for perspective
 /// cameras. `width`, `height`: the output size (wood's default centre).
-render::FieldTransform read_transform(std::optional<Reader> r, const CameraConfig& camera,
+output::FieldTransform read_transform(std::optional<Reader> r, const CameraConfig& camera,
                                       int width, int height, uint64_t scene_seed);
 
 /// layer.region: the birth region of a layer (scenes/region_config.cpp); `base` resolves a mask

@@ -5,9 +5,10 @@
 #include <cmath>
 #include <filesystem>
 
+#include "output/output.h"
 #include "render/render.h"
 #include "scenes/reader.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::scenes::detail {
 namespace {
@@ -121,7 +122,7 @@ void read_region(Reader& layer, sim::ProcessConfig& process, const fs::path& bas
     const size_t type = r.choice("type", kRegionTypes, 0);
     const bool invert = r.boolean("invert", false);
     if (type == kImage) {
-        // A grey mask: luminance of RGB, the first channel otherwise (render::read_image);
+        // A grey mask: luminance of RGB, the first channel otherwise (output::read_image);
         // integer formats in [0, 1], float ones must lie there.
         if (r.has("feather"))
             r.fail(r.node("feather"), "feather",
@@ -134,7 +135,7 @@ void read_region(Reader& layer, sim::ProcessConfig& process, const fs::path& bas
         if (!fs::is_regular_file(path, ec)) r.fail(pn, "path", "cannot read: no such file");
         sim::MaskGrid g;
         try {
-            render::Frame f = render::read_image(path.string());
+            render::Frame f = output::read_image(path.string());
             g.width = f.width, g.height = f.height, g.values = std::move(f.data);
         } catch (const Error& e) {
             r.fail(pn, "path", e.what());

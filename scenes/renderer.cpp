@@ -11,7 +11,7 @@
 #include "scenes/compose_detail.h"
 #include "scenes/marginal.h"
 #include "scenes/scenes.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 #ifndef IMPULSE_SCENES_DIR
 #define IMPULSE_SCENES_DIR "scenes"
@@ -42,8 +42,8 @@ double Scene::layer_time(size_t layer, int64_t frame) const {
            output.fps;
 }
 
-render::Shading Scene::shading_at(double t) const {
-    render::Shading s = shading;
+output::Shading Scene::shading_at(double t) const {
+    output::Shading s = shading;
     s.relief = shading_keys.relief.value(t);
     s.light_azimuth_deg = shading_keys.light_azimuth.value(t);
     s.light_elevation_deg = shading_keys.light_elevation.value(t);
@@ -183,9 +183,9 @@ struct Renderer::State {
     void raw(size_t i, const Pass& pass, const render::View& v, Space space, render::Frame& out,
              sim::Impulses& impulses);
     /// The layer's impulses covering `box`, gain applied, oriented by its source layer if any.
-    void layer_impulses(size_t i, const Pass& pass, const sim::Region& box, sim::Impulses& out);
+    void layer_impulses(size_t i, const Pass& pass, const numeric::Region& box, sim::Impulses& out);
     /// Samples layer i's orientation source on a lattice covering the impulses of `box`.
-    void orient(size_t i, const Pass& pass, const sim::Box& box);
+    void orient(size_t i, const Pass& pass, const numeric::Box& box);
     /// Rebuilds layer i's marginal transfer for layer time tl when its target or source varies.
     void update_marginal(size_t i, double tl);
     /// Refuses a frame buffer of `pixels` beyond limits.max_memory_mib.
@@ -273,7 +273,7 @@ double Renderer::estimated_impulses() const {
         for (const auto& k : S.scene.camera.zoom.keys) min_zoom = std::min(min_zoom, k.second);
         render::View v = S.scene.camera.view(S.scene.output.width, S.scene.output.height, 0.0);
         v.scale = 1.0 / min_zoom;
-        sim::Region box = S.camera->estimate_region(i, v);
+        numeric::Region box = S.camera->estimate_region(i, v);
         const Composition& c = S.scene.layers[i].compose;
         // A warp reads the layer up to its largest displacement beyond the view: about 5 sd of
         // the sources over a frame of a million pixels, 6 sd taken.
@@ -322,11 +322,11 @@ double Renderer::estimated_memory_mib() const {
     return bytes / (1024.0 * 1024.0);
 }
 
-render::ValueMapping Renderer::mapping() const {
+output::ValueMapping Renderer::mapping() const {
     const Scene& s = m_state->scene;
     if (s.output.range) return {(*s.output.range)[0], (*s.output.range)[1]};
-    if (s.transform.type != render::FieldTransform::Type::None)
-        return render::transform_range(s.transform);  // the transformed values' known range
+    if (s.transform.type != output::FieldTransform::Type::None)
+        return output::transform_range(s.transform);  // the transformed values' known range
     bool keyed = false;
     for (const auto& l : s.layers) keyed = keyed || l.keyframed();
     if (!keyed) {
@@ -341,7 +341,7 @@ render::ValueMapping Renderer::mapping() const {
     std::set<double> times = {t0, t1};
     for (int i = 1; i < 64; ++i) times.insert(t0 + (t1 - t0) * i / 64.0);
     for (const auto& l : s.layers) {
-        std::vector<const sim::Keyframed*> ks = {&l.density, &l.mean, &l.gain};
+        std::vector<const numeric::Keyframed*> ks = {&l.density, &l.mean, &l.gain};
         for (const auto& k : l.kernel_keys) ks.push_back(&k.value);
         for (const auto& k : l.marginal_keys) ks.push_back(&k.value);
         const double P = l.process.loop_s;
@@ -402,11 +402,11 @@ void Renderer::render(int64_t frame, render::Frame& out, const render::EvalOptio
     }
     if (mean != 0.0)
         for (auto& v : out.data) v = static_cast<float>(v + mean);
-    if (S.scene.transform.type != render::FieldTransform::Type::None) {
+    if (S.scene.transform.type != output::FieldTransform::Type::None) {
         // Marble and wood (Lewis 1989 §5.1) of the field in standard deviations.
         const Theory th = scene_theory(S.scene, t);
         try {
-            render::apply_transform(S.scene.transform, view, th.mean, std::sqrt(th.variance),
+            output::apply_transform(S.scene.transform, view, th.mean, std::sqrt(th.variance),
                                     out);
         } catch (const ValueError& e) {
             throw SceneError(S.scene.path + ": shading.transform: " + e.what());
@@ -486,7 +486,7 @@ void Renderer::State::raw(size_t i, const Pass& pass, const render::View& v, Spa
     }
 }
 
-void Renderer::State::layer_impulses(size_t i, const Pass& pass, const sim::Region& box,
+void Renderer::State::layer_impulses(size_t i, const Pass& pass, const numeric::Region& box,
                                      sim::Impulses& out) {
     if (orientations[i]) orient(i, pass, box.bounds());
     in_layer(scene, i, [&] { sims[i].impulses_at(pass.frame, box, out); });
@@ -510,14 +510,14 @@ void Renderer::State::layer_impulses(size_t i, const Pass& pass, const sim::Regi
     }
 }
 
-void Renderer::State::orient(size_t i, const Pass& pass, const sim::Box& box) {
+void Renderer::State::orient(size_t i, const Pass& pass, const numeric::Box& box) {
     // The source's own field (kernel itself, in texture space) on a lattice of spacing R / 8
     // whose nodes are whole multiples of the spacing, covering every impulse the simulator
     // emits for `box` (within the layer's support radius of it) with the bicubic stencil's two
     // nodes to spare.
     const size_t j = scene.layers[i].compose.orientation->source;
     const double h = kernels[j].radius() / 8.0;
-    const sim::Box b = box.expanded(scene.layers[i].kernel.radius);
+    const numeric::Box b = box.expanded(scene.layers[i].kernel.radius);
     const int64_t i0 = static_cast<int64_t>(std::floor(b.x0 / h)) - 2;
     const int64_t j0 = static_cast<int64_t>(std::floor(b.y0 / h)) - 2;
     const int64_t i1 = static_cast<int64_t>(std::floor(b.x1 / h)) + 3;

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "kernels/kernels.h"
+#include "output/output.h"
 #include "render/render.h"
 #include "sim/sim.h"
 
@@ -37,14 +38,14 @@ struct CameraConfig {
     enum class Type { Orthographic, Perspective };
     Type type = Type::Orthographic;
     // orthographic
-    sim::Keyframed center_x, center_y;  ///< texture point at the frame centre (default: size/2)
-    sim::Keyframed zoom = 1.0;          ///< pixels per texture unit, > 0
+    numeric::Keyframed center_x, center_y;  ///< texture point at the frame centre (default: size/2)
+    numeric::Keyframed zoom = 1.0;          ///< pixels per texture unit, > 0
     // perspective (scenes/camera_config.cpp)
-    sim::Keyframed position_x, position_y;  ///< the camera's foot on the plane (default: size/2)
-    sim::Keyframed altitude = 100.0;    ///< key `height`: distance from the plane, texture units, > 0
-    sim::Keyframed pitch = 20.0;        ///< degrees below (ground) / above (sky) the horizon, [-90, 90]
-    sim::Keyframed heading = 0.0;       ///< degrees on the plane: 0 looks towards -y, 90 towards +x
-    sim::Keyframed fov = 60.0;          ///< vertical field of view, degrees, in (0, 180)
+    numeric::Keyframed position_x, position_y;  ///< the camera's foot on the plane (default: size/2)
+    numeric::Keyframed altitude = 100.0;    ///< key `height`: distance from the plane, texture units, > 0
+    numeric::Keyframed pitch = 20.0;        ///< degrees below (ground) / above (sky) the horizon, [-90, 90]
+    numeric::Keyframed heading = 0.0;       ///< degrees on the plane: 0 looks towards -y, 90 towards +x
+    numeric::Keyframed fov = 60.0;          ///< vertical field of view, degrees, in (0, 180)
     render::Plane plane = render::Plane::Ground;
     // anti-aliasing
     enum class AntiAliasMode { Auto, Blend, Nearest, Off };
@@ -83,7 +84,7 @@ inline constexpr std::array<std::string_view, 5> kBlendNames = {"add", "multiply
 /// standardised values (v - mean) / sd of two source layers (Campbell mean and sd).
 struct WarpConfig {
     std::array<size_t, 2> source{};  ///< layers giving the x and y displacement (may be equal)
-    sim::Keyframed amount = 0.0;     ///< texture units per standard deviation of the sources, >= 0
+    numeric::Keyframed amount = 0.0;     ///< texture units per standard deviation of the sources, >= 0
 };
 
 /// Kernel rotation from another layer's field at each impulse's position at the frame time.
@@ -97,7 +98,7 @@ struct Composition {
     std::string name;                ///< "" when unnamed
     bool visible = true;             ///< false: rendered only as a source for other layers
     Blend blend = Blend::Add;
-    sim::Keyframed opacity = 1.0;    ///< weight of the layer in its blend, in [0, 1]
+    numeric::Keyframed opacity = 1.0;    ///< weight of the layer in its blend, in [0, 1]
     /// Over: alpha = opacity * smoothstep(lo, hi, value), value = the layer's own field; absent:
     /// alpha = opacity.
     std::optional<std::array<double, 2>> alpha;
@@ -109,13 +110,13 @@ struct Composition {
 /// A keyframed field of a layer's kernel: kernel.*field = value(t) (docs/scenes.md "Keyframes").
 struct KernelKey {
     double kernels::KernelParams::*field = nullptr;
-    sim::Keyframed value;
+    numeric::Keyframed value;
 };
 
 /// A keyframed parameter of a layer's target marginal: params.*field = value(t).
 struct MarginalKey {
     double kernels::MarginalParams::*field = nullptr;
-    sim::Keyframed value;
+    numeric::Keyframed value;
 };
 
 /// One [[layer]]. Its keyframed parameters are evaluated at the layer time (layer_time).
@@ -125,9 +126,9 @@ struct LayerConfig {
     /// intensity: the largest live intensity over time, density / kernel area (births are
     /// thinned down from it by process.density_scale when density or kernel area vary).
     sim::ProcessConfig process;
-    sim::Keyframed density = 16.0;  ///< expected live impulses per kernel area, > 0
-    sim::Keyframed mean = 0.0;      ///< constant added to the layer
-    sim::Keyframed gain = 1.0;      ///< amplitude scale
+    numeric::Keyframed density = 16.0;  ///< expected live impulses per kernel area, > 0
+    numeric::Keyframed mean = 0.0;      ///< constant added to the layer
+    numeric::Keyframed gain = 1.0;      ///< amplitude scale
     std::shared_ptr<sim::Flow> flow;  ///< null: no motion
     /// Distribution shaping g = F_y^-1(F_x(.)) of the layer's values (Lewis 1986 §4); null:
     /// none. Built with the Gaussian F_x of the unshaped layer's closed-form mean and variance
@@ -159,7 +160,7 @@ struct LayerConfig {
 
 /// [shading] numbers that may vary in time; the values at t = 0 are in Scene::shading.
 struct ShadingKeys {
-    sim::Keyframed relief = 0.0, light_azimuth = 135.0, light_elevation = 35.0, ambient = 0.25;
+    numeric::Keyframed relief = 0.0, light_azimuth = 135.0, light_elevation = 35.0, ambient = 0.25;
 };
 
 struct Scene {
@@ -169,11 +170,11 @@ struct Scene {
     CameraConfig camera;
     Limits limits;
     std::vector<LayerConfig> layers;
-    render::Shading shading;  ///< [shading]: how the field becomes display colour (at t = 0)
+    output::Shading shading;  ///< [shading]: how the field becomes display colour (at t = 0)
     ShadingKeys shading_keys;  ///< its keyframed numbers (shading_at evaluates them)
     /// [shading.transform]: marble or wood, applied to the summed field by Renderer::render
     /// (type None: the field as it is).
-    render::FieldTransform transform;
+    output::FieldTransform transform;
     std::string hash;  ///< FNV-1a of the scene text, included files and overrides, hex
     std::vector<std::string> warnings;  ///< accepted but suspicious values, one line each
 
@@ -183,7 +184,7 @@ struct Scene {
     /// frames for a looped layer (so frame loop fps repeats frame 0 bit for bit).
     double layer_time(size_t layer, int64_t frame) const;
     /// The shading at frame time t_s (keyframed numbers evaluated).
-    render::Shading shading_at(double t_s) const;
+    output::Shading shading_at(double t_s) const;
 };
 
 /// Derive a layer's process.intensity (density / kernel area, the largest over time),
@@ -241,7 +242,7 @@ public:
     /// standard deviations; with keyframed layers the widest such range over the output's
     /// frames (scene_theory at the first and last frame, every key time inside, one lifetime
     /// after each, and 64 times between), so the mapping is the same in every frame.
-    render::ValueMapping mapping() const;
+    output::ValueMapping mapping() const;
 
 private:
     struct State;

@@ -9,13 +9,14 @@
 #include <filesystem>
 #include <map>
 
+#include "numeric/gaussian.h"
 #include "scenes/reader.h"
 #include "scenes/scenes.h"
 
 namespace impulse::scenes::detail {
 namespace {
 
-using Ramp = std::vector<render::ColorStop>;
+using Ramp = std::vector<output::ColorStop>;
 
 /// Built-in ramps: display value t -> colour and opacity.
 const std::map<std::string, Ramp>& named_ramps() {
@@ -47,7 +48,7 @@ bool read_rgb_pixels(const std::string& path, std::vector<float>& px, int& chann
         error = "cannot read: " + in->geterror();
         return false;
     }
-    error = render::nonfinite_pixel(px.data(), px.size(), spec.width, channels);
+    error = output::nonfinite_pixel(px.data(), px.size(), spec.width, channels);
     return error.empty();  // a NaN would break the sort by luminance
 }
 
@@ -72,21 +73,11 @@ bool parse_color(const toml::node& n, float c[4]) {
     return true;
 }
 
-/// Standard normal quantile by bisection on erfc (only used to place ramp stops).
-double normal_quantile(double p) {
-    double lo = -10.0, hi = 10.0;
-    for (int i = 0; i < 100; ++i) {
-        const double mid = 0.5 * (lo + hi);
-        (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p ? lo : hi) = mid;
-    }
-    return 0.5 * (lo + hi);
-}
-
 }  // namespace
 
-render::Shading read_shading(std::optional<Reader> r, const std::filesystem::path& base,
+output::Shading read_shading(std::optional<Reader> r, const std::filesystem::path& base,
                              ShadingKeys& keys) {
-    render::Shading s;
+    output::Shading s;
     keys = ShadingKeys{};
     if (!r) return s;
     if (const toml::node* n = r->node("ramp"); n && n->is_table()) {
@@ -118,8 +109,8 @@ render::Shading read_shading(std::optional<Reader> r, const std::filesystem::pat
             double sum[3] = {0, 0, 0};
             for (size_t k = i0; k < i1; ++k)
                 for (int ch = 0; ch < 3; ++ch) sum[ch] += px[order[k].second * channels + (channels >= 3 ? ch : 0)];
-            render::ColorStop cs;
-            cs.t = std::clamp((normal_quantile((b + 0.5) / stops) + 3.0) / 6.0, 0.0, 1.0);
+            output::ColorStop cs;
+            cs.t = std::clamp((numeric::normal_quantile((b + 0.5) / stops) + 3.0) / 6.0, 0.0, 1.0);
             cs.r = float(sum[0] / (i1 - i0)), cs.g = float(sum[1] / (i1 - i0)), cs.b = float(sum[2] / (i1 - i0));
             s.ramp.push_back(cs);
         }
@@ -137,7 +128,7 @@ render::Shading read_shading(std::optional<Reader> r, const std::filesystem::pat
             for (const auto& e : *a) {
                 const toml::array* stop = e.as_array();
                 if (!stop || stop->size() != 2 || !(*stop)[0].is_number()) r->fail(&e, "ramp", what);
-                render::ColorStop cs;
+                output::ColorStop cs;
                 cs.t = (*stop)[0].value<double>().value_or(-1);
                 float c[4];
                 if (!(cs.t >= 0.0 && cs.t <= 1.0) || !parse_color((*stop)[1], c)) r->fail(&e, "ramp", what);

@@ -8,9 +8,9 @@
 
 namespace impulse::scenes::detail {
 
-render::FieldTransform read_transform(std::optional<Reader> r, const CameraConfig& camera,
+output::FieldTransform read_transform(std::optional<Reader> r, const CameraConfig& camera,
                                       int width, int height, uint64_t scene_seed) {
-    using T = render::FieldTransform;
+    using T = output::FieldTransform;
     T t;
     if (!r) return t;
     constexpr std::array<std::string_view, 2> kTypes = {"marble", "wood"};

@@ -7,7 +7,7 @@
 
 #include "sim/layout.h"
 #include "sim/normal.h"
-#include "sim/rng.h"
+#include "numeric/rng.h"
 
 namespace impulse::sim {
 namespace detail {

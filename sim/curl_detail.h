@@ -8,7 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "sim/rng.h"
+#include "numeric/rng.h"
 
 namespace impulse::sim::detail {
 

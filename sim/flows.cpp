@@ -12,16 +12,11 @@
 
 #include "sim/curl_detail.h"
 #include "sim/layout.h"
-#include "sim/rng.h"
+#include "numeric/rng.h"
 #include "sim/sim.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::sim {
-
-bool detail::cpu_has_avx2() {
-    static const bool has = __builtin_cpu_supports("avx2");
-    return has;
-}
 
 namespace {
 

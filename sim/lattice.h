@@ -15,12 +15,12 @@
 #include <cstdint>
 #include <vector>
 
-#include "sim/catmull_rom.h"
+#include "numeric/spline.h"
 #include "sim/layout.h"
 
 namespace impulse::sim::detail {
 
-using sim::catmull_rom;
+using numeric::catmull_rom;
 
 /// The gradient and Laplacian of the interpolated potential at a point.
 struct PotentialSample {

@@ -9,9 +9,20 @@
 #include <utility>
 #include <vector>
 
+#include "numeric/rng.h"
 #include "sim/sim.h"
 
 namespace impulse::sim::detail {
+
+using numeric::CounterRng;
+using numeric::DrawBatch;
+using numeric::cpu_has_avx2;
+
+/// Stream tag (xored into the layer) of the birth-region thinning uniforms ("REGN").
+inline constexpr uint32_t kRegionStream = 0x5245474Eu;
+
+/// Poisson(mean) by inversion of one uniform u in (0, 1] (deterministic, no rejection loop).
+int poisson_inverse(double mean, double u);
 
 inline int64_t floor_div(int64_t a, int64_t b) {
     const int64_t q = a / b;

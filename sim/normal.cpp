@@ -8,7 +8,7 @@
 #include <bit>
 #include <cmath>
 
-#include "sim/rng.h"
+#include "numeric/rng.h"
 
 namespace impulse::sim::detail {
 
@@ -52,7 +52,7 @@ double normal_from_uniforms(double u, double v) {
 
 void NormalBatch::run(float* out) const {
     const size_t n = m_u.size();
-    if (cpu_has_avx2()) {
+    if (numeric::cpu_has_avx2()) {
         normals_from_uniforms_avx2(n, m_u.data(), m_v.data(), out);
         return;
     }

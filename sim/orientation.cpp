@@ -11,7 +11,7 @@
 
 #include "sim/angle.h"
 #include "sim/sim.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::sim {
 namespace {

@@ -9,7 +9,7 @@
 #include <sstream>
 
 #include "sim/sim.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::sim {
 namespace {

@@ -14,7 +14,16 @@
 #include <utility>
 #include <vector>
 
+#include "numeric/box.h"
+#include "numeric/keyframed.h"
+
 namespace impulse::sim {
+
+// Time-varying scalars and texture-space boxes come from the base library.
+using numeric::Box;
+using numeric::Ease;
+using numeric::Keyframed;
+using numeric::Region;
 
 // ---------------------------------------------------------------------------------------------
 // Amplitudes and temporal envelopes
@@ -37,56 +46,6 @@ double envelope_weight(Envelope e, double age_s, double lifetime_s);
 double envelope_sq_integral(Envelope e, double lifetime_s);
 /// int_0^T w dt: hann T/2, box T.
 double envelope_integral(Envelope e, double lifetime_s);
-
-// ---------------------------------------------------------------------------------------------
-// Keyframed parameters
-
-enum class Ease { Linear, Smooth, Step };
-inline constexpr std::array<std::string_view, 3> kEaseNames = {"linear", "smooth", "step"};
-std::optional<Ease> ease_from_string(std::string_view name);
-
-/// A scalar that may vary in time: constant, or keys (t_s, value) with strictly increasing
-/// times, held constant before the first and after the last key. `smooth` eases with
-/// smoothstep between keys; `step` holds each key's value until the next.
-struct Keyframed {
-    std::vector<std::pair<double, double>> keys;  ///< (time in seconds, value)
-    Ease ease = Ease::Linear;
-
-    Keyframed() = default;
-    Keyframed(double constant) : keys{{0.0, constant}} {}  // NOLINT: implicit by design
-    double value(double t_s) const;
-    double max_abs() const;  ///< max |value| over all time
-    /// Smallest and largest value over all time: the extreme keys (linear, smoothstep and step
-    /// interpolation never leave the range of the two keys around t).
-    double min() const;
-    double max() const;
-    bool is_constant() const { return keys.size() <= 1; }
-};
-
-// ---------------------------------------------------------------------------------------------
-// Geometry
-
-/// Axis-aligned box in texture space.
-struct Box {
-    double x0 = 0, y0 = 0, x1 = 0, y1 = 0;
-    Box expanded(double m) const { return {x0 - m, y0 - m, x1 + m, y1 + m}; }
-    double area() const { return (x1 - x0) * (y1 - y0); }
-};
-
-/// A texture-space region: the union of boxes (empty boxes, x1 < x0 or y1 < y0, are ignored).
-/// The part of the plane a perspective camera sees is a wedge whose bounding box is about twice
-/// its area; a union of row boxes follows it.
-struct Region {
-    std::vector<Box> boxes;
-    Region() = default;
-    Region(const Box& box) : boxes{box} {}  // NOLINT: a box is a region
-    /// Bounding box of the non-empty boxes ({0, 0, -1, -1} when there are none).
-    Box bounds() const;
-    /// Sum of the non-empty boxes' areas (at least the union's: a budget estimate).
-    double area() const;
-    bool empty() const;
-    Region expanded(double margin) const;
-};
 
 // ---------------------------------------------------------------------------------------------
 // Flows

@@ -15,8 +15,8 @@
 #include "sim/angle.h"
 #include "sim/layout.h"
 #include "sim/normal.h"
-#include "sim/rng.h"
-#include "util/errors.h"
+#include "numeric/rng.h"
+#include "numeric/errors.h"
 
 namespace impulse::sim {
 namespace {

@@ -7,7 +7,7 @@
 #include <sstream>
 
 #include "sim/lattice.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace impulse::sim {
 namespace {

@@ -7,52 +7,17 @@
 #include "sim/layout.h"
 
 namespace impulse::sim {
-namespace {
-
-bool is_empty(const Box& b) { return !(b.x1 >= b.x0 && b.y1 >= b.y0); }
-
-}  // namespace
-
-Box Region::bounds() const {
-    Box r{1e300, 1e300, -1e300, -1e300};
-    for (const Box& b : boxes) {
-        if (is_empty(b)) continue;
-        r.x0 = std::min(r.x0, b.x0), r.y0 = std::min(r.y0, b.y0);
-        r.x1 = std::max(r.x1, b.x1), r.y1 = std::max(r.y1, b.y1);
-    }
-    return is_empty(r) ? Box{0, 0, -1, -1} : r;
-}
-
-double Region::area() const {
-    double a = 0.0;
-    for (const Box& b : boxes)
-        if (!is_empty(b)) a += b.area();
-    return a;
-}
-
-bool Region::empty() const {
-    return std::all_of(boxes.begin(), boxes.end(), [](const Box& b) { return is_empty(b); });
-}
-
-Region Region::expanded(double margin) const {
-    Region r;
-    r.boxes.reserve(boxes.size());
-    for (const Box& b : boxes)
-        if (!is_empty(b)) r.boxes.push_back(b.expanded(margin));
-    return r;
-}
-
 namespace detail {
 
 CellCover cell_cover(const Region& region, const Layout& L) {
     CellCover c;
     const Box all = region.bounds();
-    if (is_empty(all)) return c;
+    if (all.empty()) return c;
     c.cy0 = static_cast<int64_t>(std::floor(all.y0 / L.cell_y));
     c.cy1 = static_cast<int64_t>(std::floor(all.y1 / L.cell_y));
     c.rows.resize(static_cast<size_t>(c.cy1 - c.cy0 + 1));
     for (const Box& b : region.boxes) {
-        if (is_empty(b)) continue;
+        if (b.empty()) continue;
         const int64_t cx0 = static_cast<int64_t>(std::floor(b.x0 / L.cell_x));
         const int64_t cx1 = static_cast<int64_t>(std::floor(b.x1 / L.cell_x));
         const int64_t cy0 = static_cast<int64_t>(std::floor(b.y0 / L.cell_y));
@@ -76,7 +41,7 @@ CellCover cell_cover(const Region& region, const Layout& L) {
 
 BoxIndex::BoxIndex(const Region& region) {
     for (const Box& b : region.boxes)
-        if (!is_empty(b)) m_boxes.push_back(b);
+        if (!b.empty()) m_boxes.push_back(b);
     if (m_boxes.empty()) {
         m_bands.resize(1);
         return;

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "analysis/analysis.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 using namespace impulse::analysis;
 using impulse::ValueError;

@@ -24,10 +24,11 @@
 #include "analysis/analysis.h"
 #include "app/analyze.h"
 #include "app/commands.h"
+#include "output/output.h"
 #include "render/render.h"
 #include "scenes/scenes.h"
 #include "tests/support.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace {
 
@@ -47,12 +48,12 @@ void render_scene(const std::string& text, const std::vector<std::string>& sets,
     for (int i = first; i <= last; ++i) {
         r.render(i, f);
         const std::string name = impulse::app::expand_pattern(pattern, i);
-        impulse::render::write_image(name.empty() ? pattern : name, f, mapping, {});
+        impulse::output::write_image(name.empty() ? pattern : name, f, mapping, {});
     }
 }
 
 Image read_image(const std::string& path) {
-    impulse::render::Frame f = impulse::render::read_image(path);
+    impulse::render::Frame f = impulse::output::read_image(path);
     Image im;
     im.width = f.width;
     im.height = f.height;
@@ -573,7 +574,7 @@ TEST_CASE("analyze refuses bad input with one line naming it", "[app][analyze]")
     const std::string image = dir / "tiny.exr";
     impulse::render::Frame f;
     f.resize(4, 4);
-    impulse::render::write_image(image, f, {}, {});
+    impulse::output::write_image(image, f, {}, {});
     opt.input = image;
     CHECK_THROWS_AS(impulse::app::analyze_input(opt), impulse::ValueError);
     CHECK_THAT(message(), Contains("at least 8x8"));

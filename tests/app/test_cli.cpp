@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "output/output.h"
 #include "render/render.h"
 #include "scenes/scenes.h"
 #include "tests/support.h"
@@ -181,11 +182,11 @@ TEST_CASE("EXR and PNG output carry the frame and its provenance", "[cli]") {
     impulse::scenes::Renderer renderer(loaded);
     impulse::render::Frame frame;
     renderer.render(2, frame);
-    const auto e = impulse::render::read_image(dir / "f.exr");
+    const auto e = impulse::output::read_image(dir / "f.exr");
     REQUIRE(e.width == 96);
     REQUIRE(e.height == 72);
     CHECK(e.data == frame.data);
-    const auto p = impulse::render::read_image(dir / "f.png");
+    const auto p = impulse::output::read_image(dir / "f.png");
     REQUIRE(p.data.size() == frame.data.size());
     const auto m = renderer.mapping();
     double worst = 0.0;
@@ -249,8 +250,8 @@ TEST_CASE("a sequence pattern writes one zero-padded file per frame", "[cli]") {
     CHECK_FALSE(fs::exists(dir / "pf_0000.exr"));
     // Frame 2 of the sequence is the same file as frame 2 rendered alone (random access).
     REQUIRE(run(dir, "render " + quote(scene) + " -o " + quote(dir / "alone.exr") + " --frames 2").status == 0);
-    const auto seq = impulse::render::read_image(dir / "pf_0002.exr");
-    const auto alone = impulse::render::read_image(dir / "alone.exr");
+    const auto seq = impulse::output::read_image(dir / "pf_0002.exr");
+    const auto alone = impulse::output::read_image(dir / "alone.exr");
     CHECK(seq.data == alone.data);
     // --resume skips what exists.
     const Result again = run(dir, "render " + quote(scene) + " -o " + quote(dir / "out_####.png") + " --resume");

@@ -11,7 +11,7 @@
 #include <fstream>
 #include <thread>
 
-#include "render/video.h"
+#include "output/video.h"
 
 extern char** environ;
 namespace fs = std::filesystem;
@@ -50,7 +50,7 @@ TEST_CASE("SIGINT closes a video so the encoded frames stay playable", "[cli][vi
     REQUIRE(WIFEXITED(status));
     CHECK(WEXITSTATUS(status) == 130);
     REQUIRE(fs::exists(out));
-    const auto info = impulse::render::probe_video(out);
+    const auto info = impulse::output::probe_video(out);
     CHECK(info.frame_count > 0);
     CHECK(info.frame_count < 100000);
     CHECK(info.width == 320);

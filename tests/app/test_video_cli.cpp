@@ -20,9 +20,11 @@
 #include <string>
 #include <vector>
 
+#include "output/output.h"
 #include "render/render.h"
 #include "tests/support.h"
 
+namespace output = impulse::output;
 namespace render = impulse::render;
 
 namespace {
@@ -70,7 +72,7 @@ TEST_CASE("video CLI: an mp4 holds the requested frames at the scene's size and 
         impulse_render(dir, quote(scene) + " -o " + quote(dir / "out.mp4") + " --frames 0-23");
     INFO(r.err);
     REQUIRE(r.status == 0);
-    const render::VideoInfo info = render::probe_video(dir / "out.mp4");
+    const output::VideoInfo info = output::probe_video(dir / "out.mp4");
     CHECK(info.frame_count == 24);
     CHECK(info.width == 64);
     CHECK(info.height == 48);
@@ -95,10 +97,10 @@ TEST_CASE("video CLI: FFV1 decodes back to the PNG sequence of the same frames",
     const Result p = impulse_render(dir, quote(scene) + " -o " + quote(dir / "png/f_####.png"));
     INFO(p.err);
     REQUIRE(p.status == 0);
-    const render::VideoInfo info = render::probe_video(dir / "out.mkv");
+    const output::VideoInfo info = output::probe_video(dir / "out.mkv");
     CHECK(info.codec_name == "ffv1");
     int w = 0, h = 0;
-    const auto frames = render::decode_video_luma(dir / "out.mkv", w, h);
+    const auto frames = output::decode_video_luma(dir / "out.mkv", w, h);
     REQUIRE(frames.size() == 12);
     REQUIRE(w == 64);
     REQUIRE(h == 48);
@@ -106,7 +108,7 @@ TEST_CASE("video CLI: FFV1 decodes back to the PNG sequence of the same frames",
     for (size_t f = 0; f < frames.size(); ++f) {
         char name[32];
         std::snprintf(name, sizeof name, "png/f_%04zu.png", f);
-        const render::Frame png = render::read_image(dir / name);
+        const render::Frame png = output::read_image(dir / name);
         REQUIRE(png.width == 64);
         REQUIRE(png.height == 48);
         for (size_t i = 0; i < png.data.size(); ++i) {

@@ -12,10 +12,11 @@
 
 #include "analysis/analysis.h"
 #include "kernels/kernels.h"
+#include "output/output.h"
 #include "render/render.h"
 #include "scenes/scenes.h"
 #include "sim/sim.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace {
 
@@ -104,7 +105,7 @@ struct Resynthesis {
 ///    fourth-cumulant term E[a^4] / (lambda A E[a^2]^2) (A = 512^2).
 /// Their relative variances add (the three estimates are, to this order, independent).
 Resynthesis resynthesise(const std::string& file, uint64_t seed) {
-    const auto ex = impulse::render::read_image(kExemplars + file);
+    const auto ex = impulse::output::read_image(kExemplars + file);
     REQUIRE(ex.width == 256);
     REQUIRE(ex.height == 256);
     K::ExemplarOptions o;
@@ -184,7 +185,7 @@ TEST_CASE("exemplar resynthesis keeps the exemplar's radially averaged spectrum"
 
 TEST_CASE("an exemplar kernel is normalised to the exemplar's variance at the layer's density",
           "[kernels]") {
-    const auto ex = impulse::render::read_image(kExemplars + "gravel.png");
+    const auto ex = impulse::output::read_image(kExemplars + "gravel.png");
     for (double density : {4.0, 16.0}) {
         for (double ea2 : {1.0, 1.0 / 3.0}) {
             K::ExemplarOptions o;
@@ -237,10 +238,10 @@ TEST_CASE("bad exemplars are refused with a clear message", "[kernels][errors]")
                       Contains("exemplar is constant"));
     CHECK_THROWS_WITH(K::kernel_from_exemplar(small.data(), 4, 4),
                       Contains("expected at least 8x8 pixels"));
-    CHECK_THROWS_AS(impulse::render::read_image(kExemplars + "missing.png"), impulse::IoError);
+    CHECK_THROWS_AS(impulse::output::read_image(kExemplars + "missing.png"), impulse::IoError);
     // A NaN or infinity in an input image is refused, naming the pixel (a NaN would break the
     // sorts and sums every image input goes through).
-    CHECK_THROWS_WITH(impulse::render::read_image(std::string(IMPULSE_SOURCE_DIR) +
+    CHECK_THROWS_WITH(impulse::output::read_image(std::string(IMPULSE_SOURCE_DIR) +
                                                   "/tests/scenes/errors/images/colours_nan.pfm"),
                       Contains("expected finite pixel values, found nan at pixel (1, 2) channel 2"));
 
@@ -283,7 +284,7 @@ TEST_CASE("scene kernels of type exemplar load relative to the scene file", "[ke
     CHECK(k.radius == 24.0);
     // Normalised at this layer's density (8) and amplitudes (uniform, E[a^2] = 1/3): Campbell's
     // variance is the exemplar's.
-    const auto ex = impulse::render::read_image(kExemplars + "grass.png");
+    const auto ex = impulse::output::read_image(kExemplars + "grass.png");
     CHECK(S::layer_theory(s.layers[0]).variance ==
           Approx(A::moments(ex.data).variance).epsilon(1e-5));
     S::Renderer r(s);

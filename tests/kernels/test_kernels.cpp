@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "kernels/kernels.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace {
 

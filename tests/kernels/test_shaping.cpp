@@ -17,7 +17,7 @@
 #include "render/render.h"
 #include "scenes/scenes.h"
 #include "sim/sim.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace {
 

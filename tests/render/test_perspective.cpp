@@ -25,7 +25,7 @@
 #include "render/render.h"
 #include "scenes/scenes.h"
 #include "sim/sim.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace {
 
@@ -37,6 +37,7 @@ using impulse::render::AntiAlias;
 using impulse::render::Frame;
 using impulse::render::PerspectiveCamera;
 using impulse::render::PerspectiveView;
+namespace numeric = impulse::numeric;
 namespace sim = impulse::sim;
 namespace render = impulse::render;
 
@@ -85,7 +86,7 @@ Frame render_frame(const KernelPyramid& pyr, sim::LayerSimulator& s, const Persp
                    const render::EvalOptions& eo = {},
                    render::PerspectiveWorkspace* workspace = nullptr) {
     const PerspectiveView v(cam);
-    const sim::Region box = render::perspective_region(pyr, v, aa);
+    const numeric::Region box = render::perspective_region(pyr, v, aa);
     sim::Impulses imp;
     s.impulses_at(0, box, imp);
     const auto pc = render::pixel_coords(v);
@@ -213,7 +214,7 @@ std::vector<float> reference_frame(const PerspectiveCase& pc, sim::LayerSimulato
         const int rows = std::min(S, H - r0);
         const PerspectiveCamera wc = cam.window(-m, r0 - m, W + 2 * m, rows + 2 * m, n);
         const PerspectiveView wv(wc);
-        const sim::Region box = render::perspective_region(pc.pyramid, wv, raw);
+        const numeric::Region box = render::perspective_region(pc.pyramid, wv, raw);
         sim::Impulses imp;
         s.impulses_at(0, box, imp);
         const auto coords = render::pixel_coords(wv);
@@ -246,7 +247,7 @@ std::vector<float> reference_frame(const PerspectiveCase& pc, sim::LayerSimulato
         const PerspectiveCamera wc =
             cam.window(-m, far0 - m, W + 2 * m, first_near - far0 + 2 * m, 1);
         const PerspectiveView wv(wc);
-        const sim::Region box = render::perspective_region(pc.pyramid, wv, raw);
+        const numeric::Region box = render::perspective_region(pc.pyramid, wv, raw);
         sim::Impulses imp;
         s.impulses_at(0, box, imp);
         const PointField field(pc.kernel, imp, max_distance, cam.x, cam.y);
@@ -922,7 +923,7 @@ TEST_CASE("perspective frames stay bounded however close the horizon", "[render]
         PerspectiveCamera c = pc.camera;
         c.pitch_deg = pitch;
         const PerspectiveView v(c);
-        const sim::Region b = render::perspective_region(pc.pyramid, v, AntiAlias{});
+        const numeric::Region b = render::perspective_region(pc.pyramid, v, AntiAlias{});
         const double n = sim::expected_impulses(pc.process, b);
         most = std::max(most, size_t(n)), least = std::min(least, size_t(n));
         INFO("pitch " << pitch << ": " << n << " impulses expected");

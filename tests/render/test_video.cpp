@@ -16,8 +16,8 @@
 #include <vector>
 
 #include "tests/support.h"
-#include "render/video.h"
-#include "util/errors.h"
+#include "output/video.h"
+#include "numeric/errors.h"
 
 namespace {
 
@@ -25,13 +25,13 @@ namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
 using Catch::Matchers::EndsWith;
 using Catch::Matchers::StartsWith;
-using impulse::render::decode_video_luma;
-using impulse::render::is_video_path;
-using impulse::render::probe_video;
-using impulse::render::video_codec_from_string;
-using impulse::render::VideoCodec;
-using impulse::render::VideoOptions;
-using impulse::render::VideoWriter;
+using impulse::output::decode_video_luma;
+using impulse::output::is_video_path;
+using impulse::output::probe_video;
+using impulse::output::video_codec_from_string;
+using impulse::output::VideoCodec;
+using impulse::output::VideoOptions;
+using impulse::output::VideoWriter;
 
 constexpr int kWidth = 64;
 constexpr int kHeight = 48;

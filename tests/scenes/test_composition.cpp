@@ -25,7 +25,8 @@
 #include "scenes/compose_detail.h"
 #include "scenes/scenes.h"
 #include "tests/scene_render.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
+#include "numeric/gaussian.h"
 
 namespace {
 
@@ -66,8 +67,8 @@ double excess_kurtosis(const scenes::LayerConfig& l) {
     return ea4 * k.integral_4() / (lambda * ea2 * ea2 * k.integral_sq() * k.integral_sq());
 }
 
-double normal_cdf(double z) { return 0.5 * std::erfc(-z / std::numbers::sqrt2); }
-double normal_pdf(double z) { return std::exp(-0.5 * z * z) / std::sqrt(2.0 * kPi); }
+using impulse::numeric::normal_cdf;
+using impulse::numeric::normal_pdf;
 
 /// Two still layers X (index 0) and Y (index 1); `y_keys` are added to Y, `x_keys` to X.
 std::string pair_scene(int size, const std::string& x_keys, const std::string& y_keys,

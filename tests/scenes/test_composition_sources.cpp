@@ -19,7 +19,7 @@
 #include "scenes/compose_detail.h"
 #include "scenes/scenes.h"
 #include "tests/scene_render.h"
-#include "sim/catmull_rom.h"
+#include "numeric/spline.h"
 #include "tests/structure_tensor.h"
 
 namespace {
@@ -117,7 +117,7 @@ TEST_CASE("layer flow: divergence-free, curl as reported, RMS speed as asked",
           "[scenes][compose][flow]") {
     const Stream s(16.0);
     auto flow = sim::make_stream_flow(s.psi, 25.0);
-    const sim::Box region{0.0, 0.0, 2048.0, 2048.0};
+    const numeric::Box region{0.0, 0.0, 2048.0, 2048.0};
     flow->prepare(region);
     // Central differences at 1e-3 units (the field varies over ~R/4 = 4 units): truncation
     // ~1e-7 and rounding ~1e-12 / 1e-3 of the velocity scale, against derivatives of order
@@ -209,8 +209,8 @@ TEST_CASE("layer flow: particles stay on the stream function's level lines",
         const double fx = x / h, fy = y / h;
         const int64_t i = int64_t(std::floor(fx)), j = int64_t(std::floor(fy));
         double wx[4], wy[4], d[4], dd[4];
-        sim::catmull_rom(fx - double(i), wx, d, dd);
-        sim::catmull_rom(fy - double(j), wy, d, dd);
+        numeric::catmull_rom(fx - double(i), wx, d, dd);
+        numeric::catmull_rom(fy - double(j), wy, d, dd);
         double v = 0;
         for (int b = 0; b < 4; ++b)
             for (int a = 0; a < 4; ++a)

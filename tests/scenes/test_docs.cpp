@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "scenes/scenes.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 TEST_CASE("every toml block of docs/scenes.md loads as a scene", "[scenes][docs]") {
     namespace fs = std::filesystem;

@@ -9,7 +9,7 @@
 #include <fstream>
 
 #include "scenes/scenes.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace fs = std::filesystem;
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "output/output.h"
 #include "render/render.h"
 #include "scenes/scenes.h"
 
@@ -28,7 +29,7 @@ TEST_CASE("each gallery scene renders 3 frames at 256x256 with sensible statisti
         const int64_t frames = std::min<int64_t>(scene.output.frames, 3);
         REQUIRE(frames >= 1);
         scenes::Renderer renderer(std::move(scene));
-        const render::ValueMapping map = renderer.mapping();
+        const output::ValueMapping map = renderer.mapping();
         const double span = map.hi - map.lo;
         REQUIRE(span > 0.0);
         render::Frame f;

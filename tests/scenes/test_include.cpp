@@ -4,10 +4,11 @@
 // written in, errors name that file, cycles and missing files are refused, --set comes last.
 #include <catch2/catch.hpp>
 
+#include "output/output.h"
 #include "render/render.h"
 #include "scenes/scenes.h"
 #include "tests/support.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 using namespace impulse;
 namespace S = impulse::scenes;
@@ -69,7 +70,7 @@ gain = { keys = [[0.0, 2.0], [1.0, 1.0]] }
     REQUIRE(s.layers.size() == 1);
     CHECK(s.layers[0].density.value(0) == 6.0);
     // An inline table (here keyframes) is a value: replaced whole, so no "smooth" from the base.
-    CHECK(s.layers[0].gain.ease == sim::Ease::Linear);
+    CHECK(s.layers[0].gain.ease == numeric::Ease::Linear);
     CHECK(s.layers[0].gain.value(0.5) == 1.5);
 
     // --set applies after the includes, over both files.
@@ -112,7 +113,7 @@ TEST_CASE("paths in an included file resolve from that file's directory", "[scen
     render::Frame img;
     img.resize(4, 4);
     for (size_t i = 0; i < img.data.size(); ++i) img.data[i] = 0.1f * float(i);
-    render::write_image(dir / "sub/values.exr", img, {0.0, 1.0}, {});
+    output::write_image(dir / "sub/values.exr", img, {0.0, 1.0}, {});
     test::write_file(dir / "sub/layer.toml",
                      "[[layer]]\nmarginal = { type = \"empirical\", image = \"values.exr\" }\n");
     test::write_file(dir / "scene.toml", "include = \"sub/layer.toml\"\n");

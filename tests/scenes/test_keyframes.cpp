@@ -9,7 +9,7 @@
 #include <numbers>
 
 #include "scenes/scenes.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 using namespace impulse;
 namespace S = impulse::scenes;
@@ -54,8 +54,8 @@ BlockVariance block_variance(const std::vector<const render::Frame*>& frames, do
 }
 
 /// Keys (0, v0) and (t1, v1), linear.
-sim::Keyframed linear_keys(double v0, double t1, double v1) {
-    sim::Keyframed k;
+numeric::Keyframed linear_keys(double v0, double t1, double v1) {
+    numeric::Keyframed k;
     k.keys = {{0.0, v0}, {t1, v1}};
     return k;
 }
@@ -396,12 +396,12 @@ TEST_CASE("keyframed orientation fields, flows and shading take their values at 
         f.add(t, 3, xs, ys, vx, vy, dv, cu);
         for (int i = 0; i < 3; ++i) out[2 * i] = vx[i], out[2 * i + 1] = vy[i];
     };
-    const sim::Keyframed ramp = linear_keys(0.0, 4.0, 4.0);  // value t
+    const numeric::Keyframed ramp = linear_keys(0.0, 4.0, 4.0);  // value t
     double p[6], q[6];
     v(*sim::make_shear_flow(0.3, ramp, 2.0, ramp), 2.0, p);
     v(*sim::make_shear_flow(0.3, 2.0, 2.0, 2.0), 2.0, q);
     for (int i = 0; i < 6; ++i) CHECK(p[i] == q[i]);
-    const sim::Keyframed core = linear_keys(10.0, 4.0, 30.0);
+    const numeric::Keyframed core = linear_keys(10.0, 4.0, 30.0);
     v(*sim::make_vortex_flow(sim::VortexModel::LambOseen, 40.0, 0.0, 900.0, core), 2.0, p);
     v(*sim::make_vortex_flow(sim::VortexModel::LambOseen, 40.0, 0.0, 900.0, 20.0), 2.0, q);
     for (int i = 0; i < 6; ++i) CHECK(p[i] == q[i]);
@@ -419,7 +419,7 @@ light_elevation = 30.0
 ambient = { keys = [[0.0, 0.1], [2.0, 0.5]], ease = "step" }
 )",
                                             "shade.toml");
-    const render::Shading sh = s.shading_at(1.0);
+    const output::Shading sh = s.shading_at(1.0);
     CHECK(sh.relief == 2.0);
     CHECK(sh.light_azimuth_deg == 90.0);
     CHECK(sh.light_elevation_deg == 30.0);
@@ -432,8 +432,8 @@ ambient = { keys = [[0.0, 0.1], [2.0, 0.5]], ease = "step" }
     for (int y = 0; y < 16; ++y)
         for (int x = 0; x < 16; ++x) f.data[size_t(y) * 16 + x] = 0.1f * x * y - 0.02f * y * y;
     std::vector<float> flat, lit;
-    render::shade(f, {-3.0, 3.0}, s.shading_at(0.0), flat);
-    render::shade(f, {-3.0, 3.0}, sh, lit);
+    output::shade(f, {-3.0, 3.0}, s.shading_at(0.0), flat);
+    output::shade(f, {-3.0, 3.0}, sh, lit);
     CHECK(flat != lit);
 }
 
@@ -449,7 +449,7 @@ mean = { keys = [[0.0, -1.0], [4.0, 2.0]] }
 )",
                                                 "range.toml");
     const S::Renderer r(scene);
-    const render::ValueMapping m = r.mapping();
+    const output::ValueMapping m = r.mapping();
     const double sd1 = std::sqrt(S::layer_theory(scene.layers[0], 0.0).variance);
     // mean(t) - 3 gain(t) sd1 falls while the gain grows (3 sd1 > 0.75 per second, the mean's
     // rise), so it is lowest at t = 3 (mean 1.25, gain 3); the top is at t = 4 (mean 2, gain 3).
@@ -458,6 +458,6 @@ mean = { keys = [[0.0, -1.0], [4.0, 2.0]] }
     CHECK(m.hi == Approx(2.0 + 9.0 * sd1));
     // A scene without layer keys keeps mean +- 3 sd.
     const S::Scene plain = S::load_scene_string("[[layer]]\nmean = 1.0\n", "plain.toml");
-    const render::ValueMapping p = S::Renderer(plain).mapping();
+    const output::ValueMapping p = S::Renderer(plain).mapping();
     CHECK(p.lo == Approx(1.0 - 3.0 * sd1));
 }

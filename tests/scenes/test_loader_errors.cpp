@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "scenes/scenes.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace {
 

@@ -13,10 +13,11 @@
 #include <vector>
 
 #include "../support.h"
+#include "output/output.h"
 #include "render/render.h"
 #include "scenes/scenes.h"
 #include "sim/sim.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace {
 
@@ -233,7 +234,7 @@ TEST_CASE("an image mask confines births to its white pixels", "[scenes][region]
     mask.resize(16, 8);
     for (int j = 2; j <= 5; ++j)
         for (int i = 4; i <= 7; ++i) mask.data[size_t(j) * 16 + i] = 1.0f;
-    impulse::render::write_image(dir / "mask.png", mask, {0.0, 1.0}, {});
+    impulse::output::write_image(dir / "mask.png", mask, {0.0, 1.0}, {});
     const std::string text = R"([output]
 size = [256, 128]
 [[layer]]

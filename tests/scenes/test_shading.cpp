@@ -8,9 +8,10 @@
 #include <filesystem>
 #include <fstream>
 
+#include "output/output.h"
 #include "render/render.h"
 #include "scenes/scenes.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 using namespace impulse;
 namespace fs = std::filesystem;
@@ -27,7 +28,7 @@ TEST_CASE("a colour exemplar becomes a ramp ordered by luminance", "[scenes][sha
         rgb[3 * i + 1] = bright ? 0.8f : 0.0f;
         rgb[3 * i + 2] = bright ? 1.0f : 0.0f;
     }
-    render::write_rgb_image((dir / "ex.png").string(), w, h, rgb, {});
+    output::write_rgb_image((dir / "ex.png").string(), w, h, rgb, {});
     const std::string text = "[[layer]]\n[shading]\nramp = { exemplar = \"ex.png\", stops = 4 }\n";
     const scenes::Scene s = scenes::load_scene_string(text, (dir / "scene.toml").string());
     REQUIRE(s.shading.ramp.size() == 4);
@@ -48,10 +49,10 @@ TEST_CASE("shading maps the field through the ramp and composites alpha over the
     render::Frame f;
     f.resize(3, 2);
     f.data = {-1.0f, 0.0f, 1.0f, -1.0f, 0.0f, 1.0f};
-    render::Shading sh;
+    output::Shading sh;
     sh.ramp = {{0.0, 1, 0, 0, 0}, {1.0, 0, 0, 1, 1}};  // transparent red -> opaque blue
     std::vector<float> rgb;
-    render::shade(f, {-1.0, 1.0}, sh, rgb);
+    output::shade(f, {-1.0, 1.0}, sh, rgb);
     // t = 0: fully transparent: the background's top colour on row 0, bottom on row 1.
     CHECK(rgb[0] == Approx(sh.top[0]).margin(1e-6));
     CHECK(rgb[3 * 3 + 2] == Approx(sh.bottom[2]).margin(1e-6));
@@ -61,12 +62,12 @@ TEST_CASE("shading maps the field through the ramp and composites alpha over the
     // t = 1/2: half-transparent purple over the sky, alpha 1/2 (table step 1/4095).
     CHECK(rgb[3 * 1 + 0] == Approx(0.25f + 0.5f * sh.top[0]).margin(1e-3));
     // Grey without a ramp is the display value itself.
-    render::shade(f, {-1.0, 1.0}, render::Shading{}, rgb);
+    output::shade(f, {-1.0, 1.0}, output::Shading{}, rgb);
     CHECK(rgb[3] == Approx(0.5f).margin(1e-6));
 }
 
 TEST_CASE("a Shader shades any band of rows exactly as shade does", "[render][shading]") {
-    // The video path shades a frame band by band (render::Shader) into the encoder's input; its
+    // The video path shades a frame band by band (output::Shader) into the encoder's input; its
     // pixels must be shade's, bit for bit, for every shading (grey, ramp with alpha, relief,
     // whose central differences reach into the neighbouring rows of a band).
     render::Frame f;
@@ -74,14 +75,14 @@ TEST_CASE("a Shader shades any band of rows exactly as shade does", "[render][sh
     for (int y = 0; y < f.height; ++y)
         for (int x = 0; x < f.width; ++x)
             f.data[size_t(y) * f.width + x] = std::sin(0.3f * x) * std::cos(0.2f * y) * 1.3f;
-    render::Shading grey, ramp, relief;
+    output::Shading grey, ramp, relief;
     ramp.ramp = {{0.0, 1, 0, 0, 0}, {0.4, 0.2f, 0.8f, 0.1f, 0.6f}, {1.0, 0, 0, 1, 1}};
     relief = ramp;
     relief.relief = 3.0;
-    for (const render::Shading* sh : {&grey, &ramp, &relief}) {
+    for (const output::Shading* sh : {&grey, &ramp, &relief}) {
         std::vector<float> whole;
-        render::shade(f, {-1.0, 1.0}, *sh, whole);
-        const render::Shader shader({-1.0, 1.0}, *sh);
+        output::shade(f, {-1.0, 1.0}, *sh, whole);
+        const output::Shader shader({-1.0, 1.0}, *sh);
         std::vector<float> banded(whole.size(), -1.0f);
         const size_t row = size_t(f.width) * 3;
         for (int y0 : {0, 5, 6, 13, 22}) {  // uneven bands: [0,5) [5,6) [6,13) [13,22) [22,23)

@@ -14,10 +14,11 @@
 
 #include "sim/curl_detail.h"
 #include "sim/sim.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace {
 
+namespace numeric = impulse::numeric;
 namespace sim = impulse::sim;
 
 struct Named {
@@ -105,7 +106,7 @@ void formula_nodes(const void*, int64_t i0, int64_t j0, double out[16]) {
 }  // namespace
 
 TEST_CASE("curl noise: the baseline and AVX2 inner loops give the same bits", "[sim][flows][determinism]") {
-    if (!sim::detail::cpu_has_avx2()) {
+    if (!numeric::cpu_has_avx2()) {
         WARN("no AVX2 on this CPU: only the baseline loop runs here");
         return;
     }

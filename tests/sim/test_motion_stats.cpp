@@ -387,8 +387,8 @@ TEST_CASE("motion: frame-to-frame change is stationary and nothing pops", "[sim]
             expected = 2.0 * th.sigma2 * (1.0 - rho_w * th.rho_h(shift)) -
                        2.0 * th.sigma2 * (1.0 - rho_w) * mean_term;
         } else {
-            const sim::Box view{0, 0, double(kSize), double(kSize)};
-            const sim::Box region = view.expanded(th.kernel.radius());
+            const numeric::Box view{0, 0, double(kSize), double(kSize)};
+            const numeric::Box region = view.expanded(th.kernel.radius());
             const double vmax = scene.layers.front().flow->max_speed(region);
             expected =
                 2.0 * th.sigma2 * (1.0 - rho_w * th.rho_h(vmax * D) * std::exp(-0.5 * c.dmax * D));

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "sim/normal.h"
-#include "sim/rng.h"
+#include "numeric/rng.h"
 
 namespace {
 
@@ -33,7 +33,7 @@ long double reference(double u, double v) {
 }
 
 /// Uniforms as the simulator draws them: Philox words k as (k + 1/2) 2^-32 (Random123's u01).
-double grid(uint32_t k) { return impulse::sim::detail::CounterRng::u01(k); }
+double grid(uint32_t k) { return impulse::numeric::CounterRng::u01(k); }
 
 /// Inputs: every 4099th grid word (about a million), their extremes, the points where the
 /// reductions switch (m = sqrt(2), v = 1/2, d = 0) and their neighbours, then random doubles.
@@ -120,7 +120,7 @@ TEST_CASE("normal amplitude: extremes of u", "[sim]") {
 }
 
 TEST_CASE("normal amplitude: AVX2 lanes give the scalar function's bits", "[sim][determinism]") {
-    if (!impulse::sim::detail::cpu_has_avx2()) {
+    if (!impulse::numeric::cpu_has_avx2()) {
         WARN("no AVX2 on this CPU: only the scalar function is checked");
         return;
     }

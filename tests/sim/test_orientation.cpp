@@ -20,15 +20,17 @@
 #include <string>
 #include <vector>
 
+#include "output/output.h"
 #include "render/render.h"
 #include "scenes/scenes.h"
 #include "sim/sim.h"
 #include "tests/structure_tensor.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace {
 
 namespace fs = std::filesystem;
+namespace numeric = impulse::numeric;
 namespace sim = impulse::sim;
 using Catch::Matchers::Contains;
 constexpr double kPi = std::numbers::pi;
@@ -51,20 +53,20 @@ fs::path temp_dir() {
 }  // namespace
 
 TEST_CASE("orientation fields: analytic angles", "[sim][orientation]") {
-    const auto constant = sim::make_constant_orientation(sim::Keyframed{0.7});
+    const auto constant = sim::make_constant_orientation(numeric::Keyframed{0.7});
     CHECK(angle_at(*constant, 10, 20) == Approx(0.7f));
-    sim::Keyframed turning;
+    numeric::Keyframed turning;
     turning.keys = {{0.0, 0.0}, {2.0, 1.0}};
     CHECK(angle_at(*sim::make_constant_orientation(turning), 0, 0, 1.0) == Approx(0.5f));
 
-    const auto radial = sim::make_radial_orientation(sim::Keyframed{10.0}, sim::Keyframed{20.0});
+    const auto radial = sim::make_radial_orientation(numeric::Keyframed{10.0}, numeric::Keyframed{20.0});
     CHECK(angle_at(*radial, 20, 20) == Approx(0.0f).margin(1e-7));
     CHECK(angle_at(*radial, 10, 30) == Approx(kPi / 2));
     CHECK(angle_at(*radial, 10, 20) == 0.0f);  // the centre itself
     const auto ccw =
-        sim::make_circular_orientation(sim::Keyframed{10.0}, sim::Keyframed{20.0}, false);
+        sim::make_circular_orientation(numeric::Keyframed{10.0}, numeric::Keyframed{20.0}, false);
     const auto cw =
-        sim::make_circular_orientation(sim::Keyframed{10.0}, sim::Keyframed{20.0}, true);
+        sim::make_circular_orientation(numeric::Keyframed{10.0}, numeric::Keyframed{20.0}, true);
     CHECK(angle_at(*ccw, 20, 20) == Approx(kPi / 2));
     CHECK(angle_at(*cw, 20, 20) == Approx(-kPi / 2));
 
@@ -91,12 +93,12 @@ TEST_CASE("orientation fields: analytic angles", "[sim][orientation]") {
     // Angles beyond +-64 rad are wrapped into [-pi, pi] before they become a float theta: 1e300
     // rad had become an infinite theta, and the renderer crashed on its cosine.
     for (double a : {1e300, -1e300, 1e10, 100.0}) {
-        const float th = angle_at(*sim::make_constant_orientation(sim::Keyframed{a}), 0, 0);
+        const float th = angle_at(*sim::make_constant_orientation(numeric::Keyframed{a}), 0, 0);
         CHECK(th == static_cast<float>(std::remainder(a, 2.0 * kPi)));
         CHECK(std::abs(th) <= kPi + 1e-6);
         CHECK(std::isfinite(angle_at(*sim::make_sine_orientation(A, L, 0.0, a, 0.0, 0.0), 3, 4)));
     }
-    CHECK(angle_at(*sim::make_constant_orientation(sim::Keyframed{60.0}), 0, 0) == 60.0f);
+    CHECK(angle_at(*sim::make_constant_orientation(numeric::Keyframed{60.0}), 0, 0) == 60.0f);
 }
 
 TEST_CASE("orientation fields: sampled angles and directions", "[sim][orientation]") {
@@ -140,11 +142,11 @@ TEST_CASE("orientation fields in the simulator: current positions and jitter and
     c.intensity = 16.0 / (kPi * 256.0);
     c.lifetime_s = 2.0;
     c.orientation = sim::OrientationMode::Field;
-    c.orientation_field = sim::make_radial_orientation(sim::Keyframed{0.0}, sim::Keyframed{0.0});
+    c.orientation_field = sim::make_radial_orientation(numeric::Keyframed{0.0}, numeric::Keyframed{0.0});
     auto flow = std::shared_ptr<sim::Flow>(
-        sim::make_vortex_flow(sim::VortexModel::LambOseen, sim::Keyframed{0.0}, sim::Keyframed{0.0},
-                              sim::Keyframed{3000.0}, 30.0));
-    const sim::Box view{-100, -100, 100, 100};
+        sim::make_vortex_flow(sim::VortexModel::LambOseen, numeric::Keyframed{0.0}, numeric::Keyframed{0.0},
+                              numeric::Keyframed{3000.0}, 30.0));
+    const numeric::Box view{-100, -100, 100, 100};
     sim::Impulses seq, rnd;
     {
         sim::LayerSimulator s(c, flow, {}, 16.0);
@@ -193,9 +195,9 @@ TEST_CASE("orientation modes: only vorticity integrates the spin", "[sim][orient
     c.intensity = 16.0 / (kPi * 256.0);
     c.lifetime_s = 2.0;
     auto flow = std::shared_ptr<sim::Flow>(
-        sim::make_vortex_flow(sim::VortexModel::LambOseen, sim::Keyframed{0.0}, sim::Keyframed{0.0},
-                              sim::Keyframed{20000.0}, 40.0));
-    const sim::Box view{-60, -60, 60, 60};
+        sim::make_vortex_flow(sim::VortexModel::LambOseen, numeric::Keyframed{0.0}, numeric::Keyframed{0.0},
+                              numeric::Keyframed{20000.0}, 40.0));
+    const numeric::Box view{-60, -60, 60, 60};
     auto run = [&](sim::OrientationMode mode) {
         c.orientation = mode;
         sim::LayerSimulator s(c, flow, {}, 16.0);
@@ -306,7 +308,7 @@ TEST_CASE(
         for (int i = 0; i < 256; ++i)
             img.data[size_t(j) * 256 + i] = static_cast<float>(wave(i + 0.5, j + 0.5));
     const fs::path path = dir / "angles.exr";
-    impulse::render::write_image(path.string(), img, {0.0, 1.0}, {});
+    impulse::output::write_image(path.string(), img, {0.0, 1.0}, {});
     const auto fi =
         render_scene(streak_scene("{ type = \"image\", path = \"" + path.string() + "\" }"));
     const auto i_ok = follow(fi, wave, all);
@@ -375,7 +377,7 @@ TEST_CASE("orientation scene keys: modes and fields and one-line errors",
                        Contains("layer[0].orientation.path = \"" + missing + "\": cannot read"));
     CHECK(e1.find('\n') == std::string::npos);
     const fs::path rgb = dir / "rgb.png";
-    impulse::render::write_rgb_image(rgb.string(), 4, 4, std::vector<float>(48, 0.5f), {});
+    impulse::output::write_rgb_image(rgb.string(), 4, 4, std::vector<float>(48, 0.5f), {});
     CHECK_THAT(error_of("{ type = \"image\", path = \"" + rgb.string() + "\" }"),
                Contains("layer[0].orientation.path = \"" + rgb.string() +
                         "\": expected an image with 1 channel (angle in radians) or 2 (direction "

@@ -12,10 +12,11 @@
 #include <vector>
 
 #include "sim/sim.h"
-#include "util/errors.h"
+#include "numeric/errors.h"
 
 namespace {
 
+namespace numeric = impulse::numeric;
 namespace sim = impulse::sim;
 constexpr double kPi = std::numbers::pi;
 
@@ -318,8 +319,8 @@ TEST_CASE("region culling: skipping cells outside the support changes no bit",
     c.region = sim::make_shape_region(shape, 24, false);
     sim::ProcessConfig all = c;
     all.region = sim::without_support(c.region);
-    auto flow = std::shared_ptr<sim::Flow>(sim::make_uniform_flow(sim::Keyframed{40.0}, sim::Keyframed{-10.0}));
-    const sim::Box view{-300, -200, 300, 200};
+    auto flow = std::shared_ptr<sim::Flow>(sim::make_uniform_flow(numeric::Keyframed{40.0}, numeric::Keyframed{-10.0}));
+    const numeric::Box view{-300, -200, 300, 200};
     sim::LayerSimulator culled(c, flow, {}, 16.0), full(all, flow, {}, 16.0);
     sim::Impulses a, b;
     size_t seen = 0;
@@ -334,6 +335,6 @@ TEST_CASE("region culling: skipping cells outside the support changes no bit",
     }
     CHECK(seen > 1000);
     // The budget estimate counts only the support's area.
-    const sim::Box big{-1000, -1000, 1000, 1000};
+    const numeric::Box big{-1000, -1000, 1000, 1000};
     CHECK(sim::expected_impulses(c, big) < 0.1 * sim::expected_impulses(all, big));
 }

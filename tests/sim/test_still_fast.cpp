@@ -17,29 +17,29 @@
 #include <utility>
 #include <vector>
 
-#include "sim/rng.h"
+#include "numeric/rng.h"
 #include "sim/sim.h"
 
 namespace {
 
 using namespace impulse;
 
-sim::Impulses reference(const sim::ProcessConfig& c, const sim::Region& view, double radius,
+sim::Impulses reference(const sim::ProcessConfig& c, const numeric::Region& view, double radius,
                         double t_s) {
     // Periods below are whole multiples of the cell size, so the cells are cell_size wide.
     const double cell = c.cell_size;
-    const sim::Region keep = view.expanded(radius);
-    const sim::Box all = keep.bounds();
+    const numeric::Region keep = view.expanded(radius);
+    const numeric::Box all = keep.bounds();
     sim::Impulses out;
     std::vector<float> th0;
     sim::CellImpulses ci;
     auto in_keep = [&](double x, double y) {
-        return std::any_of(keep.boxes.begin(), keep.boxes.end(), [&](const sim::Box& b) {
+        return std::any_of(keep.boxes.begin(), keep.boxes.end(), [&](const numeric::Box& b) {
             return x >= b.x0 && x <= b.x1 && y >= b.y0 && y <= b.y1;
         });
     };
     auto meets = [&](int64_t cx, int64_t cy) {
-        return std::any_of(keep.boxes.begin(), keep.boxes.end(), [&](const sim::Box& b) {
+        return std::any_of(keep.boxes.begin(), keep.boxes.end(), [&](const numeric::Box& b) {
             return cx >= std::floor(b.x0 / cell) && cx <= std::floor(b.x1 / cell) &&
                    cy >= std::floor(b.y0 / cell) && cy <= std::floor(b.y1 / cell);
         });
@@ -74,7 +74,7 @@ bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
     return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
 }
 
-void check_still(const sim::ProcessConfig& c, const sim::Region& view, double radius) {
+void check_still(const sim::ProcessConfig& c, const numeric::Region& view, double radius) {
     const sim::Timing timing{24.0, 5};
     sim::LayerSimulator s(c, nullptr, timing, radius);
     sim::Impulses got;
@@ -94,9 +94,9 @@ void check_still(const sim::ProcessConfig& c, const sim::Region& view, double ra
     }
 }
 
-sim::Region wedge() {
+numeric::Region wedge() {
     // Overlapping boxes, one of them across the origin (negative cells), and a disjoint one.
-    sim::Region r;
+    numeric::Region r;
     r.boxes = {{-150.5, -40.0, 220.0, 30.0}, {-60.0, 10.0, 90.25, 160.0}, {400.0, -300.0, 470.0, -250.0}};
     return r;
 }
@@ -154,7 +154,7 @@ TEST_CASE("still fast path: dense cells (over 64 candidates, split Poisson draws
     for (const double intensity : {0.4, 1.2}) {  // ~100 and ~300 candidates per cell
         sim::ProcessConfig c;
         c.intensity = intensity;
-        sim::Region view;
+        numeric::Region view;
         view.boxes = {{-20.0, -20.0, 21.0, 13.0}, {5.0, 0.0, 40.0, 30.0}};
         for (const bool region : {false, true}) {
             c.region = region ? sim::make_shape_region(sim::make_circle_shape(0, 0, 25), 10, false)
@@ -166,8 +166,8 @@ TEST_CASE("still fast path: dense cells (over 64 candidates, split Poisson draws
 }
 
 TEST_CASE("batched Philox draws match CounterRng's", "[sim][still]") {
-    const sim::detail::CounterRng rng(0xFEDCBA9876543210ull, 0x5245474Eu);
-    sim::detail::DrawBatch batch;
+    const numeric::CounterRng rng(0xFEDCBA9876543210ull, 0x5245474Eu);
+    numeric::DrawBatch batch;
     const int64_t big = int64_t(1) << 40;
     for (const size_t n : {1, 16, 37, 300}) {  // partial and whole lane groups, regrown arrays
         batch.clear();

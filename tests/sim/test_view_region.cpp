@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// Regions (sim::Region, a union of boxes): the impulses of a region are those of its bounding
+// Regions (numeric::Region, a union of boxes): the impulses of a region are those of its bounding
 // box whose support touches one of the boxes, in the same canonical order, for still and moving
 // layers; a still layer's parallel generation gives the same bits on any number of threads.
 
@@ -15,6 +15,7 @@
 
 namespace {
 
+namespace numeric = impulse::numeric;
 namespace sim = impulse::sim;
 
 sim::ProcessConfig config(bool moving) {
@@ -28,7 +29,7 @@ sim::ProcessConfig config(bool moving) {
 
 std::shared_ptr<sim::Flow> wind() {
     auto f = std::make_shared<sim::FlowSum>();
-    f->push(sim::make_uniform_flow(sim::Keyframed(40.0), sim::Keyframed(-15.0)));
+    f->push(sim::make_uniform_flow(numeric::Keyframed(40.0), numeric::Keyframed(-15.0)));
     return f;
 }
 
@@ -46,10 +47,10 @@ TEST_CASE("a region gives its bounding box's impulses that touch one of its boxe
           "[sim][determinism]") {
     constexpr double R = 16.0;  // support radius given to the simulator
     // A wedge-like union: two rows of different widths, overlapping, and a detached box.
-    sim::Region region;
+    numeric::Region region;
     region.boxes = {{0, 0, 300, 40}, {-100, 30, 500, 90}, {700, -50, 760, 10}, {5, 5, 4, 4}};
     CHECK(region.boxes[3].x1 < region.boxes[3].x0);  // an empty box is ignored
-    const sim::Box all = region.bounds();
+    const numeric::Box all = region.bounds();
     CHECK(all.x0 == -100);
     CHECK(all.x1 == 760);
     CHECK(all.y0 == -50);
@@ -65,9 +66,9 @@ TEST_CASE("a region gives its bounding box's impulses that touch one of its boxe
             sim::Impulses expected;
             for (size_t i = 0; i < from_box.size(); ++i) {
                 bool in = false;
-                for (const sim::Box& box : region.boxes) {
+                for (const numeric::Box& box : region.boxes) {
                     if (box.x1 < box.x0) continue;
-                    const sim::Box k = box.expanded(R);
+                    const numeric::Box k = box.expanded(R);
                     in = in || (from_box.x[i] >= k.x0 && from_box.x[i] <= k.x1 &&
                                 from_box.y[i] >= k.y0 && from_box.y[i] <= k.y1);
                 }
@@ -86,7 +87,7 @@ TEST_CASE("a region gives its bounding box's impulses that touch one of its boxe
 
 TEST_CASE("a still layer's rows of cells give the same bits on one thread and on many",
           "[sim][determinism]") {
-    sim::Region region;
+    numeric::Region region;
     region.boxes = {{-2000, -500, 2000, 0}, {-900, 0, 900, 700}};
     sim::Impulses many, one;
     {

@@ -4,7 +4,7 @@
 // stream-function flows (sim/lattice.h) and for resampling and differentiating frames in the
 // composition of layers (scenes/compose_render.cpp).
 
-namespace impulse::sim {
+namespace impulse::numeric {
 
 /// Weights w and their first and second derivatives d, dd (per unit t) at t in [0, 1) for the
 /// nodes -1, 0, 1, 2; w reproduces node 0 exactly at t = 0 (w = 0, 1, 0, 0).
@@ -17,4 +17,4 @@ inline void catmull_rom(double t, double w[4], double d[4], double dd[4]) {
     dd[0] = 2 - 3 * t, dd[1] = -5 + 9 * t, dd[2] = 4 - 9 * t, dd[3] = -1 + 3 * t;
 }
 
-}  // namespace impulse::sim
+}  // namespace impulse::numeric

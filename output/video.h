@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Video output through FFmpeg's libav*: H.264/MP4 (default), ProRes 4444/MOV, FFV1/MKV, VP9/WebM.
-// Part of impulse::render; included by render/render.h.
+// Part of impulse::output; included by output/output.h.
 
 #include <cstdint>
 #include <functional>
@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace impulse::render {
+namespace impulse::output {
 
 /// Codec choices. `Auto` picks from the container: .mp4 -> h264, .mov -> prores,
 /// .mkv -> ffv1, .webm -> vp9.
@@ -100,4 +100,4 @@ VideoInfo probe_video(const std::string& path);
 /// Used by `impulse analyze` on videos and by tests.
 std::vector<std::vector<float>> decode_video_luma(const std::string& path, int& width, int& height);
 
-}  // namespace impulse::render
+}  // namespace impulse::output

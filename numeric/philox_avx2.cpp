@@ -5,9 +5,9 @@
 
 #include <immintrin.h>
 
-#include "sim/rng.h"
+#include "numeric/rng.h"
 
-namespace impulse::sim::detail {
+namespace impulse::numeric {
 
 namespace {
 
@@ -62,4 +62,4 @@ void philox4x32_avx2(const uint32_t key[2], size_t n, const uint32_t* const in[4
     }
 }
 
-}  // namespace impulse::sim::detail
+}  // namespace impulse::numeric

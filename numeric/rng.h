@@ -1,8 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Counter-based random numbers (Random123 Philox4x32-10): a draw is a pure function of what it
-// is for — (seed, stream, cell, index) — never of the order of the calls (design.md §3,
-// Lewis 1989 §2.1 "internally consistent").
+// is for — (seed, stream, cell, index), or more coordinates (a z, a level, a node) through
+// CounterRng::keyed — never of the order of the calls (design.md §3, Lewis 1989 §2.1
+// "internally consistent"). Shared by every synthesizer.
 
 #include <Random123/philox.h>
 #include <Random123/uniform.hpp>
@@ -13,14 +14,13 @@
 #include <cstdint>
 #include <vector>
 
-namespace impulse::sim::detail {
+#include "numeric/cpu.h"
 
-/// True when the CPU runs AVX2 code (checked once).
-bool cpu_has_avx2();
+namespace impulse::numeric {
 
 /// Philox4x32-10 (Salmon et al. 2011) of n counters, word i of counter j at in[i][j], under
 /// `key`, into out[i][j]: the integers r123::Philox4x32 gives, sixteen lanes at a time
-/// (sim/philox_avx2.cpp, compiled with -mavx2; call only when cpu_has_avx2(); n a multiple of 16).
+/// (numeric/philox_avx2.cpp, compiled with -mavx2; call only when cpu_has_avx2(); n a multiple of 16).
 void philox4x32_avx2(const uint32_t key[2], size_t n, const uint32_t* const in[4],
                      uint32_t* const out[4]);
 
@@ -46,6 +46,18 @@ public:
                  d ^ hi}};
     }
     Counter generate(const Counter& ctr) const { return m_gen(ctr, m_key); }
+    /// A generator for the sub-stream `coordinate` of this one (a z cell, a subdivision level,
+    /// a time cell): its key is the Philox image of (this key, coordinate), so keyed(z) and
+    /// keyed(z') are unrelated streams for z != z', and keyed() of keyed() adds coordinates.
+    /// The streams of the plain constructor are not changed by its existence.
+    CounterRng keyed(int64_t coordinate) const {
+        const Counter r = m_gen({{m_key[0], m_key[1], static_cast<uint32_t>(coordinate),
+                                  static_cast<uint32_t>(static_cast<uint64_t>(coordinate) >> 32)}},
+                                {{0x4B455944u, 0x53554253u}});  // "KEYD", "SUBS"
+        CounterRng sub = *this;
+        sub.m_key = {{r[0] ^ r[2], r[1] ^ r[3]}};
+        return sub;
+    }
     std::array<uint32_t, 2> key() const { return {m_key[0], m_key[1]}; }
     /// A Philox word as a uniform in (0, 1].
     static double u01(uint32_t word) { return r123::u01<double>(word); }
@@ -99,10 +111,4 @@ private:
     std::vector<uint32_t> m_in[4], m_out[4];
 };
 
-/// Stream tag (xored into the layer) of the birth-region thinning uniforms ("REGN").
-inline constexpr uint32_t kRegionStream = 0x5245474Eu;
-
-/// Poisson(mean) by inversion of one uniform u in (0, 1] (deterministic, no rejection loop).
-int poisson_inverse(double mean, double u);
-
-}  // namespace impulse::sim::detail
+}  // namespace impulse::numeric

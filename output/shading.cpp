@@ -7,9 +7,9 @@
 #include <cmath>
 #include <numbers>
 
-#include "render/render.h"
+#include "output/output.h"
 
-namespace impulse::render {
+namespace impulse::output {
 namespace {
 
 /// Ramp colour at display value t (stops sorted by t; clamped at the ends).
@@ -104,4 +104,4 @@ void shade(const Frame& field, const ValueMapping& mapping, const Shading& sh,
     tbb::parallel_for(0, h, [&](int y) { shader.rows(field, y, y + 1, rgb.data() + size_t(y) * w * 3); });
 }
 
-}  // namespace impulse::render
+}  // namespace impulse::output

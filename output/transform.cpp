@@ -9,9 +9,10 @@
 #include <sstream>
 #include <vector>
 
-#include "render/render.h"
+#include "numeric/errors.h"
+#include "output/output.h"
 
-namespace impulse::render {
+namespace impulse::output {
 namespace {
 
 constexpr double kTwoPi = 2.0 * std::numbers::pi;
@@ -122,4 +123,4 @@ void apply_transform(const FieldTransform& t, const View& view, double mean, dou
     });
 }
 
-}  // namespace impulse::render
+}  // namespace impulse::output

@@ -2,13 +2,15 @@
 #pragma once
 // Shading: from a float field to display RGB — colour ramps, height-field lighting (Lewis's
 // figures shade noise "as an obliquely illuminated height field"), and alpha over a sky
-// gradient. Part of impulse::render; included by render/render.h.
+// gradient. Part of impulse::output; included by output/output.h.
 
 #include <vector>
 
-namespace impulse::render {
+#include "numeric/frame.h"
 
-struct Frame;
+namespace impulse::output {
+
+using numeric::Frame;
 struct ValueMapping;
 
 /// One stop of a colour ramp: at display value t (0..1 after the value mapping) the colour
@@ -57,4 +59,4 @@ private:
     bool m_plain_grey = true;
 };
 
-}  // namespace impulse::render
+}  // namespace impulse::output

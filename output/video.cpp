@@ -36,10 +36,10 @@ extern "C" {
 #include <libswscale/swscale.h>
 }
 
-#include "render/video.h"
-#include "util/errors.h"
+#include "output/video.h"
+#include "numeric/errors.h"
 
-namespace impulse::render {
+namespace impulse::output {
 namespace {
 
 namespace fs = std::filesystem;
@@ -799,4 +799,4 @@ std::vector<std::vector<float>> decode_video_luma(const std::string& path, int& 
 
 void quiet_video_logs() { av_log_set_level(AV_LOG_QUIET); }
 
-}  // namespace impulse::render
+}  // namespace impulse::output

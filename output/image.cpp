@@ -11,10 +11,10 @@
 #include <sstream>
 #include <system_error>
 
-#include "render/render.h"
-#include "util/errors.h"
+#include "output/output.h"
+#include "numeric/errors.h"
 
-namespace impulse::render {
+namespace impulse::output {
 namespace {
 
 namespace fs = std::filesystem;
@@ -181,4 +181,4 @@ bool is_readable_image_path(const std::string& path) {
     return false;
 }
 
-}  // namespace impulse::render
+}  // namespace impulse::output

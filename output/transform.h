@@ -2,15 +2,17 @@
 #pragma once
 // Field transforms: procedural transforms of the homogeneous noise field into structured
 // textures, marble and wood (Lewis 1989 §5.1 "a procedural transform of a homogeneous
-// texture"), applied to the float field before shading. Part of impulse::render; included by
-// render/render.h.
+// texture"), applied to the float field before shading. Part of impulse::output; included by
+// output/output.h.
 
 #include <cstdint>
 
-namespace impulse::render {
+#include "numeric/frame.h"
 
-struct Frame;
-struct View;
+namespace impulse::output {
+
+using numeric::Frame;
+using numeric::View;
 struct ValueMapping;
 
 /// What the transform does to the field f at texture point p. z = (f - mean) / sd is the field
@@ -57,4 +59,4 @@ double wood_profile(double s, double sharpness);
 void apply_transform(const FieldTransform& transform, const View& view, double mean, double sd,
                      Frame& field);
 
-}  // namespace impulse::render
+}  // namespace impulse::output

@@ -1,0 +1,58 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// Images through OpenImageIO (part of impulse::output): frames written atomically (a
+// temporary file renamed into place), read as single-channel float, probed from headers.
+
+#include <cstddef>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "numeric/frame.h"
+
+namespace impulse::output {
+
+using numeric::Frame;
+
+/// Linear map from field values to display [0, 1]: v -> (v - lo) / (hi - lo), then clamped to
+/// [0, 1] and quantised with rounding for 8/16-bit formats. EXR stores the raw values.
+struct ValueMapping {
+    double lo = -1.0, hi = 1.0;
+};
+
+/// Metadata written into images and videos.
+using Metadata = std::vector<std::pair<std::string, std::string>>;
+
+/// Writes a frame with OpenImageIO, format from the extension (.exr float; .png 8-bit, or
+/// 16-bit when `bits16`; .tif/.tiff 16-bit). The file is written to a temporary name in the
+/// same directory and renamed, so a partial file never appears under `path`. Throws IoError
+/// with OIIO's message.
+void write_image(const std::string& path, const Frame& frame, const ValueMapping& mapping,
+                 const Metadata& metadata, bool bits16 = false);
+/// Same for an RGB float frame (3 floats per pixel, display values in [0, 1] already mapped).
+void write_rgb_image(const std::string& path, int width, int height, const std::vector<float>& rgb,
+                     const Metadata& metadata, bool bits16 = false);
+/// Reads an image as single-channel float (luminance of RGB; raw floats for EXR, [0,1] for
+/// integer formats). Throws IoError.
+Frame read_image(const std::string& path);
+/// "" when every value of an image's pixels (`channels` interleaved, rows of `width`) is finite,
+/// else "expected finite pixel values, found nan at pixel (x, y) channel c" for the first that
+/// is not: image inputs are refused with it (a NaN breaks the sorts and sums they go through).
+std::string nonfinite_pixel(const float* px, size_t count, int width, int channels);
+
+/// True for extensions OIIO writes here (.exr .png .tif .tiff .jpg .jpeg).
+bool is_image_path(const std::string& path);
+
+/// What an image file holds, read from its header only (no pixels).
+struct ImageInfo {
+    int width = 0, height = 0, channels = 0;
+    bool is_float = false;  ///< float or half samples: raw field values, not display values
+    int bits = 8;           ///< bits per sample (8, 16, 32 ...)
+};
+/// Header of an image in any format OIIO reads. Throws IoError with OIIO's message.
+ImageInfo probe_image(const std::string& path);
+/// True when the extension belongs to a format this OIIO build can read (case-insensitive;
+/// e.g. .exr .hdr .png .tif .jpg .bmp .tga .dpx).
+bool is_readable_image_path(const std::string& path);
+
+}  // namespace impulse::output

@@ -1,0 +1,54 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// Frame evaluation (part of impulse::render): tiled sparse convolution of the live impulses
+// with the kernel (Lewis 1986 eq. 2) and the naive per-pixel reference.
+
+#include "kernels/kernels.h"
+#include "numeric/errors.h"
+#include "numeric/frame.h"
+#include "sim/sim.h"
+
+namespace impulse::render {
+
+using numeric::Frame;
+using numeric::View;
+
+struct EvalOptions {
+    int tile_size = 128;  ///< square tiles in pixels, >= 8; the result does not depend on it
+    bool parallel = true;  ///< false: the serial path through the same code (debugging)
+    bool use_avx2 = true;  ///< false: baseline SSE2 loops (bit-identical; for tests)
+    /// > 0: a perspective frame (accumulate_perspective) whose impulses' pixel boxes add up to
+    /// more than this is refused with render::PixelBudgetError before any pixel is evaluated.
+    /// The impulse count alone does not bound the work: a footprint blurred isotropically
+    /// (anisotropic = false) spreads a far impulse over a row of hundreds of pixels.
+    double max_pixel_evaluations = 0.0;
+};
+
+/// Thrown by accumulate_perspective when EvalOptions::max_pixel_evaluations is exceeded.
+class PixelBudgetError : public BudgetError {
+public:
+    PixelBudgetError(double needed, double budget);
+    double needed, budget;
+};
+
+/// Adds sum_k w_k h_{theta_k}(x - x_k) to `out` (sized to the view; not cleared) for every
+/// pixel centre. Deterministic: each pixel sums its impulses in their canonical order, so the
+/// bits do not depend on the thread count or the tile size. Uses AVX2 where the CPU has it,
+/// with the same arithmetic (no FMA contraction) as the baseline path.
+void accumulate(const kernels::Kernel& kernel, const sim::Impulses& impulses, const View& view,
+                Frame& out, const EvalOptions& options = {});
+
+/// Evaluates only the pixel rectangle [x0, x0+w) x [y0, y0+h) of the view into `tile`
+/// (w*h floats, added to). Equal bits to the same pixels of `accumulate` (tiling independence).
+void accumulate_region(const kernels::Kernel& kernel, const sim::Impulses& impulses,
+                       const View& view, int x0, int y0, int w, int h, float* tile,
+                       const EvalOptions& options = {});
+
+/// The naive reference (Lewis 1989 §4.1, and how shading-language sparse convolution noise
+/// works): for every pixel, regenerate the impulses of the 3x3 neighbouring cells from the
+/// counter-based generator and evaluate the kernel exactly in double. Still processes only;
+/// needs config.cell_size >= kernel radius. Adds to `out`.
+void accumulate_naive(const kernels::Kernel& kernel, const sim::ProcessConfig& config,
+                      const View& view, Frame& out);
+
+}  // namespace impulse::render
