@@ -104,6 +104,13 @@ Theory unshaped_theory(const LayerConfig& layer, double t) {
     return {layer.mean.value(t), v * gain * gain};
 }
 
+/// A source layer without its marginal at layer time t: the source's theory through the gain.
+Theory source_theory(const LayerConfig& layer, double t) {
+    const Theory s = layer.source->theory(t);
+    const double gain = layer.gain.value(t);
+    return {layer.mean.value(t) + gain * s.mean, gain * gain * s.variance};
+}
+
 }  // namespace
 
 Theory layer_theory(const LayerConfig& layer, double t_s) {
@@ -115,6 +122,7 @@ Theory layer_theory(const LayerConfig& layer, double t_s) {
         const kernels::Distribution target(layer.marginal_at(t));
         return {target.mean(), target.variance()};
     }
+    if (layer.source) return source_theory(layer, t);
     // Campbell's theorem: Var = lambda E[a^2] int h^2, times (1/T) int w^2 dt for a process
     // with births at beta = lambda / T and a temporal envelope w (design.md §1).
     return unshaped_theory(layer, t);
@@ -136,7 +144,7 @@ bool is_sum_of_layers(const Scene& scene) {
     for (const auto& l : scene.layers) {
         const Composition& c = l.compose;
         if (!c.visible || c.blend != Blend::Add || !c.opacity.is_constant() ||
-            c.opacity.value(0.0) != 1.0 || c.warp)
+            c.opacity.value(0.0) != 1.0 || c.warp || l.source)
             return false;
     }
     return true;
@@ -232,6 +240,13 @@ Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
                 if (!S.rendered[j]) S.rendered[j] = changed = true;
         }
     }
+    for (size_t i = 0; i < count; ++i) {
+        const auto& src = S.scene.layers[i].source;
+        if (src && S.rendered[i] && S.scene.camera.type == CameraConfig::Type::Perspective)
+            throw SceneError(S.scene.path + ": layer[" + std::to_string(i) + "]: a " +
+                             std::string(src->kind()) +
+                             " layer is seen through an orthographic camera only");
+    }
     S.camera = std::make_unique<detail::CameraPipeline>(S.scene, S.kernels);
     // Refuse what would exhaust memory or time, with the estimate (design.md §4).
     const double n = estimated_impulses();
@@ -266,8 +281,9 @@ double Renderer::estimated_impulses() const {
     const State& S = *m_state;
     double n = 0.0;
     for (size_t i = 0; i < S.sims.size(); ++i) {
-        // A hidden layer no frame reads (a flow's stream function only) is never rendered.
-        if (!S.rendered[i]) continue;
+        // A hidden layer no frame reads (a flow's stream function only) is never rendered; a
+        // source layer draws no impulses.
+        if (!S.rendered[i] || S.scene.layers[i].source) continue;
         // The largest view over the animation bounds the birth region (zoom keys are extrema).
         double min_zoom = 1e300;
         for (const auto& k : S.scene.camera.zoom.keys) min_zoom = std::min(min_zoom, k.second);
@@ -282,7 +298,7 @@ double Renderer::estimated_impulses() const {
             return sim::expected_impulses(S.sims[i].config(), S.sims[i].birth_region(box));
         });
         // The orientation source sampled where this layer's impulses are.
-        if (c.orientation) {
+        if (c.orientation && !S.scene.layers[c.orientation->source].source) {
             const size_t j = c.orientation->source;
             n += in_layer(S.scene, j, [&] {
                 return sim::expected_impulses(
@@ -385,7 +401,7 @@ void Renderer::render(int64_t frame, render::Frame& out, const render::EvalOptio
         const double opacity = c.opacity.value(t);
         const bool warped = c.warp && c.warp->amount.value(t) != 0.0;
         if (c.blend == Blend::Add && opacity == 1.0 && !S.marginals[i] && !warped &&
-            !S.warp_source[i]) {
+            !S.warp_source[i] && !layer.source) {
             // A plain sum: impulses straight into the frame, the mean added at the end.
             sim::Impulses& imp = S.impulses[i];
             S.layer_impulses(i, pass, S.camera->region(i, view, t), imp);
@@ -477,6 +493,18 @@ void Renderer::State::field(size_t i, const Pass& pass, const render::View& v, S
 
 void Renderer::State::raw(size_t i, const Pass& pass, const render::View& v, Space space,
                           render::Frame& out, sim::Impulses& imp) {
+    const LayerConfig& layer = scene.layers[i];
+    if (layer.source) {  // the layer-source seam: the same in camera and texture space
+        const double tl = scene.layer_time(i, pass.frame);
+        const double gain = layer.gain.value(tl);
+        if (gain == 1.0) return layer.source->add(v, tl, out);
+        render::Frame f;
+        f.resize(v.width, v.height);
+        layer.source->add(v, tl, f);
+        for (size_t p = 0; p < f.data.size(); ++p)
+            out.data[p] = static_cast<float>(out.data[p] + gain * f.data[p]);
+        return;
+    }
     if (space == Space::Camera) {
         layer_impulses(i, pass, camera->region(i, v, pass.t), imp);
         camera->accumulate(i, imp, v, pass.t, out, *pass.options);
@@ -516,7 +544,8 @@ void Renderer::State::orient(size_t i, const Pass& pass, const numeric::Box& box
     // emits for `box` (within the layer's support radius of it) with the bicubic stencil's two
     // nodes to spare.
     const size_t j = scene.layers[i].compose.orientation->source;
-    const double h = kernels[j].radius() / 8.0;
+    const auto& src = scene.layers[j].source;
+    const double h = (src ? src->correlation_length() : kernels[j].radius()) / 8.0;
     const numeric::Box b = box.expanded(scene.layers[i].kernel.radius);
     const int64_t i0 = static_cast<int64_t>(std::floor(b.x0 / h)) - 2;
     const int64_t j0 = static_cast<int64_t>(std::floor(b.y0 / h)) - 2;

@@ -15,6 +15,7 @@
 #include "kernels/kernels.h"
 #include "output/output.h"
 #include "render/render.h"
+#include "scenes/source.h"
 #include "sim/sim.h"
 
 namespace impulse::scenes {
@@ -121,6 +122,10 @@ struct MarginalKey {
 
 /// One [[layer]]. Its keyframed parameters are evaluated at the layer time (layer_time).
 struct LayerConfig {
+    /// What the layer draws: null, the impulse process described by the fields below (kernel,
+    /// process, density, flow); else a field from another synthesizer (scenes/source.h), and
+    /// of the fields below only mean, gain, marginal and compose apply.
+    std::shared_ptr<const LayerSource> source;
     kernels::KernelParams kernel;  ///< the kernel; keyframed fields hold their value at t = 0
     std::vector<KernelKey> kernel_keys;  ///< keyframed kernel fields; empty: a fixed kernel
     /// intensity: the largest live intensity over time, density / kernel area (births are
@@ -202,12 +207,8 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
 Scene load_scene_string(std::string_view text, const std::string& name,
                         const std::vector<std::string>& overrides = {});
 
-/// Closed-form statistics of a layer (Campbell's theorem, design.md §1).
-struct Theory {
-    double mean = 0.0;
-    double variance = 0.0;
-};
-/// At frame time t_s: mean(t) and gain(t)^2 E[a^2] int h_t^2 (lambda / T) int_0^T s(t - a)
+/// At frame time t_s: for a source layer mean(t) + gain(t) mean_s and gain(t)^2 var_s from the
+/// source's theory; for an impulse layer mean(t) and gain(t)^2 E[a^2] int h_t^2 (lambda / T) int_0^T s(t - a)
 /// w(a)^2 da, s the birth thinning (process.density_scale; 1 when the rate is constant), so
 /// a keyframed density acts through the births of the last lifetime. A shaped layer has its
 /// target's moments at t.
@@ -217,8 +218,8 @@ Theory layer_theory(const LayerConfig& layer, double t_s = 0.0);
 /// alpha range in the Gaussian approximation, see docs/scenes.md "Composition"). Sums add means
 /// and variances.
 Theory scene_theory(const Scene& scene, double t_s = 0.0);
-/// True when the frame is the plain sum of all layers (every layer visible, added at opacity 1,
-/// unwarped): what the spectral theory of `impulse analyze` covers.
+/// True when the frame is the plain sum of impulse layers (every layer visible, added at opacity
+/// 1, unwarped, no source layer): what the spectral theory of `impulse analyze` covers.
 bool is_sum_of_layers(const Scene& scene);
 
 /// Renders frames of a scene. Frame f is a pure function of (scene, f): rendering frames in

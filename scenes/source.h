@@ -1,0 +1,47 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// The layer-source seam (design.md §2; part of impulse::scenes, included by scenes/scenes.h):
+// a layer draws either the impulse process (the point process of sim/ and render/, configured
+// by the layer's kernel, density and flow) or a LayerSource, a field of texture space and time
+// from another synthesizer (subdivision, fBm, solid noise). Composition, shading, marginal
+// shaping, warps, orientation and analysis take a source's layer as they take any other.
+
+#include <optional>
+#include <string_view>
+
+#include "numeric/frame.h"
+
+namespace impulse::scenes {
+
+/// Closed-form statistics of a layer or a source (Campbell's theorem for impulses, design.md
+/// §1; the synthesizer's own theory for a source).
+struct Theory {
+    double mean = 0.0;
+    double variance = 0.0;
+};
+
+/// A field f(x, t) of texture space x and time t, stated by a synthesizer. Implementations are
+/// immutable once built and thread-safe.
+class LayerSource {
+public:
+    virtual ~LayerSource() = default;
+    /// The source's name in scene files and messages ("fbm", "subdivision", "solid").
+    virtual std::string_view kind() const = 0;
+    /// Adds f(x, t_s) at the pixel centres x of `view` to `out` (sized to the view), band-limited
+    /// by the source to the view's pixel spacing where it can be. A pure function of (source,
+    /// view, t_s): the same pixels in any view, tile or frame order give the same bits.
+    virtual void add(const numeric::View& view, double t_s, numeric::Frame& out) const = 0;
+    /// Closed-form mean and variance of f at t_s (before the layer's gain and mean).
+    virtual Theory theory(double t_s) const = 0;
+    /// A length over which f is correlated (texture units, > 0): the spacing of the lattices on
+    /// which other layers sample this one (orientation from its gradient), taken as 1/8 of it.
+    virtual double correlation_length() const = 0;
+    /// The radially averaged power spectrum S(k), k in cycles per texture unit, where the
+    /// source states it; nullopt otherwise (analysis then compares moments only).
+    virtual std::optional<double> power_spectrum(double k_cycles) const {
+        (void)k_cycles;
+        return std::nullopt;
+    }
+};
+
+}  // namespace impulse::scenes
