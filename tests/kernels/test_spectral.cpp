@@ -539,7 +539,7 @@ TEST_CASE("design options set the radius and window and are validated", "[kernel
     CHECK(!K::spectral_model_from_string("markow"));
 }
 
-TEST_CASE("a CSV table is read at its rows exactly, the last one included", "[kernels]") {
+TEST_CASE("a CSV table is read exactly at each of its rows and at the last", "[kernels]") {
     // At the last k the interpolation has no segment after it (it used to read one row past the
     // arrays: a heap-buffer-overflow under ASan, whatever lay there in a release build).
     const auto t = K::table_spectrum_text("0,1\n0.1,0.5\n0.25,0.1\n0.5,0.05\n", "t.csv");
