@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // Kernels of the shaped point process and their second-order statistics.
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -47,6 +49,48 @@ double hankel(const G& g, double radius, double k) {
                    return g(r) * j0 * r;
                },
                0.0, radius, panels);
+}
+
+/// Integrals of h, h^2, h^4 of a grid kernel of radius R; `sample(u, v)` is its bilinear
+/// interpolant masked to the disk (Kernel::grid_value).
+template <class Sample>
+std::array<double, 3> grid_integrals(const SampledKernel& sk, double R, const Sample& sample) {
+    // Integrals of h, h^2, h^4 for the bilinear interpolant masked to the disk (what the
+    // renderer evaluates). Inside the disk a cell holds a bilinear h, so h^4 is of degree <= 4 in
+    // each variable and 3 x 3 Gauss-Legendre nodes integrate all three exactly; a cell the circle
+    // crosses is sub-sampled 8 x 8 at midpoints (error O(spacing^2 / 64 h'')); a cell outside is
+    // zero. (Sub-sampling every cell took seconds for a designed 513^2 grid under the sanitizers.)
+    const int n = sk.n;
+    const double d = 2.0 * R / (n - 1);
+    const double g = std::sqrt(0.6) / 2;
+    const double node[3] = {0.5 - g, 0.5, 0.5 + g}, weight[3] = {5.0 / 18, 8.0 / 18, 5.0 / 18};
+    constexpr int kSub = 8;
+    double i1 = 0, i2 = 0, i4 = 0;
+    auto add = [&](double h, double w) { i1 += w * h, i2 += w * h * h, i4 += w * h * h * h * h; };
+    for (int j = 0; j + 1 < n; ++j)
+        for (int i = 0; i + 1 < n; ++i) {
+            const double u0 = -R + i * d, v0 = -R + j * d;
+            const double un = std::max({u0, -u0 - d, 0.0}), vn = std::max({v0, -v0 - d, 0.0});
+            if (un * un + vn * vn >= R * R) continue;  // outside the disk
+            const double uf = std::max(std::abs(u0), std::abs(u0 + d));
+            const double vf = std::max(std::abs(v0), std::abs(v0 + d));
+            if (uf * uf + vf * vf < R * R) {  // inside: exact
+                const double* r0 = sk.values.data() + size_t(j) * n + i;
+                const double* r1 = r0 + n;
+                for (int b = 0; b < 3; ++b)
+                    for (int a = 0; a < 3; ++a) {
+                        const double x = node[a], y = node[b];
+                        add((1 - y) * ((1 - x) * r0[0] + x * r0[1]) + y * ((1 - x) * r1[0] + x * r1[1]),
+                            weight[a] * weight[b]);
+                    }
+                continue;
+            }
+            for (int b = 0; b < kSub; ++b)
+                for (int a = 0; a < kSub; ++a)
+                    add(sample(u0 + (a + 0.5) / kSub * d, v0 + (b + 0.5) / kSub * d),
+                        1.0 / (kSub * kSub));
+        }
+    return {i1 * d * d, i2 * d * d, i4 * d * d};
 }
 
 }  // namespace
@@ -152,27 +196,12 @@ Kernel::Kernel(const KernelParams& params) : m_params(params) {
     // cos^4 = 3/8 + 1/2 cos 2x + 1/8 cos 4x); each cosine term is the envelope power's
     // transform at the harmonic (the integral of e(x) cos(2 pi k u + c) is cos(c) E(k)).
     if (is_grid()) {
-        // Integrals of the bilinear interpolant masked to the disk (what the renderer
-        // evaluates): each cell sub-sampled 8 x 8 at midpoints, error O(spacing^2 / 64 h'').
-        const SampledKernel& sk = *params.sampled;
-        const int n = sk.n;
-        const double d = 2.0 * R / (n - 1);
-        constexpr int kSub = 8;
-        double i1 = 0, i2 = 0, i4 = 0;
-        for (int j = 0; j + 1 < n; ++j)
-            for (int i = 0; i + 1 < n; ++i)
-                for (int b = 0; b < kSub; ++b)
-                    for (int a = 0; a < kSub; ++a) {
-                        const double u = -R + (i + (a + 0.5) / kSub) * d;
-                        const double v = -R + (j + (b + 0.5) / kSub) * d;
-                        const double h = grid_value(u, v);
-                        i1 += h, i2 += h * h, i4 += h * h * h * h;
-                    }
-        const double cell = d * d / (kSub * kSub);
-        m_integral = inv_aspect * i1 * cell;
-        m_integral_sq = inv_aspect * i2 * cell;
-        m_integral_4 = inv_aspect * i4 * cell;
-        m_grid.assign(sk.values.begin(), sk.values.end());
+        const std::array<double, 3> in = grid_integrals(
+            *params.sampled, R, [this](double u, double v) { return grid_value(u, v); });
+        m_integral = inv_aspect * in[0];
+        m_integral_sq = inv_aspect * in[1];
+        m_integral_4 = inv_aspect * in[2];
+        m_grid.assign(params.sampled->values.begin(), params.sampled->values.end());
         return;
     }
     if (!has_carrier()) {

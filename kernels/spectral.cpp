@@ -182,6 +182,8 @@ struct Table {
     double operator()(double q) const {
         if (q <= k.front()) return s.front();
         if (q > k.back()) return 0.0;
+        // At the last row upper_bound finds the end: there is no segment after it to interpolate.
+        if (q == k.back()) return s.back();
         const size_t i = std::upper_bound(k.begin(), k.end(), q) - k.begin() - 1;
         const double t = (q - k[i]) / (k[i + 1] - k[i]);
         return s[i] + t * (s[i + 1] - s[i]);

@@ -120,11 +120,29 @@ std::string nonfinite_pixel(const float* px, size_t count, int width, int channe
     return "";
 }
 
+std::string image_size_problem(int width, int height, int depth, int channels) {
+    std::ostringstream s;
+    s << "the header claims " << width << "x" << height;
+    if (depth != 1) s << "x" << depth;
+    s << " pixels of " << channels << " channels";
+    if (width <= 0 || height <= 0 || channels <= 0 || depth != 1) {
+        s << ": expected a 2-D image with pixels and channels";
+        return s.str();
+    }
+    const double mib = double(width) * height * channels * sizeof(float) / (1024.0 * 1024.0);
+    const int limit = OIIO::get_int_attribute("limits:imagesize_MB", 32768);
+    if (limit <= 0 || mib <= limit) return "";
+    s << ", " << mib << " MiB as floats: over OpenImageIO's limits:imagesize_MB = " << limit;
+    return s.str();
+}
+
 Frame read_image(const std::string& path) {
     auto in = OIIO::ImageInput::open(path);
     if (!in) throw IoError(path + ": cannot read: " + OIIO::geterror());
     const OIIO::ImageSpec& spec = in->spec();
     const int w = spec.width, h = spec.height, nc = spec.nchannels;
+    if (const std::string bad = image_size_problem(w, h, spec.depth, nc); !bad.empty())
+        throw IoError(path + ": " + bad);
     std::vector<float> px(size_t(w) * h * nc);
     if (!in->read_image(0, 0, 0, nc, OIIO::TypeDesc::FLOAT, px.data()))
         throw IoError(path + ": cannot read: " + in->geterror());

@@ -40,6 +40,12 @@ Frame read_image(const std::string& path);
 /// is not: image inputs are refused with it (a NaN breaks the sorts and sums they go through).
 std::string nonfinite_pixel(const float* px, size_t count, int width, int channels);
 
+/// "" when an image header's size (any values: a corrupt or hostile file can claim anything) is
+/// one this program reads: a 2-D image (depth 1) with width, height and channels > 0 whose pixels
+/// as floats fit within OpenImageIO's limits:imagesize_MB (32 GB by default; OIIO::attribute
+/// raises or lowers it); else what is wrong. Every image reader checks it before allocating.
+std::string image_size_problem(int width, int height, int depth, int channels);
+
 /// True for extensions OIIO writes here (.exr .png .tif .tiff .jpg .jpeg).
 bool is_image_path(const std::string& path);
 

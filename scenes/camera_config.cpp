@@ -239,6 +239,10 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
                 f.fail(pn, "path", "cannot read: " + e);
             }
             const auto& spec = in->spec();
+            if (const std::string bad = output::image_size_problem(spec.width, spec.height,
+                                                                   spec.depth, spec.nchannels);
+                !bad.empty())
+                f.fail(pn, "path", bad);
             if (spec.nchannels != 1 && spec.nchannels != 2)
                 f.fail(pn, "path",
                        "expected an image with 1 channel (angle in radians) or 2 "

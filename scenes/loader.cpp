@@ -237,6 +237,10 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
                 auto in = OIIO::ImageInput::open(p.string());
                 if (!in) f.fail(pn, "path", "cannot read: " + OIIO::geterror());
                 const auto& spec = in->spec();
+                if (const std::string bad = output::image_size_problem(
+                        spec.width, spec.height, spec.depth, spec.nchannels);
+                    !bad.empty())
+                    f.fail(pn, "path", bad);
                 if (spec.nchannels < 2)
                     f.fail(pn, "path", "expected an image with 2 or more channels (vx, vy), found " +
                                            std::to_string(spec.nchannels));

@@ -43,6 +43,8 @@ bool read_rgb_pixels(const std::string& path, std::vector<float>& px, int& chann
     }
     const auto& spec = in->spec();
     channels = spec.nchannels;
+    error = output::image_size_problem(spec.width, spec.height, spec.depth, channels);
+    if (!error.empty()) return false;
     px.resize(size_t(spec.width) * spec.height * channels);
     if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, px.data())) {
         error = "cannot read: " + in->geterror();

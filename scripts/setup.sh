@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs what impulse needs from Debian's packages (when missing), configures and builds.
-# Used by run.sh and test.sh; safe to run again (it only installs what is missing).
+# Used by run.sh, test.sh and sanitize.sh (--deps-only: install, do not build); safe to run
+# again (it only installs what is missing).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -19,6 +20,8 @@ if [ ${#missing[@]} -gt 0 ]; then
     $sudo apt-get update -qq
     DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
 fi
+
+[ "${1:-}" = "--deps-only" ] && exit 0
 
 cmake -S . -B build -DCMAKE_BUILD_TYPE=Release > build.log 2>&1 || { cat build.log; exit 1; }
 cmake --build build -j"$(nproc)" >> build.log 2>&1 || { tail -50 build.log; exit 1; }

@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
-# Sets everything up, then runs the whole test suite (Catch2 tests through CTest), then fuzzes
-# the scene loader for a bounded minute (libFuzzer, AddressSanitizer and UBSan).
+# Sets everything up, then runs the whole test suite (Catch2 tests through CTest), the fast
+# subset again under AddressSanitizer and UBSan (scripts/sanitize.sh --fast; the whole suite under
+# them is scripts/sanitize.sh, too long for CI), then fuzzes the scene and image targets for a
+# bounded minute each (libFuzzer, ASan, UBSan).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 ctest --test-dir build --output-on-failure -j"$(nproc)"
+bash scripts/sanitize.sh --fast
 bash scripts/fuzz.sh 60

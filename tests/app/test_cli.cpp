@@ -213,6 +213,19 @@ TEST_CASE("EXR and PNG output carry the frame and its provenance", "[cli]") {
     CHECK(dir.files() == std::vector<std::string>{"f.exr", "f.png", "scene.toml"});
 }
 
+TEST_CASE("a spectrum table whose last row is at the Nyquist frequency renders", "[cli]") {
+    // The kernel design reads the table at its last k (the default nyquist, 0.5), which used to
+    // read past the table's arrays (a child's sanitizer report fails the status check).
+    TempDir dir;
+    write_text(dir / "tab.csv", "0,1\n0.1,0.5\n0.25,0.1\n0.5,0\n");
+    write_text(dir / "scene.toml", "[output]\nsize = [48, 32]\n[[layer]]\n[layer.kernel]\n"
+                                   "type = \"spectrum\"\ntable = \"tab.csv\"\n");
+    const Result r = run(dir, "render " + quote(dir / "scene.toml") + " -o " + quote(dir / "f.exr"));
+    CHECK(r.err.empty());
+    REQUIRE(r.status == 0);
+    CHECK(impulse::output::read_image(dir / "f.exr").width == 48);
+}
+
 TEST_CASE("output files do not depend on the thread count or tile size", "[cli][determinism]") {
     TempDir dir;
     const std::string scene = dir / "scene.toml";

@@ -539,6 +539,21 @@ TEST_CASE("design options set the radius and window and are validated", "[kernel
     CHECK(!K::spectral_model_from_string("markow"));
 }
 
+TEST_CASE("a CSV table is read exactly at each of its rows and at the last", "[kernels]") {
+    // At the last k the interpolation has no segment after it (it used to read one row past the
+    // arrays: a heap-buffer-overflow under ASan, whatever lay there in a release build).
+    const auto t = K::table_spectrum_text("0,1\n0.1,0.5\n0.25,0.1\n0.5,0.05\n", "t.csv");
+    CHECK(t.density(0.0, 0) == 1.0);
+    CHECK(t.density(0.1, 0) == 0.5);
+    CHECK(t.density(0.25, 0) == 0.1);
+    CHECK(t.density(0.5, 0) == 0.05);
+    CHECK(t.density(std::nextafter(0.5, 1.0), 0) == 0.0);
+    // The issue's table: its last row sits at the default design Nyquist frequency, 0.5.
+    const auto d = K::kernel_from_spectrum(
+        K::table_spectrum_text("0,1\n0.1,0.5\n0.25,0.1\n0.5,0\n", "tab.csv"));
+    CHECK(d.params.radius > 0.0);
+}
+
 TEST_CASE("scene kernels of type spectrum and autocorrelation", "[kernels][scenes]") {
     namespace S = impulse::scenes;
     const std::string head =

@@ -1,0 +1,41 @@
+#!/usr/bin/env bash
+# Builds impulse with AddressSanitizer and UBSan (RelWithDebInfo, -fno-sanitize-recover, in
+# build-asan/) and runs the test suite under it with ctest -j2; fails on a failing test and on any
+# sanitizer report, including one from a child process (the CLI tests run the impulse binary and
+# may expect it to fail: its report goes to a log file, not to the exit status a test checks).
+#   scripts/sanitize.sh          the whole suite
+#   scripts/sanitize.sh --fast   the fast subset CI runs: the tests labelled kernels and scenes
+#                                (kernel design and tables, the scene loader, its error corpus,
+#                                composition), building only their two test programs
+set -euo pipefail
+cd "$(dirname "$0")/.."
+fast=0
+[ "${1:-}" = "--fast" ] && fast=1
+bash scripts/setup.sh --deps-only
+build=build-asan
+launcher=()
+command -v ccache > /dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DIMPULSE_SANITIZE=ON \
+    -DIMPULSE_BUILD_BENCH=OFF "${launcher[@]}" > "$build.log" 2>&1 || { cat "$build.log"; exit 1; }
+targets=(all)
+selection=()
+[ "$fast" -eq 1 ] && targets=(test_kernels test_scenes) && selection=(-L '^(kernels|scenes)$')
+cmake --build "$build" -j"$(nproc)" --target "${targets[@]}" >> "$build.log" 2>&1 \
+    || { tail -50 "$build.log"; exit 1; }
+
+reports="$PWD/$build/sanitizer-reports"
+rm -rf "$reports" && mkdir -p "$reports"
+export ASAN_OPTIONS="log_path=$reports/asan:detect_leaks=1"
+export UBSAN_OPTIONS="log_path=$reports/ubsan:print_stacktrace=1:halt_on_error=1"
+export LSAN_OPTIONS="suppressions=$PWD/fuzz/lsan.supp"
+start=$SECONDS
+status=0
+ctest --test-dir "$build" --output-on-failure -j2 "${selection[@]}" || status=$?
+if compgen -G "$reports/*" > /dev/null; then
+    echo "sanitize: sanitizer reports:"
+    for f in "$reports"/*; do echo "== $f"; head -40 "$f"; done
+    exit 1
+fi
+[ "$status" -eq 0 ] || { echo "sanitize: failing tests (see above)"; exit "$status"; }
+echo "sanitize: every selected test passes under ASan+UBSan with no sanitizer report" \
+    "($((SECONDS - start)) s)"

@@ -1,0 +1,53 @@
+// SPDX-License-Identifier: Apache-2.0
+// Image inputs are untrusted files: a header may claim any size, and the readers refuse one whose
+// pixels as floats exceed OpenImageIO's limits:imagesize_MB before allocating them. OIIO checks
+// the file's own sample size (an 8-bit image of 100000^2 pixels, 9537 MB, passes it); the float
+// buffer of 37 GiB used to be allocated and zero-filled.
+#include <catch2/catch.hpp>
+#include <cstdint>
+#include <string>
+
+#include "output/output.h"
+#include "render/render.h"
+#include "tests/support.h"
+#include "numeric/errors.h"
+
+namespace {
+
+using Catch::Matchers::Contains;
+
+/// A little-endian TIFF of width x height 8-bit grey pixels whose strip holds one byte: only the
+/// header is valid.
+std::string tiff_header(uint32_t width, uint32_t height) {
+    std::string t = "II";
+    auto u16 = [&](uint32_t v) { t += char(v & 0xff), t += char(v >> 8 & 0xff); };
+    auto u32 = [&](uint32_t v) { u16(v & 0xffff), u16(v >> 16); };
+    u16(42), u32(8);
+    const uint32_t entries[][3] = {{256, 4, width}, {257, 4, height}, {258, 3, 8}, {259, 3, 1},
+                                   {262, 3, 1},     {273, 4, 0},      {277, 3, 1}, {278, 4, height},
+                                   {279, 4, 1}};
+    const uint32_t data = 8 + 2 + 9 * 12 + 4;  // the strip, after the directory
+    u16(9);
+    for (const auto& e : entries) u16(e[0]), u16(e[1]), u32(1), u32(e[0] == 273 ? data : e[2]);
+    u32(0);
+    t += '\0';
+    return t;
+}
+
+}  // namespace
+
+TEST_CASE("an image whose header claims more than the size limit is refused before reading",
+          "[render][errors]") {
+    impulse::test::TempDir dir;
+    const std::string huge = dir / "huge.tif", small = dir / "small.tif";
+    impulse::test::write_file(huge, tiff_header(100000, 100000));
+    impulse::test::write_file(small, tiff_header(1, 1));
+    CHECK_THROWS_AS(impulse::output::read_image(huge), impulse::IoError);
+    CHECK_THROWS_WITH(impulse::output::read_image(huge),
+                      Contains("huge.tif: the header claims 100000x100000 pixels of 1 channels") &&
+                          Contains("over OpenImageIO's limits:imagesize_MB = 32768"));
+    CHECK(impulse::output::read_image(small).width == 1);  // the same file at a size that fits
+    CHECK(impulse::output::image_size_problem(4, 3, 1, 2).empty());
+    CHECK_THAT(impulse::output::image_size_problem(4, 3, 2, 1), Contains("4x3x2 pixels"));
+    CHECK_THAT(impulse::output::image_size_problem(0, 3, 1, 1), Contains("expected a 2-D image"));
+}
