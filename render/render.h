@@ -57,7 +57,9 @@ public:
 /// Adds sum_k w_k h_{theta_k}(x - x_k) to `out` (sized to the view; not cleared) for every
 /// pixel centre. Deterministic: each pixel sums its impulses in their canonical order, so the
 /// bits do not depend on the thread count or the tile size. Uses AVX2 where the CPU has it,
-/// with the same arithmetic (no FMA contraction) as the baseline path.
+/// with the same arithmetic (no FMA contraction) as the baseline path. Throws ValueError naming
+/// the first impulse whose position (in pixels, as a float), orientation or weight is not
+/// finite; accumulate_region too.
 void accumulate(const kernels::Kernel& kernel, const sim::Impulses& impulses, const View& view,
                 Frame& out, const EvalOptions& options = {});
 
@@ -95,6 +97,16 @@ void write_image(const std::string& path, const Frame& frame, const ValueMapping
 /// Same for an RGB float frame (3 floats per pixel, display values in [0, 1] already mapped).
 void write_rgb_image(const std::string& path, int width, int height, const std::vector<float>& rgb,
                      const Metadata& metadata, bool bits16 = false);
+/// Why the image file `path` is not the frame write_image (or write_rgb_image) would write with
+/// these arguments, or "" when it is, for --resume: it must decode completely (a truncated file
+/// does not), have `width` x `height` pixels, `channels` channels and the sample type of the
+/// extension (and `bits16`), and carry each of `metadata`'s keys as impulse:KEY with the same
+/// value in the formats that store them (EXR, PNG; TIFF and JPEG keep no metadata here). The
+/// reason is one line ("truncated or unreadable: ...", "impulse:seed is 7, expected 8").
+std::string image_mismatch(const std::string& path, int width, int height, int channels,
+                           bool bits16, const Metadata& metadata);
+/// True when files of this extension keep write_image's metadata (.exr, .png).
+bool keeps_metadata(const std::string& path);
 /// Reads an image as single-channel float (luminance of RGB; raw floats for EXR, [0,1] for
 /// integer formats). Throws IoError.
 Frame read_image(const std::string& path);
