@@ -326,6 +326,7 @@ int run_render(const RenderOptions& opt) {
                              {"fps", std::to_string(out.fps)},
                              {"range", std::to_string(mapping.lo) + " " + std::to_string(mapping.hi)}};
 
+    StopSignals stop_signals;  // from here a stop signal keeps what was written
     render::VideoWriter writer;
     if (video) {
         render::quiet_video_logs();
@@ -337,8 +338,13 @@ int run_render(const RenderOptions& opt) {
         writer.open(output, vo);
     }
 
-    if (sequence && opt.resume) remove_stale_temporaries(output);
-    StopSignals stop_signals;
+    if (sequence && opt.resume) {
+        remove_stale_temporaries(output);
+        if (!render::keeps_metadata(output))
+            std::cerr << output << ": --resume: this format keeps no metadata; a present frame is "
+                         "kept if it decodes whole with the run's size, channels and sample type "
+                         "(EXR and PNG also check seed, frame and scene hash)\n";
+    }
     Progress progress(last - first + 1, opt.quiet);
     // Frame f + 1 renders while frame f is written: on two cores the encoder and the renderer
     // overlap instead of taking turns. Images: two float frames, f + 1 renders while f is

@@ -84,7 +84,8 @@ int main(int argc, char** argv) {
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        return app.exit(e);
+        // CLI11's own codes (105, 106, ...) are not what scripts test for: 2, as getopt tools.
+        return app.exit(e) == 0 ? 0 : 2;
     }
     ao.json = analyze->count("--json") > 0;
     // `analyze --json INPUT`: the one name given is the input, the JSON goes to stdout.

@@ -236,6 +236,8 @@ TEST_CASE("SIGTERM and SIGHUP close a video as SIGINT does, with exit status 128
         CHECK(info.width == 320);
         for (const auto& e : dir.files()) CHECK(e.find("partial") == std::string::npos);
     }
+    TempDir dir("signal-help");
+    CHECK_THAT(run(dir, "render --help").out, Contains("SIGTERM (143)"));
 }
 
 TEST_CASE("SIGTERM stops an image sequence between frames: every file whole, 143",
@@ -304,7 +306,8 @@ TEST_CASE("--resume renders again the frames that do not check out, and says why
     REQUIRE(run(dir, "render " + scene + " -q --size 64x48 -o " + quote(dir / "t_####.tif")).status == 0);
     const Result t = run(dir, "render " + scene + " -q --resume -o " + quote(dir / "t_####.tif"));
     CHECK(t.status == 0);
-    CHECK(t.err_lines().size() == 4);
+    CHECK(t.err_lines().size() == 5);
+    CHECK_THAT(t.err, Contains("this format keeps no metadata"));
     CHECK_THAT(t.err, Contains("t_0000.tif: rendering again: 64x48 pixels, expected 96x72"));
     CHECK(impulse::render::probe_image(dir / "t_0003.tif").width == 96);
 }
