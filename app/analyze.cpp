@@ -159,6 +159,10 @@ Loaded load_input(const AnalyzeOptions& opt) {
         return L;
     }
 
+    // A sequence rendered with --frames 100-199 starts at 100: without --frames, analyse from
+    // the first frame present.
+    if (!ranged && !expand_pattern(in, 0).empty() && !fs::exists(expand_pattern(in, 0), ec))
+        if (const long long first = first_frame_present(in); first > 0) a = L.first = first;
     const std::string first_name = expand_pattern(in, a);
     if (!first_name.empty()) {
         if (!fs::exists(first_name, ec))

@@ -21,6 +21,7 @@ struct AnalyzeOptions {
     std::string frames;             ///< "A-B" or "A", inclusive and 0-based; empty: from 0
     long long max_frames = 0;       ///< > 0: analyse at most this many frames
     bool json = false;              ///< CLI only: print JSON instead of text
+    std::string json_file;          ///< CLI only: --json FILE writes the JSON there (text printed)
     std::string report;             ///< CLI only: write an HTML report here
 };
 

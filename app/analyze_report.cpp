@@ -5,8 +5,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -664,12 +666,13 @@ void write_atomically(const std::string& path, const std::string& text) {
     {
         std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
         if (!out) throw IoError(path + ": cannot write " + tmp.string());
+        errno = 0;
         out << text;
-        out.flush();
+        out.close();  // close reports what a buffered write deferred
         if (!out) {
-            out.close();
+            const std::string why = errno ? std::strerror(errno) : "unknown error";
             fs::remove(tmp, ec);
-            throw IoError(path + ": write failed");
+            throw IoError(path + ": write failed: " + why);
         }
     }
     fs::rename(tmp, p, ec);
@@ -1066,8 +1069,10 @@ std::string to_html(const AnalysisResult& r) {
 int run_analyze(const AnalyzeOptions& options) {
     const AnalysisResult r = analyze_input(options);
     if (!options.report.empty()) write_atomically(options.report, to_html(r));
-    std::cout << (options.json ? to_json(r) : to_text(r));
+    if (!options.json_file.empty()) write_atomically(options.json_file, to_json(r));
+    std::cout << (options.json && options.json_file.empty() ? to_json(r) : to_text(r));
     if (!options.report.empty() && !options.json) std::cout << "wrote " << options.report << "\n";
+    if (!options.json_file.empty()) std::cout << "wrote " << options.json_file << "\n";
     return 0;
 }
 

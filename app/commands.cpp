@@ -4,17 +4,20 @@
 #include "app/commands.h"
 
 #include <tbb/global_control.h>
+#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
 #include <charconv>
 #include <chrono>
+#include <cerrno>
 #include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
 #include <future>
 #include <fstream>
+#include <iomanip>
 #include <iostream>
 #include <regex>
 #include <sstream>
@@ -29,8 +32,89 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::atomic<bool> g_interrupted{false};
-extern "C" void on_sigint(int) { g_interrupted.store(true); }
+// The first stop signal received (0: none): the render loop stops between frames, the video
+// is closed so what was encoded plays, and the exit status is 128 + its number.
+std::atomic<int> g_signal{0};
+extern "C" void on_stop_signal(int signo) {
+    int none = 0;
+    g_signal.compare_exchange_strong(none, signo);
+}
+
+/// Catches SIGINT (Ctrl-C), SIGTERM (timeout, kill, Slurm, container stop) and SIGHUP (a closed
+/// terminal or ssh session) while alive. A signal the caller ignores stays ignored (nohup, a
+/// background job of a non-interactive shell).
+class StopSignals {
+public:
+    static constexpr int kSignals[3] = {SIGINT, SIGTERM, SIGHUP};
+    StopSignals() {
+        g_signal = 0;
+        struct sigaction sa {};
+        sa.sa_handler = on_stop_signal;
+        sigemptyset(&sa.sa_mask);
+        for (int i = 0; i < 3; ++i) {
+            ::sigaction(kSignals[i], nullptr, &m_old[i]);
+            if (m_old[i].sa_handler != SIG_IGN) ::sigaction(kSignals[i], &sa, nullptr);
+        }
+    }
+    ~StopSignals() {
+        for (int i = 0; i < 3; ++i) ::sigaction(kSignals[i], &m_old[i], nullptr);
+    }
+    StopSignals(const StopSignals&) = delete;
+    StopSignals& operator=(const StopSignals&) = delete;
+    static const char* name(int signo) {
+        return signo == SIGINT ? "SIGINT" : signo == SIGTERM ? "SIGTERM" : signo == SIGHUP ? "SIGHUP" : "a signal";
+    }
+
+private:
+    struct sigaction m_old[3];
+};
+
+std::string regex_escape(const std::string& text) {
+    static const std::regex special(R"([.^$|()\[\]{}*+?\\])");
+    return std::regex_replace(text, special, R"(\$&)");
+}
+
+/// A regex matching the file names of `name`'s frames (the pattern's digits captured), where
+/// `spot` is the pattern in `name`.
+std::regex frame_name_regex(const std::string& name, const PatternSpot& spot) {
+    return std::regex(regex_escape(name.substr(0, spot.pos)) + "(\\d+)" +
+                      regex_escape(name.substr(spot.pos + spot.length)));
+}
+
+/// Removes the temporaries (.NAME.partial-PID.EXT, render/image_io.cpp) of `pattern`'s frames
+/// that a killed run left behind: those whose process is gone and that have not been written
+/// for a minute (on storage shared by a farm, a PID from another machine may not exist here,
+/// but its temporary lives only while one frame's bytes are written). Says what it removes.
+void remove_stale_temporaries(const std::string& pattern) {
+    const fs::path p(pattern);
+    const std::string name = p.filename().string();
+    const PatternSpot spot = find_pattern(name);
+    if (!spot.found) return;  // the pattern is in the directory part: no names to match
+    const std::regex frame = frame_name_regex(name, spot);
+    static const std::regex temporary(R"(\.(.+)\.partial-(\d{1,9})(\.[^.]+))");
+    const fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(dir, ec)) {
+        const std::string entry = e.path().filename().string();
+        std::smatch m;
+        if (!std::regex_match(entry, m, temporary) || !std::regex_match(m[1].str() + m[3].str(), frame))
+            continue;
+        const pid_t pid = static_cast<pid_t>(std::stol(m[2].str()));
+        const bool gone = ::kill(pid, 0) != 0 && errno == ESRCH;
+        std::error_code tec;
+        const auto age = fs::file_time_type::clock::now() - fs::last_write_time(e.path(), tec);
+        if (!gone || tec || age < std::chrono::minutes(1)) {
+            std::cerr << e.path().string() << ": left in place: "
+                      << (gone ? "written less than a minute ago" : "process " + m[2].str() + " is running")
+                      << "\n";
+            continue;
+        }
+        if (fs::remove(e.path(), tec))
+            std::cerr << "removed " << e.path().string() << ": a stale temporary (process " << m[2].str()
+                      << " is gone)\n";
+    }
+}
+
 
 /// Progress on a terminal: frames done, rate, time left. Silent when not a terminal or -q.
 class Progress {
@@ -71,16 +155,25 @@ long long whole_number(const std::string& option, const std::string& text, const
     return v;
 }
 
-std::vector<std::string> overrides_for(const std::vector<std::string>& sets, const std::string& size,
+/// --size or --crop "WxH" in [1, 32768]^2 ({0, 0} when not given).
+scenes::OutputSize parse_size(const std::string& option, const std::string& text) {
+    if (text.empty()) return {};
+    static const std::regex re(R"((\d{1,5})x(\d{1,5}))");
+    std::smatch m;
+    if (!std::regex_match(text, m, re) || std::stoi(m[1].str()) < 1 || std::stoi(m[2].str()) < 1 ||
+        std::stoi(m[1].str()) > 32768 || std::stoi(m[2].str()) > 32768)
+        throw ValueError(option + " " + text.substr(0, 40) +
+                         ": expected WxH in pixels, each in [1, 32768], e.g. 1920x1080");
+    return {std::stoi(m[1].str()), std::stoi(m[2].str())};
+}
+
+/// The scene overrides of --set, --crop (output.size: a window at the scene's own scale) and
+/// --seed.
+std::vector<std::string> overrides_for(const std::vector<std::string>& sets, const std::string& crop,
                                        const std::string& seed) {
     std::vector<std::string> o = sets;
-    if (!size.empty()) {
-        static const std::regex re(R"((\d+)x(\d+))");
-        std::smatch m;
-        if (!std::regex_match(size, m, re))
-            throw ValueError("--size " + size + ": expected WxH in pixels, e.g. 1920x1080");
-        o.push_back("output.size=[" + m[1].str() + "," + m[2].str() + "]");
-    }
+    if (const scenes::OutputSize c = parse_size("--crop", crop); c.width > 0)
+        o.push_back("output.size=[" + std::to_string(c.width) + "," + std::to_string(c.height) + "]");
     if (!seed.empty())
         o.push_back("seed=" + std::to_string(whole_number(
                                   "--seed", seed, seed, "an integer in [0, 9223372036854775807]")));
@@ -102,24 +195,70 @@ bool colour_shading(const scenes::Scene& s) {
     return !s.shading.ramp.empty() || s.shading_keys.relief.max() != 0.0;
 }
 
+/// Why the file `target` present for --resume is not frame `f` of `sc` as this run would
+/// write it ("" when it is): render::image_mismatch with the run's size, channels and metadata.
+std::string present_frame_mismatch(const std::string& target, const scenes::Scene& sc, long long f) {
+    const bool exr = fs::path(target).extension() == ".exr";
+    const int channels = !exr && colour_shading(sc) ? 3 : 1;
+    const output::Metadata expected = {
+        {"seed", std::to_string(sc.seed)}, {"frame", std::to_string(f)}, {"scene_hash", sc.hash}};
+    return render::image_mismatch(target, sc.output.width, sc.output.height, channels,
+                                  sc.output.bits == 16, expected);
+}
+
 }  // namespace
 
+PatternSpot find_pattern(const std::string& path) {
+    static const std::regex token("#+|%0?(\\d*)d");
+    PatternSpot spot;
+    for (auto it = std::sregex_iterator(path.begin(), path.end(), token); it != std::sregex_iterator();
+         ++it) {
+        const std::smatch& m = *it;
+        if (spot.found)
+            throw ValueError(path + ": two frame-number patterns (\"" + path.substr(spot.pos, spot.length) +
+                             "\" and \"" + m.str(0) + "\"): expected one, e.g. frame_####.png");
+        spot.found = true;
+        spot.pos = size_t(m.position(0)), spot.length = size_t(m.length(0));
+        const bool hashes = m.str(0)[0] == '#';
+        // A single # is 4 digits (Shake's and Nuke's convention): frame_#.png sorts as it plays.
+        const size_t width = hashes ? (m.length(0) == 1 ? 4 : size_t(m.length(0)))
+                             : m[1].length() > 2 ? 100
+                             : m[1].length()     ? size_t(std::stoi(m[1].str()))
+                                                 : 0;
+        if (width > 19)
+            throw ValueError(path.substr(0, std::min<size_t>(path.size(), 200)) +
+                             ": frame-number pattern wider than 19 digits (2^63 has 19)");
+        spot.width = int(width);
+    }
+    return spot;
+}
+
 std::string expand_pattern(const std::string& pattern, long long frame) {
-    static const std::regex hashes("#+");
-    static const std::regex printf_like("%0?(\\d*)d");
-    std::smatch m;
-    if (std::regex_search(pattern, m, hashes)) {
-        std::ostringstream s;
-        s << std::setw(static_cast<int>(m.length(0))) << std::setfill('0') << frame;
-        return m.prefix().str() + s.str() + m.suffix().str();
+    const PatternSpot spot = find_pattern(pattern);
+    if (!spot.found) return "";
+    std::ostringstream s;
+    s << std::setw(spot.width) << std::setfill('0') << frame;
+    return pattern.substr(0, spot.pos) + s.str() + pattern.substr(spot.pos + spot.length);
+}
+
+long long first_frame_present(const std::string& pattern) {
+    const fs::path p(pattern);
+    const std::string name = p.filename().string();
+    const PatternSpot spot = find_pattern(name);
+    if (!spot.found) return -1;
+    const std::regex frame = frame_name_regex(name, spot);
+    const fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
+    long long first = -1;
+    std::error_code ec;
+    for (const auto& e : fs::directory_iterator(dir, ec)) {
+        const std::string entry = e.path().filename().string();
+        std::smatch m;
+        if (!std::regex_match(entry, m, frame) || m[1].length() > 18) continue;
+        const long long f = std::stoll(m[1].str());
+        // Only names the pattern gives (f_0007.png, not f_7.png for ####).
+        if (expand_pattern(name, f) == entry && (first < 0 || f < first)) first = f;
     }
-    if (std::regex_search(pattern, m, printf_like)) {
-        const int w = m[1].length() ? std::stoi(m[1].str()) : 0;
-        std::ostringstream s;
-        s << std::setw(w) << std::setfill('0') << frame;
-        return m.prefix().str() + s.str() + m.suffix().str();
-    }
-    return "";
+    return first;
 }
 
 std::pair<long long, long long> parse_frame_range(const std::string& text, long long frames) {
@@ -139,26 +278,36 @@ std::pair<long long, long long> parse_frame_range(const std::string& text, long 
 
 int run_render(const RenderOptions& opt) {
     const std::string path = scenes::resolve_scene(opt.scene);
-    auto overrides = overrides_for(opt.sets, opt.size, opt.seed);
+    auto overrides = overrides_for(opt.sets, opt.crop, opt.seed);
     if (!opt.codec.empty()) overrides.push_back("output.codec=\"" + opt.codec + "\"");
-    scenes::Scene scene = scenes::load_scene(path, overrides);
+    scenes::Scene scene = scenes::load_scene(path, overrides, parse_size("--size", opt.size));
     for (const auto& w : scene.warnings) std::cerr << w << "\n";
     long long first = 0, last = scene.output.frames - 1;
     if (!opt.frames.empty()) std::tie(first, last) = parse_frame_range(opt.frames, scene.output.frames);
 
-    const bool video = output::is_video_path(opt.output);
-    const bool sequence = !video && !expand_pattern(opt.output, 0).empty();
+    // No -o: out/SCENE.mp4, or out/SCENE.png for one frame (README's first command works).
+    const bool default_output = opt.output.empty();
+    const std::string output =
+        default_output ? "out/" + fs::path(path).stem().string() + (first == last ? ".png" : ".mp4")
+                       : opt.output;
+    if (default_output) {
+        std::error_code ec;
+        fs::create_directories("out", ec);
+        std::cerr << "output: " << output << " (-o to choose)\n";
+    }
+    const bool video = output::is_video_path(output);
+    const bool sequence = !video && !expand_pattern(output, 0).empty();
     if (!video && !sequence) {
-        if (!output::is_image_path(opt.output))
-            throw ValueError(opt.output + ": unknown output type: expected an image (.exr .png .tif), "
+        if (!output::is_image_path(output))
+            throw ValueError(output + ": unknown output type: expected an image (.exr .png .tif), "
                              "a pattern (frame_####.png) or a video (.mp4 .mov .mkv .webm)");
         if (last != first)
-            throw ValueError(opt.output + ": one image but " + std::to_string(last - first + 1) +
+            throw ValueError(output + ": one image but " + std::to_string(last - first + 1) +
                              " frames requested: use a pattern like frame_####.png, a video, or --frames N");
     }
     if (opt.resume && video)
         throw ValueError("--resume: applies to image sequences; a video is always written whole");
-    ensure_directory(sequence ? expand_pattern(opt.output, first) : opt.output);
+    ensure_directory(sequence ? expand_pattern(output, first) : output);
 
     // Held by pointer so it can be freed before the encoder's flush (below).
     auto renderer = std::make_unique<scenes::Renderer>(std::move(scene));
@@ -178,6 +327,7 @@ int run_render(const RenderOptions& opt) {
                              {"fps", std::to_string(out.fps)},
                              {"range", std::to_string(mapping.lo) + " " + std::to_string(mapping.hi)}};
 
+    StopSignals stop_signals;  // from here a stop signal keeps what was written
     output::VideoWriter writer;
     if (video) {
         output::quiet_video_logs();
@@ -186,11 +336,16 @@ int run_render(const RenderOptions& opt) {
         vo.codec = output::video_codec_from_string(out.codec);
         vo.crf = out.crf, vo.preset = out.preset;
         vo.metadata = meta;
-        writer.open(opt.output, vo);
+        writer.open(output, vo);
     }
 
-    g_interrupted = false;
-    auto previous = std::signal(SIGINT, on_sigint);
+    if (sequence && opt.resume) {
+        remove_stale_temporaries(output);
+        if (!render::keeps_metadata(output))
+            std::cerr << output << ": --resume: this format keeps no metadata; a present frame is "
+                         "kept if it decodes whole with the run's size, channels and sample type "
+                         "(EXR and PNG also check seed, frame and scene hash)\n";
+    }
     Progress progress(last - first + 1, opt.quiet);
     // Frame f + 1 renders while frame f is written: on two cores the encoder and the renderer
     // overlap instead of taking turns. Images: two float frames, f + 1 renders while f is
@@ -199,7 +354,7 @@ int run_render(const RenderOptions& opt) {
     // the conversion and encoding of f overlap the rendering of f + 1.
     render::Frame frames[2];
     std::vector<float> rgb;
-    long long written = 0, skipped = 0;
+    long long written = 0, skipped = 0, redone = 0;
     // --threads caps TBB's workers process-wide (a task arena would serialise the two threads
     // of the pipeline: an arena admits one outside thread at a time by default).
     std::unique_ptr<tbb::global_control> cap;
@@ -230,11 +385,16 @@ int run_render(const RenderOptions& opt) {
     };
     int slot = 0;
     for (long long f = first; f <= last; ++f) {
-        if (g_interrupted) break;
-        const std::string target = sequence ? expand_pattern(opt.output, f) : opt.output;
+        if (g_signal) break;
+        const std::string target = sequence ? expand_pattern(output, f) : output;
         if (sequence && opt.resume && fs::exists(target)) {
-            ++skipped;
-            continue;
+            const std::string why = present_frame_mismatch(target, sc, f);
+            if (why.empty()) {
+                ++skipped;
+                continue;
+            }
+            std::cerr << target << ": rendering again: " << why << "\n";
+            ++redone;
         }
         renderer->render(f, frames[slot], eo);
         finish_pending();
@@ -251,7 +411,6 @@ int run_render(const RenderOptions& opt) {
     }
     finish_pending();
     progress.done();
-    std::signal(SIGINT, previous);
     if (video) {
         // Closing flushes the encoder, which then encodes every frame it still holds (x264's
         // lookahead): the peak of a short render. The renderer and the float frames are no
@@ -260,12 +419,15 @@ int run_render(const RenderOptions& opt) {
         renderer.reset();
         writer.close();  // on interruption too: what was encoded stays playable
     }
-    if (g_interrupted) {
-        std::cerr << "interrupted: " << written << " frames written to " << opt.output << "\n";
-        return 130;
+    if (const int signo = g_signal) {
+        std::cerr << "interrupted by " << StopSignals::name(signo) << ": " << written << " frame"
+                  << (written == 1 ? "" : "s") << " written to " << output << " (exit status "
+                  << 128 + signo << ")\n";
+        return 128 + signo;
     }
-    std::cout << "wrote " << opt.output << " (" << written << " frame" << (written == 1 ? "" : "s");
+    std::cout << "wrote " << output << " (" << written << " frame" << (written == 1 ? "" : "s");
     if (skipped) std::cout << ", " << skipped << " already present";
+    if (redone) std::cout << ", " << redone << " replaced (present but did not check out)";
     std::cout << ", " << width << "x" << height << ")\n";
     return 0;
 }
@@ -278,15 +440,22 @@ int run_scenes() {
         if (e.path().extension() == ".toml") files.push_back(e.path());
     std::sort(files.begin(), files.end());
     for (const auto& p : files) {
-        // The first comment line of a scene file is its one-line description.
+        // A scene file opens with a comment paragraph; its first sentence describes it.
         std::ifstream in(p);
-        std::string line, desc;
-        while (std::getline(in, line))
-            if (line.rfind("# ", 0) == 0) {
-                desc = line.substr(2);
-                break;
-            }
-        std::printf("%-10s %s\n", p.stem().c_str(), desc.c_str());
+        std::string line, text;
+        while (std::getline(in, line) && line.rfind("#", 0) == 0)
+            text += (text.empty() ? "" : " ") + line.substr(line.find_first_not_of("# ") == std::string::npos
+                                                               ? line.size()
+                                                               : line.find_first_not_of("# "));
+        const size_t stop = text.find(". ");
+        if (stop != std::string::npos) text.resize(stop + 1);
+        // "clouds: wind-blown ..." and "Drift: flowing ..." name the scene again.
+        const std::string stem = p.stem().string();
+        if (text.size() > stem.size() + 1 && text[stem.size()] == ':' &&
+            std::equal(stem.begin(), stem.end(), text.begin(),
+                       [](char a, char b) { return std::tolower(a) == std::tolower(b); }))
+            text = text.substr(text.find_first_not_of(' ', stem.size() + 1));
+        std::printf("%-10s %s\n", stem.c_str(), text.c_str());
     }
     return 0;
 }
@@ -315,13 +484,15 @@ std::string composition_text(const scenes::LayerConfig& l) {
 
 int run_info(const InfoOptions& opt) {
     const std::string path = scenes::resolve_scene(opt.scene);
-    scenes::Scene scene = scenes::load_scene(path, overrides_for(opt.sets, opt.size, ""));
+    scenes::Scene scene = scenes::load_scene(path, overrides_for(opt.sets, opt.crop, ""),
+                                             parse_size("--size", opt.size));
     for (const auto& w : scene.warnings) std::cerr << w << "\n";
     scenes::Renderer r(scene);
     const auto t = scenes::scene_theory(scene);
     std::printf("scene      %s (hash %s)\n", path.c_str(), scene.hash.c_str());
-    std::printf("output     %dx%d, %lld frames at %g fps\n", scene.output.width, scene.output.height,
-                static_cast<long long>(scene.output.frames), scene.output.fps);
+    const long long nframes = scene.output.frames;
+    std::printf("output     %dx%d, %lld frame%s at %g fps\n", scene.output.width, scene.output.height,
+                nframes, nframes == 1 ? "" : "s", scene.output.fps);
     bool keyframed = false;
     for (const auto& l : scene.layers) keyframed = keyframed || l.keyframed();
     std::printf("mean       %.6g\nvariance   %.6g (%s%s)\n", t.mean, t.variance,

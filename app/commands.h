@@ -8,7 +8,7 @@
 namespace impulse::app {
 
 struct RenderOptions {
-    std::string scene, output, frames, size, codec;
+    std::string scene, output, frames, size, crop, codec;
     std::vector<std::string> sets;
     std::string seed;  ///< --seed as given ("": the scene's own); checked to be in [0, 2^63 - 1]
     int threads = 0;
@@ -18,7 +18,7 @@ struct RenderOptions {
 };
 
 struct InfoOptions {
-    std::string scene, size;
+    std::string scene, size, crop;
     std::vector<std::string> sets;
 };
 
@@ -26,9 +26,22 @@ int run_render(const RenderOptions& options);
 int run_scenes();
 int run_info(const InfoOptions& options);
 
+/// Where the frame number goes in a sequence pattern: a run of N '#' (N digits, zero-padded; a
+/// single '#' is 4 digits) or printf's "%0Nd" / "%d".
+struct PatternSpot {
+    bool found = false;
+    size_t pos = 0, length = 0;  ///< the pattern's characters in the path
+    int width = 0;               ///< digits, zero-padded (0: as many as the number has)
+};
+/// The one pattern in `path` (found = false if none). Throws ValueError for two patterns or a
+/// width over 19 digits.
+PatternSpot find_pattern(const std::string& path);
 /// Expand a sequence pattern: "####" or "%04d" -> zero-padded frame number. Returns "" if the
-/// path is not a pattern.
+/// path is not a pattern; throws as find_pattern.
 std::string expand_pattern(const std::string& pattern, long long frame);
+/// The smallest frame number whose file exists for `pattern` (a pattern in the file name), or
+/// -1 when there is none.
+long long first_frame_present(const std::string& pattern);
 /// Parse "A-B" or "A" into an inclusive range; throws ValueError.
 std::pair<long long, long long> parse_frame_range(const std::string& text, long long frames);
 

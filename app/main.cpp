@@ -4,6 +4,7 @@
 
 
 #include <CLI/CLI.hpp>
+#include <csignal>
 #include <iostream>
 
 #include "app/analyze.h"
@@ -15,6 +16,11 @@ int main(int argc, char** argv) {
         "impulse: animated, anti-aliased procedural textures from Lewis's shaped Poisson point\n"
         "process (sparse convolution noise) treated as a particle system."};
     app.require_subcommand(1);
+    app.set_version_flag("--version", "impulse " IMPULSE_VERSION);
+    app.footer(
+        "Exit status: 0 done; 1 an error (one line on stderr); 2 a bad command line; 128 + the\n"
+        "signal's number when stopped by SIGINT (130), SIGTERM (143) or SIGHUP (129): the frames\n"
+        "written so far are kept whole and a video is closed so it plays.");
     app.set_help_all_flag("--help-all", "Show help for every command");
 
     impulse::app::RenderOptions ro;
@@ -22,11 +28,17 @@ int main(int argc, char** argv) {
     render->add_option("scene", ro.scene, "Scene file (TOML) or built-in scene name (see `impulse scenes`)")
         ->required();
     render->add_option("-o,--output", ro.output,
-                       "Output: one image (.exr .png .tif), a sequence pattern (frame_####.png or "
-                       "frame_%04d.exr), or a video (.mp4 .mov .mkv .webm)")
-        ->required();
+                       "Output: one image (.exr .png .tif .jpg), a sequence pattern (frame_####.png "
+                       "or frame_%04d.exr; a single # is 4 digits), or a video (.mp4 .mov .mkv "
+                       ".webm). Default: out/SCENE.mp4, or out/SCENE.png for one frame");
     render->add_option("--frames", ro.frames, "Inclusive 0-based frame range A-B, or one frame A (default: all)");
-    render->add_option("--size", ro.size, "Override output.size as WxH, e.g. 1920x1080");
+    render->add_option("--size", ro.size,
+                       "The scene's picture at WxH pixels, e.g. 480x270 for a quick preview: the "
+                       "same view (an orthographic camera's zoom scales with the height; kernels "
+                       "and flows are in texture units)");
+    render->add_option("--crop", ro.crop,
+                       "A WxH window at the scene's own scale (sets output.size; the camera's "
+                       "centre defaults to the window's middle)");
     render->add_option("--seed", ro.seed, "Scene-wide seed mixed into every layer's seed");
     render->add_option("--set", ro.sets, "Override any scene key by dotted path, e.g. layer.0.kernel.radius=8")
         ->allow_extra_args(false);
@@ -35,7 +47,10 @@ int main(int argc, char** argv) {
     render->add_option("--tile", ro.tile, "Tile size in pixels (default 128); output does not depend on it")
         ->check(CLI::Range(8, 4096));
     render->add_option("--codec", ro.codec, "Video codec: auto, h264, prores, ffv1, vp9 (overrides output.codec)");
-    render->add_flag("--resume", ro.resume, "Image sequences: skip frames whose files already exist");
+    render->add_flag("--resume", ro.resume,
+                     "Image sequences: keep the frames already present that check out (they decode "
+                     "whole; size, channels and, in EXR and PNG, scene hash, seed and frame match), "
+                     "render the others, and remove temporaries left by killed runs");
     render->add_flag("-q,--quiet", ro.quiet, "No progress display");
 
     CLI::App* scenes = app.add_subcommand("scenes", "List the built-in scenes");
@@ -44,27 +59,37 @@ int main(int argc, char** argv) {
     CLI::App* info = app.add_subcommand("info", "Print a scene's closed-form statistics and cost estimate");
     info->add_option("scene", io.scene, "Scene file or built-in name")->required();
     info->add_option("--set", io.sets, "Override a scene key");
-    info->add_option("--size", io.size, "Override output.size as WxH");
+    info->add_option("--size", io.size, "The scene at WxH pixels, the same view (as render --size)");
+    info->add_option("--crop", io.crop, "A WxH window at the scene's scale (as render --crop)");
 
     impulse::app::AnalyzeOptions ao;
     CLI::App* analyze = app.add_subcommand(
         "analyze", "Measure an image, sequence or video; with --scene, compare with its theory");
     analyze->add_option("input", ao.input,
-                        "One image, a sequence pattern (frame_####.exr, frame_%04d.png) or a video")
-        ->required();
+                        "One image, a sequence pattern (frame_####.exr, frame_%04d.png; from the "
+                        "first frame present) or a video");
     analyze->add_option("--scene", ao.scene, "Scene file or built-in name to compare with");
     analyze->add_option("--set", ao.sets, "Override a scene key (with --scene)");
-    analyze->add_flag("--json", ao.json, "Print one JSON object instead of text");
+    analyze->add_option("--json", ao.json_file,
+                        "Print one JSON object instead of text; --json FILE writes it to FILE")
+        ->expected(0, 1);
     analyze->add_option("--report", ao.report, "Write a self-contained HTML report (plots as SVG)");
     analyze->add_option("--frames", ao.frames, "Inclusive 0-based frame range A-B, or one frame A");
     analyze->add_option("--max-frames", ao.max_frames, "Analyse at most N frames")
         ->check(CLI::PositiveNumber);
 
+    // Past a file size limit (ulimit -f) a write fails with EFBIG and is reported with the file's
+    // name, instead of the process being killed by SIGXFSZ with nothing said.
+    std::signal(SIGXFSZ, SIG_IGN);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
-        return app.exit(e);
+        // CLI11's own codes (105, 106, ...) are not what scripts test for: 2, as getopt tools.
+        return app.exit(e) == 0 ? 0 : 2;
     }
+    ao.json = analyze->count("--json") > 0;
+    // `analyze --json INPUT`: the one name given is the input, the JSON goes to stdout.
+    if (ao.input.empty() && !ao.json_file.empty()) std::swap(ao.input, ao.json_file);
     try {
         if (*render) return impulse::app::run_render(ro);
         if (*scenes) return impulse::app::run_scenes();

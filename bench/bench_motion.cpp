@@ -478,10 +478,10 @@ Memory measure_memory(const Options& o, const TempDir& tmp) {
         return m;
     }
     const std::string size = std::to_string(kBigWidth) + "x" + std::to_string(kBigHeight);
-    m.rows = {{"startup (info)", {"info", kScene, "--size", size}, "", {}, {}},
-              {"1 frame .exr", {"render", kScene, "--size", size, "--frames", "0", "-q", "-o"},
+    m.rows = {{"startup (info)", {"info", kScene, "--crop", size}, "", {}, {}},
+              {"1 frame .exr", {"render", kScene, "--crop", size, "--frames", "0", "-q", "-o"},
                tmp.file("big.exr"), {}, {}},
-              {"3 frames .mp4", {"render", kScene, "--size", size, "--frames", "0-2", "-q", "-o"},
+              {"3 frames .mp4", {"render", kScene, "--crop", size, "--frames", "0-2", "-q", "-o"},
                tmp.file("big.mp4"), {}, {}}};
     m.own_anon_mib = own_anon_mib();
     for (int r = 0; r < o.rss_reps; ++r)

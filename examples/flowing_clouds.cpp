@@ -3,8 +3,10 @@
 //
 //   build/examples/flowing_clouds out/clouds_from_code.mp4
 //
-// The same scene as a file would be scenes/clouds.toml; this shows the C++ API: fill the
-// configuration structs, call prepare_layer, render frames into float buffers, shade, encode.
+// Not one of the built-in scenes: a one-layer relative of scenes/drift.toml (flowing clouds
+// seen straight up, in wind and curl noise; drift adds a finer second layer, a sky gradient and
+// 1080p). It shows the C++ API: fill the configuration structs, call prepare_layer, render
+// frames into float buffers, shade, encode.
 #include <cstdio>
 #include <exception>
 #include <string>

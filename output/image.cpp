@@ -2,11 +2,15 @@
 // Image output and input through OpenImageIO; every write goes to a temporary file that is
 // renamed into place (design.md §4: no half-written frames).
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <sstream>
 #include <system_error>
@@ -33,6 +37,30 @@ std::string temp_name(const std::string& path) {
         .string();
 }
 
+/// A library message on one line (libjpeg's and libpng's can span several).
+std::string one_line(std::string text) {
+    std::replace(text.begin(), text.end(), '\n', ' ');
+    while (!text.empty() && text.back() == ' ') text.pop_back();
+    return text.empty() ? "unknown error" : text;
+}
+
+/// Sends stderr to /dev/null while alive (a library that prints on its own).
+class QuietStderr {
+public:
+    QuietStderr() : m_saved(::dup(2)) {
+        const int null = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+        if (null >= 0) ::dup2(null, 2), ::close(null);
+    }
+    ~QuietStderr() {
+        if (m_saved >= 0) ::dup2(m_saved, 2), ::close(m_saved);
+    }
+    QuietStderr(const QuietStderr&) = delete;
+    QuietStderr& operator=(const QuietStderr&) = delete;
+
+private:
+    int m_saved;
+};
+
 void check_directory(const std::string& path) {
     const fs::path dir = fs::path(path).parent_path();
     std::error_code ec;
@@ -40,18 +68,50 @@ void check_directory(const std::string& path) {
         throw IoError(path + ": cannot write: directory " + dir.string() + " does not exist");
 }
 
+/// Writes `bytes` to a new file `path` with every write and the close checked: a full disk or
+/// a file size limit is an error here, never a short file. Returns "" or the system's message.
+std::string write_bytes(const std::string& path, const std::vector<unsigned char>& bytes) {
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+    if (fd < 0) return std::strerror(errno);
+    size_t done = 0;
+    while (done < bytes.size()) {
+        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+        if (n < 0 && errno == EINTR) continue;
+        if (n <= 0) {
+            const int e = n < 0 ? errno : ENOSPC;
+            ::close(fd);
+            return std::strerror(e);
+        }
+        done += size_t(n);
+    }
+    // close reports deferred errors (NFS, quotas).
+    if (::close(fd) != 0) return std::strerror(errno);
+    return "";
+}
+
+/// The sample type asked of OIIO for an extension: float EXR, 16-bit TIFF (and others with
+/// `bits16`), else 8-bit. JPEG stores 8 bits whatever it is given.
+OIIO::TypeDesc sample_type(const std::string& ext, bool bits16) {
+    if (ext == ".exr") return OIIO::TypeDesc::FLOAT;
+    if (ext == ".tif" || ext == ".tiff" || bits16) return OIIO::TypeDesc::UINT16;
+    return OIIO::TypeDesc::UINT8;
+}
+
+OIIO::TypeDesc stored_type(const std::string& ext, bool bits16) {
+    return ext == ".jpg" || ext == ".jpeg" ? OIIO::TypeDesc::UINT8 : sample_type(ext, bits16);
+}
+
 void write_pixels(const std::string& path, int width, int height, int channels,
                   const float* pixels, const Metadata& metadata, bool bits16) {
     check_directory(path);
     const std::string ext = lower_extension(path);
-    OIIO::TypeDesc type = OIIO::TypeDesc::UINT8;
-    if (ext == ".exr")
-        type = OIIO::TypeDesc::FLOAT;
-    else if (ext == ".tif" || ext == ".tiff" || bits16)
-        type = OIIO::TypeDesc::UINT16;
-    const std::string tmp = temp_name(path);
-    auto out = OIIO::ImageOutput::create(tmp);
-    if (!out) throw IoError(path + ": cannot write: " + OIIO::geterror());
+    const OIIO::TypeDesc type = sample_type(ext, bits16);
+    // The file is encoded in memory and written here: OIIO's PNG, TIFF and JPEG writers do not
+    // all report a failed write (a full disk gave a truncated PNG and exit 0), and a library's
+    // own message on stderr names no file.
+    OIIO::Filesystem::IOVecOutput memory;
+    auto out = OIIO::ImageOutput::create(path, &memory);
+    if (!out) throw IoError(path + ": cannot write: " + one_line(OIIO::geterror()));
     OIIO::ImageSpec spec(width, height, channels, type);
     if (channels == 1) spec.channelnames = {"Y"};
     for (const auto& [k, v] : metadata) spec.attribute("impulse:" + k, v);
@@ -60,18 +120,18 @@ void write_pixels(const std::string& path, int width, int height, int channels,
     // OIIO stamps files with the wall-clock time unless told otherwise; a frame must be a pure
     // function of the scene (design.md §4), so the stamp is a fixed value.
     spec.attribute("DateTime", "1970:01:01 00:00:00");
-    if (!out->open(tmp, spec)) {
-        std::string err = out->geterror();
-        throw IoError(path + ": cannot write: " + (err.empty() ? OIIO::geterror() : err));
-    }
     // Quantisation to integer formats is OIIO's: clamp to [0, 1], scale, round to nearest.
-    const bool ok = out->write_image(OIIO::TypeDesc::FLOAT, pixels);
+    const bool ok = out->open(path, spec) && out->write_image(OIIO::TypeDesc::FLOAT, pixels);
     std::string err = ok ? std::string() : out->geterror();
-    if (!out->close() && ok) err = out->geterror();
-    if (!ok || !err.empty()) {
+    if (!out->close() && err.empty()) err = out->geterror();
+    if (!ok || !err.empty() || memory.buffer().empty())
+        throw IoError(path + ": cannot encode: " + one_line(err.empty() ? OIIO::geterror() : err));
+    // A temporary beside the target, renamed into place: never a half-written frame.
+    const std::string tmp = temp_name(path);
+    if (const std::string e = write_bytes(tmp, memory.buffer()); !e.empty()) {
         std::error_code ec;
         fs::remove(tmp, ec);
-        throw IoError(path + ": write failed: " + err);
+        throw IoError(path + ": write failed: " + e);
     }
     std::error_code ec;
     fs::rename(tmp, path, ec);
@@ -134,6 +194,45 @@ std::string image_size_problem(int width, int height, int depth, int channels) {
     if (limit <= 0 || mib <= limit) return "";
     s << ", " << mib << " MiB as floats: over OpenImageIO's limits:imagesize_MB = " << limit;
     return s.str();
+}
+
+bool keeps_metadata(const std::string& path) {
+    const std::string e = lower_extension(path);
+    return e == ".exr" || e == ".png";
+}
+
+std::string image_mismatch(const std::string& path, int width, int height, int channels,
+                           bool bits16, const Metadata& metadata) {
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) return "unreadable: " + one_line(OIIO::geterror());
+    const OIIO::ImageSpec& spec = in->spec();
+    std::ostringstream why;
+    if (spec.width != width || spec.height != height)
+        why << spec.width << "x" << spec.height << " pixels, expected " << width << "x" << height;
+    else if (spec.nchannels != channels)
+        why << spec.nchannels << " channels, expected " << channels;
+    else if (const OIIO::TypeDesc t = stored_type(lower_extension(path), bits16); spec.format != t)
+        why << spec.format << " samples, expected " << t;
+    if (!why.str().empty()) return why.str();
+    if (keeps_metadata(path))
+        for (const auto& [k, v] : metadata) {
+            const std::string have = spec.get_string_attribute("impulse:" + k, "(none)");
+            if (have != v) return "impulse:" + k + " is " + have + ", expected " + v;
+        }
+    // Every pixel decoded: a file cut short by a full disk or a killed copy fails here. libpng
+    // prints its own line on stderr before OIIO reports the error: silenced, the reason is
+    // returned.
+    std::vector<float> px(size_t(width) * height * channels);
+    bool ok = false;
+    {
+        const QuietStderr quiet;
+        ok = in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, px.data());
+    }
+    if (!ok) {
+        const std::string err = in->geterror();
+        return "truncated or unreadable: " + one_line(err.substr(0, err.find('\n')));
+    }
+    return "";
 }
 
 Frame read_image(const std::string& path) {

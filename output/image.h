@@ -46,6 +46,17 @@ std::string nonfinite_pixel(const float* px, size_t count, int width, int channe
 /// raises or lowers it); else what is wrong. Every image reader checks it before allocating.
 std::string image_size_problem(int width, int height, int depth, int channels);
 
+/// Why the image file `path` is not the frame write_image (or write_rgb_image) would write with
+/// these arguments, or "" when it is, for --resume: it must decode completely (a truncated file
+/// does not), have `width` x `height` pixels, `channels` channels and the sample type of the
+/// extension (and `bits16`), and carry each of `metadata`'s keys as impulse:KEY with the same
+/// value in the formats that store them (EXR, PNG; TIFF and JPEG keep no metadata here). The
+/// reason is one line ("truncated or unreadable: ...", "impulse:seed is 7, expected 8").
+std::string image_mismatch(const std::string& path, int width, int height, int channels,
+                           bool bits16, const Metadata& metadata);
+/// True when files of this extension keep write_image's metadata (.exr, .png).
+bool keeps_metadata(const std::string& path);
+
 /// True for extensions OIIO writes here (.exr .png .tif .tiff .jpg .jpeg).
 bool is_image_path(const std::string& path);
 

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <sstream>
 
 #include "numeric/cpu.h"
 #include "render/eval_detail.h"
@@ -62,12 +63,35 @@ LoopKernel loop_kernel(const kernels::Kernel& k, const View& view) {
     return lk;
 }
 
-Prepared prepare(const kernels::Kernel& k, const sim::Impulses& imp, const View& view) {
+/// Throws ValueError naming the first impulse of `imp` that is not finite in `view`'s pixel
+/// coordinates (a NaN breaks the tile binning: an out-of-range cast to int).
+[[noreturn]] void refuse_nonfinite(const Prepared& p, const sim::Impulses& imp, const char* api) {
+    for (size_t i = 0; i < p.px.size(); ++i) {
+        std::ostringstream s;
+        s << api << ": impulse " << i << ": ";
+        if (!std::isfinite(p.px[i]))
+            s << "x = " << imp.x[i];
+        else if (!std::isfinite(p.py[i]))
+            s << "y = " << imp.y[i];
+        else if (!std::isfinite(p.c[i]) || !std::isfinite(imp.theta[i]))
+            s << "theta = " << imp.theta[i];
+        else if (!std::isfinite(p.w[i]))
+            s << "weight = " << imp.weight[i];
+        else
+            continue;
+        throw ValueError(s.str() + ": expected finite impulse coordinates, orientations and weights");
+    }
+    throw ValueError(std::string(api) + ": expected finite impulses");
+}
+
+Prepared prepare(const kernels::Kernel& k, const sim::Impulses& imp, const View& view,
+                 const char* api) {
     Prepared p;
     const size_t n = imp.size();
     p.px.resize(n), p.py.resize(n), p.w.resize(n), p.c.resize(n), p.s.resize(n);
     const double inv = 1.0 / view.scale;
     const double o = k.params().orientation;
+    bool finite = true;
     for (size_t i = 0; i < n; ++i) {
         // Pixel coordinates with pixel i's centre at i; rounded to float once, here, so every
         // tile sees the same values.
@@ -77,7 +101,11 @@ Prepared prepare(const kernels::Kernel& k, const sim::Impulses& imp, const View&
         const double t = o + static_cast<double>(imp.theta[i]);
         p.c[i] = static_cast<float>(std::cos(t));
         p.s[i] = static_cast<float>(std::sin(t));
+        // A NaN or an infinity anywhere makes the sum NaN: one test per impulse at the API
+        // boundary, a branch that is never taken on good input.
+        finite &= std::isfinite(double(p.px[i]) + double(p.py[i]) + double(p.w[i]) + double(p.c[i]));
     }
+    if (!finite) refuse_nonfinite(p, imp, api);
     return p;
 }
 
@@ -105,7 +133,7 @@ void accumulate(const kernels::Kernel& kernel, const sim::Impulses& impulses, co
                 Frame& out, const EvalOptions& options) {
     if (out.width != view.width || out.height != view.height) out.resize(view.width, view.height);
     const LoopKernel lk = loop_kernel(kernel, view);
-    const Prepared prep = prepare(kernel, impulses, view);
+    const Prepared prep = prepare(kernel, impulses, view, "render::accumulate");
     const int T = std::max(8, options.tile_size);
     const int ntx = (view.width + T - 1) / T, nty = (view.height + T - 1) / T;
     const float r = lk.radius_px;
@@ -164,7 +192,7 @@ void accumulate_region(const kernels::Kernel& kernel, const sim::Impulses& impul
                        const View& view, int x0, int y0, int w, int h, float* tile,
                        const EvalOptions& options) {
     const LoopKernel lk = loop_kernel(kernel, view);
-    const Prepared prep = prepare(kernel, impulses, view);
+    const Prepared prep = prepare(kernel, impulses, view, "render::accumulate_region");
     std::vector<uint32_t> idx;
     select(prep, lk.radius_px, x0, y0, x0 + w, y0 + h, idx);
     const int stride = w + 2 * detail::kPad;

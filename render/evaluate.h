@@ -34,7 +34,9 @@ public:
 /// Adds sum_k w_k h_{theta_k}(x - x_k) to `out` (sized to the view; not cleared) for every
 /// pixel centre. Deterministic: each pixel sums its impulses in their canonical order, so the
 /// bits do not depend on the thread count or the tile size. Uses AVX2 where the CPU has it,
-/// with the same arithmetic (no FMA contraction) as the baseline path.
+/// with the same arithmetic (no FMA contraction) as the baseline path. Throws ValueError naming
+/// the first impulse whose position (in pixels, as a float), orientation or weight is not
+/// finite; accumulate_region too.
 void accumulate(const kernels::Kernel& kernel, const sim::Impulses& impulses, const View& view,
                 Frame& out, const EvalOptions& options = {});
 

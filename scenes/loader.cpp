@@ -630,7 +630,8 @@ kernels::KernelParams read_kernel(std::optional<Reader> r, Reader& layer, const 
     return k;
 }
 
-Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
+Scene read_scene(const toml::table& root, Source& src, const fs::path& base, OutputSize size,
+                 OutputSize* own_size) {
     Scene s;
     Reader top(root, "", src);
     const uint64_t global_seed = static_cast<uint64_t>(top.integer("seed", 0, 0, INT64_MAX));
@@ -668,11 +669,19 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
         if (s.output.bits != 8 && s.output.bits != 16) o->fail(o->node("bits"), "bits", "expected 8 or 16");
         o->finish();
     }
-    s.camera = read_camera(top.table("camera"), s.output.width, s.output.height);
+    // Defaults that depend on the frame size (centres) come from the scene's own size; --size
+    // then scales the orthographic zoom so the same texture region fills the new size.
+    const int scene_w = s.output.width, scene_h = s.output.height;
+    if (size.width > 0 && size.height > 0)
+        s.output.width = size.width, s.output.height = size.height;
+    s.camera = read_camera(top.table("camera"), scene_w, scene_h);
+    if (s.output.height != scene_h && s.camera.type == CameraConfig::Type::Orthographic)
+        for (auto& key : s.camera.zoom.keys) key.second *= s.output.height / double(scene_h);
+    if (own_size) *own_size = {scene_w, scene_h};
     auto shading = top.table("shading");
     if (shading)  // read first so read_shading knows the key
-        s.transform = detail::read_transform(shading->table("transform"), s.camera,
-                                             s.output.width, s.output.height, global_seed);
+        s.transform = detail::read_transform(shading->table("transform"), s.camera, scene_w,
+                                             scene_h, global_seed);
     s.shading = detail::read_shading(shading, base, s.shading_keys);
     if (auto l = top.table("limits")) {
         s.limits.max_impulses = l->number("max_impulses", s.limits.max_impulses, kPositive, "a count > 0");
@@ -683,7 +692,10 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base) {
     }
 
     auto layers = top.tables("layer");
-    if (layers.empty()) top.fail(nullptr, "layer", "a scene needs at least one [[layer]]");
+    if (layers.empty()) {
+        top.finish();  // an unknown key (a misspelt [[layer]]) explains more than the absence
+        top.fail(nullptr, "layer", "a scene needs at least one [[layer]]");
+    }
     detail::CompositionReader compose;  // keys naming other layers, resolved after the loop
     for (size_t i = 0; i < layers.size(); ++i) {
         Reader& r = layers[i];
@@ -811,15 +823,53 @@ double LayerConfig::layer_time(double t) const {
 namespace {
 
 /// The text of a file, or nullopt with the system's reason in `error`.
+/// Scene files and their includes are at most this long: a scene is a page of TOML, and a
+/// larger file is a mistake (an include of a data file or a device).
+constexpr std::uintmax_t kMaxSceneBytes = 1 << 20;
+
+/// What a file that is not regular is, for messages.
+const char* file_kind(fs::file_type t) {
+    switch (t) {
+        case fs::file_type::directory: return "a directory";
+        case fs::file_type::fifo: return "a FIFO";
+        case fs::file_type::character: return "a character device";
+        case fs::file_type::block: return "a block device";
+        case fs::file_type::socket: return "a socket";
+        default: return "not a regular file";
+    }
+}
+
+/// The text of a scene file, or nullopt with `error` set. Only regular files of at most
+/// kMaxSceneBytes: the type is checked before opening, so a FIFO cannot block and /dev/zero
+/// cannot fill memory.
 std::optional<std::string> read_text(const std::string& path, std::string& error) {
+    std::error_code ec;
+    const fs::file_status st = fs::status(path, ec);
+    if (ec) {
+        error = ec.message();
+        return std::nullopt;
+    }
+    if (st.type() != fs::file_type::regular) {
+        error = std::string(file_kind(st.type())) + ": expected a regular file";
+        return std::nullopt;
+    }
+    if (const auto size = fs::file_size(path, ec); !ec && size > kMaxSceneBytes) {
+        error = std::to_string(size) + " bytes: a scene file is at most 1 MiB";
+        return std::nullopt;
+    }
     std::ifstream in(path, std::ios::binary);
     if (!in) {
         error = std::strerror(errno);
         return std::nullopt;
     }
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return ss.str();
+    std::string text(kMaxSceneBytes + 1, '\0');  // a file grown since the check is cut here
+    in.read(text.data(), std::streamsize(text.size()));
+    text.resize(size_t(in.gcount()));
+    if (text.size() > kMaxSceneBytes) {
+        error = "more than 1 MiB: a scene file is at most 1 MiB";
+        return std::nullopt;
+    }
+    return text;
 }
 
 /// A path made absolute and normal, for comparing files (no exception for odd names).
@@ -893,11 +943,14 @@ void resolve_includes(toml::table& root, const std::string& name,
                 r.fail(f, "include", "include cycle: " + cycle + path.string());
             }
         std::string error;
+        std::error_code ec;
         const auto text = read_text(path.string(), error);
         if (!text)
             r.fail(f, "include",
                    "cannot open: " + error +
-                       (fs::path(rel).is_absolute() ? "" : " (relative to this file's directory)"));
+                       (fs::path(rel).is_absolute() || fs::exists(path, ec)
+                            ? ""
+                            : " (relative to this file's directory)"));
         texts += "\n--include " + path.string() + "\n" + *text;
         included.push_back(parse_text(*text, path.string()));
         chain.emplace_back(canonical, path.string());
@@ -911,7 +964,7 @@ void resolve_includes(toml::table& root, const std::string& name,
 }  // namespace
 
 Scene load_scene_string(std::string_view text, const std::string& name,
-                        const std::vector<std::string>& overrides) {
+                        const std::vector<std::string>& overrides, OutputSize size) {
     Source src;
     src.file = name;
     std::vector<std::string> warnings;
@@ -925,18 +978,23 @@ Scene load_scene_string(std::string_view text, const std::string& name,
         all += "\n--set " + o;
     }
     fs::path base = fs::path(name).parent_path();
-    Scene s = read_scene(root, src, base);
+    OutputSize own;
+    Scene s = read_scene(root, src, base, size, &own);
+    // Another resolution is another picture: the hash says so (the scene's own size does not).
+    if (s.output.width != own.width || s.output.height != own.height)
+        all += "\n--size " + std::to_string(s.output.width) + "x" + std::to_string(s.output.height);
     s.path = name;
     s.hash = fnv1a_hex(all);
     s.warnings = std::move(warnings);
     return s;
 }
 
-Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides,
+                 OutputSize size) {
     std::string error;
     const auto text = read_text(path, error);
     if (!text) throw IoError(path + ": cannot open scene file: " + error);
-    return load_scene_string(*text, path, overrides);
+    return load_scene_string(*text, path, overrides, size);
 }
 
 }  // namespace impulse::scenes

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Rendering a scene: one simulator and kernel per layer, layers summed into one float frame.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -10,6 +11,7 @@
 #include "scenes/camera_detail.h"
 #include "scenes/compose_detail.h"
 #include "scenes/marginal.h"
+#include "scenes/reader.h"
 #include "scenes/scenes.h"
 #include "numeric/errors.h"
 
@@ -603,10 +605,16 @@ std::string resolve_scene(const std::string& arg) {
     if (fs::is_regular_file(arg, ec)) return arg;
     const fs::path builtin = fs::path(builtin_scene_dir()) / (arg + ".toml");
     if (arg.find('/') == std::string::npos && fs::is_regular_file(builtin, ec)) return builtin.string();
-    std::string names;
+    std::vector<std::string> stems;
     for (const auto& e : fs::directory_iterator(builtin_scene_dir(), ec))
-        if (e.path().extension() == ".toml") names += (names.empty() ? "" : ", ") + e.path().stem().string();
-    throw IoError(arg + ": no such scene file or built-in scene (built-in: " + names + ")");
+        if (e.path().extension() == ".toml") stems.push_back(e.path().stem().string());
+    std::sort(stems.begin(), stems.end());
+    std::string names;
+    for (const auto& n : stems) names += (names.empty() ? "" : ", ") + n;
+    const auto near =
+        arg.find('/') == std::string::npos ? detail::nearest(arg, stems) : std::nullopt;
+    throw IoError(arg + ": no such scene file or built-in scene" +
+                  (near ? " (did you mean \"" + *near + "\"?)" : "") + " (built-in: " + names + ")");
 }
 
 }  // namespace impulse::scenes

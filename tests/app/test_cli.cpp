@@ -65,9 +65,9 @@ type = "cosine"
 radius = 6.0
 )";
 
-const std::vector<std::string> kRenderOptions = {"--output", "--frames", "--size",    "--seed",
-                                                 "--set",    "--threads", "--tile",   "--codec",
-                                                 "--resume", "--quiet",   "--help"};
+const std::vector<std::string> kRenderOptions = {"--output", "--frames",  "--size", "--crop",
+                                                 "--seed",   "--set",     "--threads", "--tile",
+                                                 "--codec",  "--resume",  "--quiet", "--help"};
 
 }  // namespace
 
@@ -80,11 +80,12 @@ TEST_CASE("help lists the commands and every render option", "[cli]") {
     CHECK(render.status == 0);
     for (const auto& opt : kRenderOptions) CHECK_THAT(render.out, Contains(opt));
     CHECK_THAT(render.out, Contains("scene"));
-    // No subcommand, or a missing required option: a usage error, non-zero.
+    // No subcommand, or a missing required argument: a usage error, non-zero (-o has a
+    // default: out/SCENE.mp4, tests/app/test_newcomer.cpp).
     CHECK(run(dir, "").status != 0);
-    const Result no_out = run(dir, "render " + quote(dir / "x.toml"));
-    CHECK(no_out.status != 0);
-    CHECK_THAT(no_out.err, Contains("--output"));
+    const Result no_scene = run(dir, "render -q");
+    CHECK(no_scene.status == 2);
+    CHECK_THAT(no_scene.err, Contains("scene"));
 }
 
 TEST_CASE("a bad scene exits non-zero with one line on stderr and writes nothing", "[cli][errors]") {

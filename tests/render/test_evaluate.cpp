@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <memory>
 #include <numbers>
 #include <string>
@@ -422,4 +423,34 @@ TEST_CASE("the tiled evaluator agrees with the naive reference for a grid kernel
     // elliptical Gabor, so only the bilinear ramp just beyond the ellipse's tips (which reach
     // R) differs — but in ~1700 pixels, by up to 0.6 % of an amplitude.
     check_against_naive(make_case(5));
+}
+
+TEST_CASE("accumulate refuses non-finite impulses with the impulse and value named",
+          "[render][evaluate][errors]") {
+    const Case c = gabor_case();
+    const Kernel kernel(c.kernel);
+    const double nan = std::numeric_limits<double>::quiet_NaN();
+    const double inf = std::numeric_limits<double>::infinity();
+    struct Bad {
+        const char* what;
+        double x, y, theta, weight;
+        const char* message;
+    };
+    for (const Bad& b : {Bad{"x NaN", nan, 10.0, 0.0, 1.0, "impulse 1: x = nan"},
+                         Bad{"y inf", 10.0, -inf, 0.0, 1.0, "impulse 1: y = -inf"},
+                         Bad{"theta NaN", 10.0, 10.0, nan, 1.0, "impulse 1: theta = nan"},
+                         Bad{"theta inf", 10.0, 10.0, inf, 1.0, "impulse 1: theta = inf"},
+                         Bad{"weight NaN", 10.0, 10.0, 0.0, nan, "impulse 1: weight = nan"},
+                         Bad{"x beyond float", 1e300, 10.0, 0.0, 1.0, "impulse 1: x = 1e+300"}}) {
+        INFO(b.what);
+        impulse::sim::Impulses imp;
+        imp.x = {20.0, b.x}, imp.y = {20.0, b.y};
+        imp.theta = {0.0f, static_cast<float>(b.theta)}, imp.weight = {1.0f, static_cast<float>(b.weight)};
+        Frame out;
+        CHECK_THROWS_MATCHES(impulse::render::accumulate(kernel, imp, c.view, out),
+                             impulse::ValueError, Catch::Message(std::string("render::accumulate: ") + b.message + ": expected finite impulse coordinates, orientations and weights"));
+        float tile[16] = {};
+        CHECK_THROWS_AS(impulse::render::accumulate_region(kernel, imp, c.view, 0, 0, 4, 4, tile),
+                        impulse::ValueError);
+    }
 }

@@ -2,7 +2,13 @@
 // `include`: included files are the base, the including file's keys override them (sections
 // merge key by key, everything else is replaced whole), paths resolve from the file they are
 // written in, errors name that file, cycles and missing files are refused, --set comes last.
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
+#include <chrono>
+#include <future>
 
 #include "output/output.h"
 #include "render/render.h"
@@ -154,4 +160,35 @@ TEST_CASE("errors in included files name them; cycles and missing files are refu
     CHECK(error_of(dir / "missing.toml") ==
           dir / "missing.toml:1:27: include = \"nowhere.toml\": cannot open: No such file or "
                 "directory (relative to this file's directory)");
+}
+
+TEST_CASE("include takes only regular files under 1 MiB: a FIFO, a device, a directory and a "
+          "large file are refused with the including line", "[scenes][include][errors]") {
+    test::TempDir dir("include-kinds");
+    const std::string fifo = dir / "pipe.toml";
+    REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+    test::write_file(dir / "big.toml", "# " + std::string(1 << 20, 'x') + "\n");
+    fs::create_directories(dir.path() / "folder");
+    struct Case {
+        std::string include, expected;
+    };
+    for (const Case& c : {Case{"pipe.toml", "a FIFO: expected a regular file"},
+                          Case{"/dev/zero", "a character device: expected a regular file"},
+                          Case{"folder", "a directory: expected a regular file"},
+                          Case{"big.toml", "1048579 bytes: a scene file is at most 1 MiB"}}) {
+        INFO(c.include);
+        test::write_file(dir / "scene.toml", "# a scene\ninclude = \"" + c.include + "\"\n[[layer]]\n");
+        // A FIFO with no writer blocks its reader: the load runs aside, and is unblocked by
+        // opening the FIFO's write end if it has not returned within 20 s.
+        auto load = std::async(std::launch::async, [&] { return error_of(dir / "scene.toml"); });
+        if (load.wait_for(std::chrono::seconds(20)) != std::future_status::ready) {
+            FAIL_CHECK("the load blocked on " << c.include);
+            const int fd = ::open(fifo.c_str(), O_WRONLY | O_NONBLOCK);
+            if (fd >= 0) ::close(fd);
+        }
+        CHECK(load.get() == dir / "scene.toml" + ":2:11: include = \"" + c.include +
+                                "\": cannot open: " + c.expected);
+    }
+    // The scene file itself too.
+    CHECK(error_of(dir / "folder") == dir / "folder" + ": cannot open scene file: a directory: expected a regular file");
 }
