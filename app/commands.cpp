@@ -196,13 +196,13 @@ bool colour_shading(const scenes::Scene& s) {
 }
 
 /// Why the file `target` present for --resume is not frame `f` of `sc` as this run would
-/// write it ("" when it is): render::image_mismatch with the run's size, channels and metadata.
+/// write it ("" when it is): output::image_mismatch with the run's size, channels and metadata.
 std::string present_frame_mismatch(const std::string& target, const scenes::Scene& sc, long long f) {
     const bool exr = fs::path(target).extension() == ".exr";
     const int channels = !exr && colour_shading(sc) ? 3 : 1;
     const output::Metadata expected = {
         {"seed", std::to_string(sc.seed)}, {"frame", std::to_string(f)}, {"scene_hash", sc.hash}};
-    return render::image_mismatch(target, sc.output.width, sc.output.height, channels,
+    return output::image_mismatch(target, sc.output.width, sc.output.height, channels,
                                   sc.output.bits == 16, expected);
 }
 
@@ -341,7 +341,7 @@ int run_render(const RenderOptions& opt) {
 
     if (sequence && opt.resume) {
         remove_stale_temporaries(output);
-        if (!render::keeps_metadata(output))
+        if (!output::keeps_metadata(output))
             std::cerr << output << ": --resume: this format keeps no metadata; a present frame is "
                          "kept if it decodes whole with the run's size, channels and sample type "
                          "(EXR and PNG also check seed, frame and scene hash)\n";
