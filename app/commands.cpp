@@ -59,17 +59,6 @@ private:
     std::chrono::steady_clock::time_point m_start;
 };
 
-/// A whole number of `option`'s value `text` in [0, 2^63 - 1]; out of range is an error, not
-/// clamped (strtoll and CLI11 clamp).
-long long whole_number(const std::string& option, const std::string& text, const std::string& digits,
-                       const std::string& expected) {
-    long long v = 0;
-    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), v);
-    if (ec != std::errc() || end != digits.data() + digits.size() || v < 0)
-        throw ValueError(option + " " + text + ": expected " + expected);
-    return v;
-}
-
 std::vector<std::string> overrides_for(const std::vector<std::string>& sets, const std::string& size,
                                        const std::string& seed) {
     std::vector<std::string> o = sets;
@@ -102,6 +91,15 @@ bool colour_shading(const scenes::Scene& s) {
 }
 
 }  // namespace
+
+long long whole_number(const std::string& option, const std::string& text, const std::string& digits,
+                       const std::string& expected) {
+    long long v = 0;
+    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), v);
+    if (ec != std::errc() || end != digits.data() + digits.size() || v < 0)
+        throw ValueError(option + " " + text + ": expected " + expected);
+    return v;
+}
 
 std::string expand_pattern(const std::string& pattern, long long frame) {
     static const std::regex hashes("#+");

@@ -8,6 +8,7 @@
 
 #include "app/analyze.h"
 #include "app/commands.h"
+#include "app/synth_gss.h"
 #include "util/errors.h"
 
 int main(int argc, char** argv) {
@@ -60,6 +61,11 @@ int main(int argc, char** argv) {
     analyze->add_option("--max-frames", ao.max_frames, "Analyse at most N frames")
         ->check(CLI::PositiveNumber);
 
+    CLI::App* synth = app.add_subcommand(
+        "synth", "Synthesize a field with another algorithm than the point process");
+    synth->require_subcommand(1);
+    impulse::app::add_synth_gss(*synth);
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -70,6 +76,7 @@ int main(int argc, char** argv) {
         if (*scenes) return impulse::app::run_scenes();
         if (*info) return impulse::app::run_info(io);
         if (*analyze) return impulse::app::run_analyze(ao);
+        if (*synth) return 0;  // its subcommands ran in their callbacks
     } catch (const impulse::Error& e) {
         std::cerr << "error: " << e.what() << "\n";
         return 1;
