@@ -26,6 +26,7 @@ namespace fs = std::filesystem;
 
 struct GssCli {
     std::string acf, size = "257", output, refine, json, seed = "0", singular = "reduce";
+    std::string displacement = "correlated";
     std::string origin;
     std::vector<std::string> params;
     int dim = 2, factor = 0, neighbors = 8, top_spacing = 0;
@@ -163,6 +164,10 @@ synth::GssOptions options_of(const GssCli& c, uint64_t seed) {
     o.debias = c.debias;
     o.top_spacing = c.top_spacing;
     o.seed = seed;
+    if (c.displacement != "correlated" && c.displacement != "independent")
+        throw ValueError("--displacement " + c.displacement +
+                         ": expected correlated or independent");
+    o.correlated = c.displacement == "correlated";
     if (c.singular == "pinv")
         o.singular = synth::Singular::PseudoInverse;
     else if (c.singular != "reduce")
@@ -295,6 +300,10 @@ void add_synth_gss(CLI::App& synth) {
                   "2-D diagonal-bias remedy: outer-coefficient ratio (0: off)");
     g->add_option("--top-spacing", c->top_spacing,
                   "Spacing of the coarsest level (power of two; 0: automatic)");
+    g->add_option(
+        "--displacement", c->displacement,
+        "correlated (default: the new nodes' covariance made R again) or independent (the "
+        "paper's)");
     g->add_flag("-q,--quiet", c->quiet, "Print nothing on success");
     g->callback([c, g] {
         try {

@@ -70,7 +70,7 @@ std::string sizes_message(int64_t w, int64_t h, int dims, bool periodic) {
 /// x_new = mean + sum_k a_k (x_k - mean) + sqrt(variance) u, u ~ N(0, 1) keyed by the node.
 class LevelStep {
 public:
-    LevelStep(const Acf& acf, const Plan& plan, int level, const GssOptions& o, Boundary b,
+    LevelStep(const Acf* acf, const Plan& plan, int level, const GssOptions& o, Boundary b,
               double mean)
         : m_acf(acf),
           m_plan(plan),
@@ -83,6 +83,7 @@ public:
     }
 
     void run(const Grid& g, Grid& f) {
+        if (m_lv.filter.radius >= 0) keyed_normals(f);
         tbb::parallel_for(0, f.h, [&](int row) {
             const int64_t j = f.j0 + row;
             for (int64_t i = f.i0; i < f.i0 + f.w; ++i) {
@@ -106,10 +107,56 @@ private:
     }
 
     double displacement(int64_t i, int64_t j) const {
-        const double s = m_sigma[size_t(class_of(m_plan.dims, i, j))];
+        const int k = class_of(m_plan.dims, i, j);
+        if (m_lv.filter.radius >= 0) return correlated(k, i >> 1, j >> 1);
+        const double s = m_sigma[size_t(k)];
         if (s == 0) return 0;
         const int64_t h = m_lv.spacing;
         return s * node_normal(m_o.seed, m_level, i * h, j * h);
+    }
+
+    /// The normal of every new node within the filter's reach of the fine range, per class and
+    /// cell (the same keys as the independent displacements).
+    void keyed_normals(const Grid& f) {
+        const int J = m_lv.filter.radius, d1 = m_plan.dims == 1;
+        m_cells.resize((f.i0 >> 1) - J, d1 ? 0 : (f.j0 >> 1) - J,
+                       int(((f.i0 + f.w - 1) >> 1) - (f.i0 >> 1)) + 1 + 2 * J,
+                       d1 ? 1 : int(((f.j0 + f.h - 1) >> 1) - (f.j0 >> 1)) + 1 + 2 * J);
+        const size_t K = m_lv.classes.size();
+        m_normals.assign(K, std::vector<double>(m_cells.v.size()));
+        const int64_t h = m_lv.spacing;
+        tbb::parallel_for(0, m_cells.h, [&](int row) {
+            for (int col = 0; col < m_cells.w; ++col) {
+                int64_t cx = m_cells.i0 + col, cy = m_cells.j0 + row;
+                if (m_b.kind == Boundary::Periodic) {
+                    cx = ((cx % m_b.mx) + m_b.mx) % m_b.mx;
+                    cy = d1 ? 0 : ((cy % m_b.my) + m_b.my) % m_b.my;
+                }
+                for (size_t k = 0; k < K; ++k) {
+                    const auto& c = m_lv.classes[k];
+                    m_normals[k][size_t(row) * m_cells.w + size_t(col)] =
+                        node_normal(m_o.seed, m_level, (2 * cx + c.tx2) * h, (2 * cy + c.ty2) * h);
+                }
+            }
+        });
+    }
+
+    /// u_k(p) = sum_k' sum_j beta_kk'(j) w_k'(p + j) (subdivision_displace.cpp).
+    double correlated(int k, int64_t tx, int64_t ty) const {
+        const int J = m_lv.filter.radius, side = 2 * J + 1, d1 = m_plan.dims == 1;
+        const size_t K = m_lv.classes.size(), box = d1 ? size_t(side) : size_t(side) * side;
+        double u = 0;
+        for (size_t k2 = 0; k2 < K; ++k2) {
+            const double* beta = m_lv.filter.beta.data() + (size_t(k) * K + k2) * box;
+            const std::vector<double>& w = m_normals[k2];
+            for (int jy = d1 ? 0 : -J; jy <= (d1 ? 0 : J); ++jy) {
+                const size_t row = size_t(ty + jy - m_cells.j0) * m_cells.w;
+                const double* b = beta + size_t(jy + (d1 ? 0 : J)) * side;
+                for (int jx = -J; jx <= J; ++jx)
+                    u += b[jx + J] * w[row + size_t(tx + jx - m_cells.i0)];
+            }
+        }
+        return u;
     }
 
     double estimate(const Grid& g, int64_t i, int64_t j) {
@@ -137,11 +184,11 @@ private:
         auto [it, fresh] = m_clipped.try_emplace(std::make_pair(k, kept));
         if (fresh)
             it->second =
-                solve_class(m_acf, 2.0 * m_lv.spacing, full.tx2, full.ty2, kept, m_o.singular);
+                solve_class(*m_acf, 2.0 * m_lv.spacing, full.tx2, full.ty2, kept, m_o.singular);
         return it->second;
     }
 
-    const Acf& m_acf;
+    const Acf* m_acf;  // for the clipped solves of a refinement; null otherwise
     const Plan& m_plan;
     const LevelPlan& m_lv;
     int m_level;
@@ -149,6 +196,8 @@ private:
     Boundary m_b;
     double m_mean;
     std::vector<double> m_sigma;
+    Grid m_cells;                                // the cell range of m_normals
+    std::vector<std::vector<double>> m_normals;  // per class, per cell
     std::mutex m_mutex;
     std::map<std::pair<int, std::vector<std::pair<int, int>>>, ClassCoefficients> m_clipped;
 };
@@ -161,16 +210,8 @@ Field to_field(Grid&& g, Plan&& plan) {
     return f;
 }
 
-}  // namespace
-
-double node_normal(uint64_t seed, int level, int64_t x, int64_t y) {
-    const sim::detail::CounterRng rng(seed, kGssStream ^ uint32_t(level));
-    const auto u = rng.uniforms(x, y, 0, 0);
-    return sim::detail::normal_from_uniforms(u[0], u[1]);
-}
-
-Field synthesize(const Acf& acf, const GssOptions& o, int64_t x0, int64_t y0, int width, int height,
-                 bool periodic) {
+/// Refuses sizes subdivision cannot make (and an origin for a periodic field).
+void check_size(const GssOptions& o, int64_t x0, int64_t y0, int width, int height, bool periodic) {
     validate(o);
     const bool ok = o.dims == 1 ? height == 1 : true;
     if (periodic) {
@@ -183,12 +224,34 @@ Field synthesize(const Acf& acf, const GssOptions& o, int64_t x0, int64_t y0, in
                (o.dims == 2 && (!is_pow2(height - 1) || height < 3))) {
         throw ValueError(sizes_message(width, height, o.dims, false));
     }
+}
+
+}  // namespace
+
+double node_normal(uint64_t seed, int level, int64_t x, int64_t y) {
+    const sim::detail::CounterRng rng(seed, kGssStream ^ uint32_t(level));
+    const auto u = rng.uniforms(x, y, 0, 0);
+    return sim::detail::normal_from_uniforms(u[0], u[1]);
+}
+
+Field synthesize(const Acf& acf, const GssOptions& o, int64_t x0, int64_t y0, int width, int height,
+                 bool periodic) {
+    check_size(o, x0, y0, width, height, periodic);
     int top = 0;
     if (periodic) {  // the coarsest spacing must divide the period
         top = std::min(auto_top_spacing(acf, o), o.top_spacing ? o.top_spacing : 1 << 30);
         top = std::min({top, width, o.dims == 2 ? height : width});
     }
-    Plan plan = plan_subdivision(acf, o, top);
+    return synthesize(plan_subdivision(acf, o, top), o, x0, y0, width, height, periodic);
+}
+
+Field synthesize(Plan plan, const GssOptions& o, int64_t x0, int64_t y0, int width, int height,
+                 bool periodic) {
+    check_size(o, x0, y0, width, height, periodic);
+    if (plan.dims != o.dims)
+        throw ValueError("synthesize: the plan's dims differ from the options'");
+    if (periodic && (width % plan.top_spacing || (o.dims == 2 && height % plan.top_spacing)))
+        throw ValueError("synthesize: the period is not a multiple of the plan's top spacing");
     const int levels = static_cast<int>(plan.levels.size());
     const double r0 = plan.variance;
     Boundary b;
@@ -223,7 +286,7 @@ Field synthesize(const Acf& acf, const GssOptions& o, int64_t x0, int64_t y0, in
         if (periodic) b = {Boundary::Periodic, g.w, g.h};
         Grid f;
         f.resize(q[0], q[2], int(q[1] - q[0] + 1), int(q[3] - q[2] + 1));
-        LevelStep(acf, plan, l, o, b, 0.0).run(g, f);
+        LevelStep(nullptr, plan, l, o, b, 0.0).run(g, f);
         g = std::move(f);
     }
     return to_field(std::move(g), std::move(plan));
@@ -250,7 +313,7 @@ Field refine(const std::vector<double>& data, int w, int h, int factor, const Ac
         const Boundary b{Boundary::Clip, g.w, g.h};
         Grid f;
         f.resize(0, 0, 2 * (g.w - 1) + 1, o.dims == 1 ? 1 : 2 * (g.h - 1) + 1);
-        LevelStep(acf, plan, l, o, b, mean).run(g, f);
+        LevelStep(&acf, plan, l, o, b, mean).run(g, f);
         g = std::move(f);
     }
     return to_field(std::move(g), std::move(plan));

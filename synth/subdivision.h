@@ -66,6 +66,10 @@ struct GssOptions {
     int top_spacing = 0;
     double top_correlation = 1e-3;
     uint64_t seed = 0;
+    /// false: independent displacements of variance (7), as in the paper; true: the same
+    /// variances, correlated between the level's new nodes so their covariance is R
+    /// (docs/subdivision.md "Correlated displacements").
+    bool correlated = true;
 };
 
 /// Throws ValueError naming the first invalid option.
@@ -83,9 +87,19 @@ struct ClassCoefficients {
     bool pseudo_inverse = false;  ///< solved by the Moore–Penrose inverse (singular matrix)
 };
 
+/// Correlated displacements (GssOptions::correlated): u_k(p) = sum_{k'} sum_j
+/// beta[k][k'](j) w_{k'}(p + j), w the keyed normals of the level's new nodes, cells p, j in
+/// [-radius, radius]^dims (docs/subdivision.md "Correlated displacements").
+struct DisplacementFilter {
+    int radius = 0;  ///< J; -1: independent displacements (the paper's)
+    /// beta[(k * classes + k') * side^dims + (jy + J) * side + (jx + J)], side = 2J + 1
+    std::vector<double> beta;
+};
+
 struct LevelPlan {
     int spacing = 1;  ///< the new (finer) spacing h in output samples; coarse spacing 2h
     std::vector<ClassCoefficients> classes;
+    DisplacementFilter filter;
     int max_n() const;  ///< the largest N of the level's classes
 };
 
@@ -101,6 +115,11 @@ struct Plan {
 /// non-negative definite (a negative eigenvalue of a neighbourhood's covariance matrix with its
 /// target, Lewis 1987 §6.2 "negative determinants").
 Plan plan_subdivision(const Acf& acf, const GssOptions& options, int top_spacing = 0);
+
+/// The displacement filter of one level (its classes solved): the spectral square root of the
+/// covariance R - (covariance of the estimates) the new nodes lack.
+DisplacementFilter displacement_filter(const Acf& acf, int dims, double s,
+                                       const std::vector<ClassCoefficients>& classes);
 
 /// The automatic top spacing (GssOptions::top_spacing = 0).
 int auto_top_spacing(const Acf& acf, const GssOptions& options);
@@ -124,6 +143,11 @@ struct Field {
 /// (k >= 1; 1-D: height 1). Periodic output: the field of period width (x height), sizes 2^k,
 /// x0 = y0 = 0. Throws ValueError for other sizes.
 Field synthesize(const Acf& acf, const GssOptions& options, int64_t x0, int64_t y0, int width,
+                 int height, bool periodic = false);
+/// The same with a plan made before (plan_subdivision, or Field::plan of an earlier call with
+/// the same autocorrelation, options and, when periodic, size): the per-level solves and
+/// displacement filters are not repeated. Only options.seed may differ.
+Field synthesize(Plan plan, const GssOptions& options, int64_t x0, int64_t y0, int width,
                  int height, bool periodic = false);
 
 /// Refinement (Lewis 1987 Fig. 5): data (w x h, row-major; h = 1 for 1-D) at every factor-th

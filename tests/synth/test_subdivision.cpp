@@ -29,8 +29,9 @@ GssOptions opts(int dims, int neighbors, double tolerance = 0, double debias = 0
 }
 
 /// Exact covariance of the periodic construction with `plan` on P (x P) nodes: level by level
-/// x_fine = T x_coarse + sqrt(D) w (Lewis 1987 eq. 3, 9, 10 with independent displacements),
-/// so C_fine = T C_coarse T^T + D, from independent top nodes of variance R(0).
+/// x_fine = T x_coarse + U w (Lewis 1987 eq. 3, 9, 10; U the displacement filter, diagonal for
+/// the paper's independent displacements), so C_fine = T C_coarse T^T + U U^T, from
+/// independent top nodes of variance R(0).
 Eigen::MatrixXd construction_cov(const Plan& plan, int P) {
     const int dims = plan.dims;
     int m = P / plan.top_spacing, my = dims == 1 ? 1 : m;
@@ -38,7 +39,9 @@ Eigen::MatrixXd construction_cov(const Plan& plan, int P) {
     for (const LevelPlan& lv : plan.levels) {
         const int mf = 2 * m, mfy = dims == 1 ? 1 : 2 * my;
         Eigen::MatrixXd T = Eigen::MatrixXd::Zero(mf * mfy, m * my);
-        Eigen::VectorXd D = Eigen::VectorXd::Zero(mf * mfy);
+        // U maps the keyed normals of the new nodes (by fine row) to their displacements.
+        Eigen::MatrixXd U = Eigen::MatrixXd::Zero(mf * mfy, mf * mfy);
+        const int K = int(lv.classes.size()), J = lv.filter.radius, side = 2 * J + 1;
         for (int j = 0; j < mfy; ++j)
             for (int i = 0; i < mf; ++i) {
                 const int row = j * mf + i;
@@ -53,10 +56,23 @@ Eigen::MatrixXd construction_cov(const Plan& plan, int P) {
                     const int cy = dims == 1 ? 0 : ((j / 2 + c.offsets[q].second) % my + my) % my;
                     T(row, cy * m + cx) += c.a[q];
                 }
-                D(row) = c.variance;
+                if (J < 0) {  // independent displacements
+                    U(row, row) = std::sqrt(c.variance);
+                    continue;
+                }
+                const int box = dims == 1 ? side : side * side;
+                for (int k2 = 0; k2 < K; ++k2)
+                    for (int jy = (dims == 1 ? 0 : -J); jy <= (dims == 1 ? 0 : J); ++jy)
+                        for (int jx = -J; jx <= J; ++jx) {
+                            const int cx = ((i / 2 + jx) % m + m) % m;
+                            const int cy = dims == 1 ? 0 : ((j / 2 + jy) % my + my) % my;
+                            const auto& c2 = lv.classes[size_t(k2)];
+                            const int col = (2 * cy + c2.ty2) * mf + 2 * cx + c2.tx2;
+                            U(row, col) += lv.filter.beta[size_t(
+                                (k * K + k2) * box + (dims == 1 ? 0 : (jy + J) * side) + jx + J)];
+                        }
             }
-        C = T * C * T.transpose();
-        C.diagonal() += D;
+        C = T * C * T.transpose() + U * U.transpose();
         m = mf, my = mfy;
     }
     return C;
@@ -106,13 +122,12 @@ AcfCheck check_acf(const Acf& acf, GssOptions o, int P, int seeds,
                    const std::vector<std::pair<int, int>>& lags) {
     const int dims = o.dims;
     std::vector<double> sum(lags.size(), 0.0);
-    Plan plan;
+    const Plan plan = synthesize(acf, o, 0, 0, P, dims == 1 ? 1 : P, true).plan;
     for (int s = 0; s < seeds; ++s) {
         o.seed = uint64_t(s);
-        const Field f = synthesize(acf, o, 0, 0, P, dims == 1 ? 1 : P, true);
+        const Field f = synthesize(plan, o, 0, 0, P, dims == 1 ? 1 : P, true);
         for (size_t k = 0; k < lags.size(); ++k)
             sum[k] += measured_lag(f, P, dims, lags[k].first, lags[k].second);
-        plan = f.plan;
     }
     const Eigen::MatrixXd C = construction_cov(plan, P);
     AcfCheck out;
@@ -207,7 +222,15 @@ TEST_CASE(
             check_acf(make_acf("gaussian", {{"length", "6"}}), opts(1, 8, 1e-4), 512, 200, lags1);
         CHECK(c.worst_z < 5);
         WARN("gaussian 1-D: construction - R up to " << c.construction);
-        CHECK(c.construction < 0.1);  // Lewis's independent displacements (docs/subdivision.md)
+        CHECK(c.construction < 0.01);  // correlated displacements (docs/subdivision.md)
+    }
+    SECTION("gaussian 1-D, the paper's independent displacements") {
+        GssOptions o = opts(1, 8, 1e-4);
+        o.correlated = false;
+        const AcfCheck c = check_acf(make_acf("gaussian", {{"length", "6"}}), o, 512, 200, lags1);
+        CHECK(c.worst_z < 5);
+        WARN("gaussian 1-D, independent displacements: construction - R up to " << c.construction);
+        CHECK(c.construction > 0.03);  // what the correlated displacements remove
     }
     SECTION("oscillatory markov 1-D (Lewis 1987 Table 1)") {
         const AcfCheck c =
@@ -215,7 +238,7 @@ TEST_CASE(
                       opts(1, 8, 1e-4), 512, 200, lags1);
         CHECK(c.worst_z < 5);
         WARN("oscillatory markov 1-D: construction - R up to " << c.construction);
-        CHECK(c.construction < 0.1);
+        CHECK(c.construction < 0.01);
     }
     SECTION("anisotropic 2-D (stretched markaussian)") {
         const std::vector<std::pair<int, int>> lags2 = {{0, 0}, {1, 0}, {0, 1}, {1, 1},
@@ -230,6 +253,54 @@ TEST_CASE(
 }
 
 TEST_CASE(
+    "gss: 2-D fields measure the specified autocorrelation up to the construction's "
+    "documented departure",
+    "[synth]") {
+    // Extendable 129^2 fields, 12 seeds: the mean of x(p) x(p + lag) against R. Band: 5
+    // standard errors from the seeds' spread plus the departure of the 2-D construction from R
+    // (docs/subdivision.md: 0.06 to 0.12 R(0) here, the displacement filter being truncated at
+    // 4 cells).
+    const std::vector<std::pair<int, int>> lags = {{0, 0}, {1, 0}, {0, 1}, {1, 1},
+                                                   {3, 0}, {0, 3}, {2, 2}, {6, 0}};
+    const std::vector<std::pair<std::string, std::vector<AcfParam>>> models = {
+        {"markov", {{"length", "6"}}},
+        {"gaussian", {{"length", "4"}}},
+        {"expression", {{"expr", "exp(-abs(x)/12)*cos(0.6*x)*exp(-(y/12)^2)"}}},
+        {"markaussian", {{"length", "3"}, {"aspect", "3"}, {"angle", "30"}}}};
+    for (const auto& [model, params] : models) {
+        const Acf acf = make_acf(model, params);
+        GssOptions o = opts(2, 8, 1e-4, 0.05);
+        const Plan plan = plan_subdivision(acf, o);
+        const int n = 129, seeds = 12;
+        std::vector<std::vector<double>> per(lags.size());
+        for (int s = 0; s < seeds; ++s) {
+            o.seed = uint64_t(s);
+            const Field f = synthesize(plan, o, 0, 0, n, n);
+            for (size_t k = 0; k < lags.size(); ++k) {
+                const auto [dx, dy] = lags[k];
+                double sum = 0;
+                for (int y = 0; y + dy < n; ++y)
+                    for (int x = 0; x + dx < n; ++x)
+                        sum += f.values[size_t(y) * n + x] * f.values[size_t(y + dy) * n + x + dx];
+                per[k].push_back(sum / (double(n - dx) * (n - dy)));
+            }
+        }
+        double worst = 0;
+        for (size_t k = 0; k < lags.size(); ++k) {
+            double m = 0, m2 = 0;
+            for (double v : per[k]) m += v, m2 += v * v;
+            m /= seeds;
+            const double se = std::sqrt((m2 / seeds - m * m) / (seeds - 1));
+            const double err = std::abs(m - acf.R(lags[k].first, lags[k].second));
+            worst = std::max(worst, err);
+            CAPTURE(model, lags[k].first, lags[k].second, m, se);
+            CHECK(err < 5 * se + 0.1 * acf.R(0, 0));
+        }
+        WARN(model << " 2-D: max |measured - R| = " << worst);
+    }
+}
+
+TEST_CASE(
     "gss: no creases: second differences have the same statistics on every level's "
     "nodes",
     "[synth]") {
@@ -239,9 +310,10 @@ TEST_CASE(
         GssOptions o = opts(1, neighbors);
         std::vector<std::vector<double>> per_seed;
         const int seeds = 16, n = 32769, groups = 6;
+        const Plan plan = plan_subdivision(acf, o);
         for (int s = 0; s < seeds; ++s) {
             o.seed = uint64_t(s);
-            const Field f = synthesize(acf, o, 0, 0, n, 1);
+            const Field f = synthesize(plan, o, 0, 0, n, 1);
             std::vector<double> sum(groups, 0.0), cnt(groups, 0.0);
             for (int i = 1; i + 1 < n; ++i) {
                 const int g = std::min(__builtin_ctz(unsigned(i)), groups - 1);
@@ -277,8 +349,8 @@ TEST_CASE(
     const double gss = spread(ma, 8, z);
     WARN("crease excess: markov " << markov << ", markaussian 2N = 2: " << fournier
                                   << ", 2N = 8: " << gss);
-    CHECK(fournier > 0.3);
-    CHECK(gss < fournier / 3);
+    CHECK(fournier > 0.2);
+    CHECK(gss < fournier / 4);
 }
 
 TEST_CASE("gss: refined output keeps the coarse samples bit-exactly", "[synth]") {
