@@ -92,7 +92,7 @@ public:
                     out = coarse(g, i >> 1, j >> 1);  // an old node keeps its value
                     continue;
                 }
-                out = estimate(g, i, j) + displacement(i, j);
+                out = estimate(g, i, j);
             }
         });
     }
@@ -168,7 +168,11 @@ private:
         for (size_t q = 0; q < c->a.size(); ++q)
             sum +=
                 c->a[q] * (coarse(g, tx + c->offsets[q].first, ty + c->offsets[q].second) - m_mean);
-        return sum;
+        if (c == &m_lv.classes[size_t(k)]) return sum + displacement(i, j);
+        // A clipped neighbourhood estimates worse: its own eq. 7 variance, independently (the
+        // displacement filter is the interior's).
+        const int64_t h = m_lv.spacing;
+        return sum + std::sqrt(c->variance) * node_normal(m_o.seed, m_level, i * h, j * h);
     }
 
     /// Refinement: the coefficients for the part of the neighbourhood inside the data (solved

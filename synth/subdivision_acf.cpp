@@ -234,13 +234,18 @@ AcfEstimate estimate_acf(const std::vector<double>& data, int w, int h, int fact
             "(give one with --acf)");
     const int max_x = std::min(16, (w - 1) / 2), max_y = h > 1 ? std::min(16, (h - 1) / 2) : 0;
     std::vector<std::pair<double, double>> pts;
+    // The fit uses each direction's lags up to the first whose estimate falls below 5 % of
+    // R(0): beyond, eq. 15 is mostly sampling noise.
+    bool open_x = true, open_y = true;
     for (int l = 0; l <= max_x; ++l) {
         e.along_x.push_back(eq15(data, w, h, e.mean, 0, l));
-        if (l > 0) pts.push_back({double(l) * factor, e.along_x.back() / e.variance});
+        open_x = open_x && e.along_x.back() > 0.05 * e.variance;
+        if (l > 0 && open_x) pts.push_back({double(l) * factor, e.along_x.back() / e.variance});
     }
     for (int l = 0; l <= max_y; ++l) {
         e.along_y.push_back(eq15(data, w, h, e.mean, l, 0));
-        if (l > 0) pts.push_back({double(l) * factor, e.along_y.back() / e.variance});
+        open_y = open_y && e.along_y.back() > 0.05 * e.variance;
+        if (l > 0 && open_y) pts.push_back({double(l) * factor, e.along_y.back() / e.variance});
     }
     if (!fit_markaussian(pts, e.length, e.exponent)) {
         // Uncorrelated at the data's spacing: correlated over less than one data sample.
