@@ -144,17 +144,6 @@ private:
     std::chrono::steady_clock::time_point m_start;
 };
 
-/// A whole number of `option`'s value `text` in [0, 2^63 - 1]; out of range is an error, not
-/// clamped (strtoll and CLI11 clamp).
-long long whole_number(const std::string& option, const std::string& text, const std::string& digits,
-                       const std::string& expected) {
-    long long v = 0;
-    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), v);
-    if (ec != std::errc() || end != digits.data() + digits.size() || v < 0)
-        throw ValueError(option + " " + text + ": expected " + expected);
-    return v;
-}
-
 /// --size or --crop "WxH" in [1, 32768]^2 ({0, 0} when not given).
 scenes::OutputSize parse_size(const std::string& option, const std::string& text) {
     if (text.empty()) return {};
@@ -207,6 +196,16 @@ std::string present_frame_mismatch(const std::string& target, const scenes::Scen
 }
 
 }  // namespace
+
+long long whole_number(const std::string& option, const std::string& text, const std::string& digits,
+                       const std::string& expected) {
+    long long v = 0;
+    const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), v);
+    if (ec != std::errc() || end != digits.data() + digits.size() || v < 0)
+        throw ValueError(option + " " + text + ": expected " + expected);
+    return v;
+}
+
 
 PatternSpot find_pattern(const std::string& path) {
     static const std::regex token("#+|%0?(\\d*)d");

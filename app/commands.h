@@ -23,6 +23,11 @@ struct InfoOptions {
 };
 
 int run_render(const RenderOptions& options);
+/// A whole number of `option`'s value `text` (its digits `digits`) in [0, 2^63 - 1]; out of
+/// range is an error (ValueError "OPTION TEXT: expected EXPECTED"), not clamped (strtoll and
+/// CLI11 clamp).
+long long whole_number(const std::string& option, const std::string& text, const std::string& digits,
+                       const std::string& expected);
 int run_scenes();
 int run_info(const InfoOptions& options);
 

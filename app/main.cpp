@@ -2,13 +2,13 @@
 // The `impulse` command-line tool: parse, call the libraries, report. Library errors are typed
 // exceptions; here they become one line on stderr and a non-zero exit (style.md "Errors").
 
-
 #include <CLI/CLI.hpp>
 #include <csignal>
 #include <iostream>
 
 #include "app/analyze.h"
 #include "app/commands.h"
+#include "app/synth_gss.h"
 #include "numeric/errors.h"
 
 int main(int argc, char** argv) {
@@ -81,6 +81,12 @@ int main(int argc, char** argv) {
     // Past a file size limit (ulimit -f) a write fails with EFBIG and is reported with the file's
     // name, instead of the process being killed by SIGXFSZ with nothing said.
     std::signal(SIGXFSZ, SIG_IGN);
+
+    CLI::App* synth = app.add_subcommand(
+        "synth", "Synthesize a field with another algorithm than the point process");
+    synth->require_subcommand(1);
+    impulse::app::add_synth_gss(*synth);
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -95,6 +101,7 @@ int main(int argc, char** argv) {
         if (*scenes) return impulse::app::run_scenes();
         if (*info) return impulse::app::run_info(io);
         if (*analyze) return impulse::app::run_analyze(ao);
+        if (*synth) return 0;  // its subcommands ran in their callbacks
     } catch (const impulse::Error& e) {
         std::cerr << "error: " << e.what() << "\n";
         return 1;

@@ -551,7 +551,8 @@ std::optional<SpectralModel> spectral_model_from_string(std::string_view name) {
 
 bool defined_by_autocorrelation(SpectralModel m) {
     return m == SpectralModel::Markov || m == SpectralModel::Gaussian ||
-           m == SpectralModel::Markaussian || m == SpectralModel::Matern;
+           m == SpectralModel::Markaussian || m == SpectralModel::Matern ||
+           m == SpectralModel::OscillatoryMarkov || m == SpectralModel::OscillatoryGaussian;
 }
 
 void validate(const ModelParams& p) {
@@ -569,6 +570,12 @@ void validate(const ModelParams& p) {
         case SpectralModel::Matern:
             require(p.length > 0, "length", p.length, "a length > 0");
             require(p.nu > 0 && p.nu <= 50, "nu", p.nu, "a smoothness nu in (0, 50]");
+            break;
+        case SpectralModel::OscillatoryMarkov:
+        case SpectralModel::OscillatoryGaussian:
+            require(p.length > 0, "length", p.length, "a length > 0");
+            require(p.omega >= 0 && std::isfinite(p.omega), "omega", p.omega,
+                    "a finite angular frequency >= 0 (radians per unit)");
             break;
         case SpectralModel::Lorentzian:
             require(p.k0 > 0, "k0", p.k0, "a corner frequency > 0 (cycles per unit)");
@@ -605,7 +612,11 @@ Spectrum model_spectrum(const ModelParams& params, double k_max) {
                 return v * kPi * p.length * p.length * std::exp(-std::pow(kPi * p.length * k, 2));
             };
             break;
-        case SpectralModel::Markaussian: {
+        case SpectralModel::Markaussian:
+        case SpectralModel::OscillatoryMarkov:
+        case SpectralModel::OscillatoryGaussian: {
+            // Numerical Hankel transform; it refuses an oscillation too fast for the envelope
+            // (the 2-D isotropic function then has a negative spectrum, Lewis 1987 §6.2).
             Spectrum t = spectrum_of_autocorrelation(model_autocorrelation(p), k_max);
             s.density = t.density;
             break;
@@ -664,6 +675,16 @@ Autocorrelation model_autocorrelation(const ModelParams& params) {
                 return v * std::exp(-std::pow(r / p.length, p.exponent));
             };
             break;
+        case SpectralModel::OscillatoryMarkov:  // Lewis 1987 Table 1, Fig. 2
+            a.function = [p, v](double r) {
+                return v * std::exp(-std::abs(r) / p.length) * std::cos(p.omega * r);
+            };
+            break;
+        case SpectralModel::OscillatoryGaussian:  // Lewis 1986 Fig. 1
+            a.function = [p, v](double r) {
+                return v * std::cos(p.omega * r) * std::exp(-(r / p.length) * (r / p.length));
+            };
+            break;
         case SpectralModel::Matern: {
             const double c = std::pow(2.0, 1.0 - p.nu) / std::tgamma(p.nu);
             a.function = [p, v, c](double r) {
@@ -677,7 +698,8 @@ Autocorrelation model_autocorrelation(const ModelParams& params) {
         default:
             throw ValueError("model = \"" + a.name +
                              "\": defined by its spectrum, not an autocorrelation: expected one of "
-                             "markov, gaussian, markaussian, matern (or use a spectrum kernel)");
+                             "markov, gaussian, markaussian, matern, oscillatory_markov, "
+                             "oscillatory_gaussian (or use a spectrum kernel)");
     }
     return a;
 }
@@ -705,7 +727,12 @@ Autocorrelation expression_autocorrelation(std::string_view text) {
     return a;
 }
 
-Spectrum table_spectrum_text(std::string_view text, const std::string& name) {
+namespace {
+
+/// Rows "x,y" of a two-column CSV table (the grammar of table_spectrum_text), x >= 0 strictly
+/// increasing; `cx`, `cy` name the columns in messages and `x_what` says what x is.
+Table parse_table(std::string_view text, const std::string& name, const std::string& cx,
+                  const std::string& cy, const std::string& x_what) {
     Table t;
     std::istringstream in{std::string(text)};
     std::string line;
@@ -732,34 +759,61 @@ Spectrum table_spectrum_text(std::string_view text, const std::string& name) {
         }
         first = false;
         if (fields.size() > 2)
-            fail("expected two columns k,S, found " + std::to_string(fields.size()));
-        if (!ok_k) fail("k: expected a number, found \"" + fields[0] + "\"");
+            fail("expected two columns " + cx + "," + cy + ", found " +
+                 std::to_string(fields.size()));
+        if (!ok_k) fail(cx + ": expected a number, found \"" + fields[0] + "\"");
         if (fields.size() < 2 || fields[1].find_first_not_of(" \t") == std::string::npos)
-            fail("missing value: expected k,S");
-        if (!ok_s) fail("S: expected a number, found \"" + fields[1] + "\"");
+            fail("missing value: expected " + cx + "," + cy);
+        if (!ok_s) fail(cy + ": expected a number, found \"" + fields[1] + "\"");
         if (!std::isfinite(k) || k < 0)
-            fail("k = " + num(k) + ": expected a finite frequency >= 0");
-        if (!std::isfinite(s)) fail("S = " + num(s) + ": expected a finite number");
+            fail(cx + " = " + num(k) + ": expected a finite " + x_what + " >= 0");
+        if (!std::isfinite(s)) fail(cy + " = " + num(s) + ": expected a finite number");
         if (!t.k.empty() && !(k > t.k.back()))
-            fail("k = " + num(k) + " after " + num(t.k.back()) + ": k must be strictly increasing");
+            fail(cx + " = " + num(k) + " after " + num(t.k.back()) + ": " + cx +
+                 " must be strictly increasing");
         t.k.push_back(k);
         t.s.push_back(s);
     }
     if (t.k.size() < 2)
-        throw ValueError(name + ": expected at least two rows k,S, found " +
+        throw ValueError(name + ": expected at least two rows " + cx + "," + cy + ", found " +
                          std::to_string(t.k.size()));
+    return t;
+}
+
+std::string read_text_file(const std::string& path, const std::string& what) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError(path + ": cannot open " + what + ": " + std::strerror(errno));
+    std::stringstream ss;
+    ss << in.rdbuf();
+    return ss.str();
+}
+
+}  // namespace
+
+Spectrum table_spectrum_text(std::string_view text, const std::string& name) {
     Spectrum sp;
     sp.name = name;
-    sp.density = [t = std::move(t)](double k, double) { return t(k); };
+    sp.density = [t = parse_table(text, name, "k", "S", "frequency")](double k, double) {
+        return t(k);
+    };
     return sp;
 }
 
+Autocorrelation table_autocorrelation_text(std::string_view text, const std::string& name) {
+    Autocorrelation a;
+    a.name = name;
+    a.function = [t = parse_table(text, name, "r", "R", "lag")](double r) {
+        return t(std::abs(r));
+    };
+    return a;
+}
+
+Autocorrelation table_autocorrelation(const std::string& path) {
+    return table_autocorrelation_text(read_text_file(path, "autocorrelation table"), path);
+}
+
 Spectrum table_spectrum(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw IoError(path + ": cannot open spectrum table: " + std::strerror(errno));
-    std::stringstream ss;
-    ss << in.rdbuf();
-    return table_spectrum_text(ss.str(), path);
+    return table_spectrum_text(read_text_file(path, "spectrum table"), path);
 }
 
 Spectrum spectrum_of_autocorrelation(const Autocorrelation& acf, double k_max) {

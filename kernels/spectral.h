@@ -61,19 +61,30 @@ private:
 // Spectrum and autocorrelation sources
 
 /// Named second-order models. Defined by their autocorrelation R(r) (the spectrum is its 2-D
-/// transform): markov, gaussian, markaussian, matern. Defined by their spectrum S(k):
-/// lorentzian, bandpass, power. All are isotropic and scaled so int S d^2k = R(0) = variance.
-enum class SpectralModel { Markov, Gaussian, Markaussian, Matern, Lorentzian, Bandpass, Power };
+/// transform): markov, gaussian, markaussian, matern, and Lewis's oscillatory noises
+/// oscillatory_markov e^{-r/l} cos(omega r) (Lewis 1987 Table 1, Fig. 2: the "oscillatory
+/// Markovian (Lorentzian)" noise, whose 1-D spectrum is a pair of Lorentzian lines at
+/// +-omega) and oscillatory_gaussian cos(omega r) e^{-r^2/l^2} (Lewis 1986 Fig. 1). Defined by
+/// their spectrum S(k): lorentzian (despite its name the 2-D spectrum of markov, kept for the
+/// scenes that use it), bandpass, power. All are isotropic and scaled so int S d^2k = R(0) =
+/// variance.
+enum class SpectralModel {
+    Markov, Gaussian, Markaussian, Matern, Lorentzian, Bandpass, Power,
+    OscillatoryMarkov, OscillatoryGaussian
+};
 /// Names in enum order ("exponential" is also accepted for markov).
-inline constexpr std::array<std::string_view, 7> kSpectralModelNames = {
-    "markov", "gaussian", "markaussian", "matern", "lorentzian", "bandpass", "power"};
+inline constexpr std::array<std::string_view, 9> kSpectralModelNames = {
+    "markov",   "gaussian", "markaussian",       "matern",
+    "lorentzian", "bandpass", "power", "oscillatory_markov", "oscillatory_gaussian"};
 
 /// Parameters of a named model (lengths in texture units, frequencies in cycles per unit).
 struct ModelParams {
     SpectralModel model = SpectralModel::Markov;
     double variance = 1.0;  ///< R(0) = int S d^2k, > 0
     double length = 8.0;    ///< l, > 0: markov exp(-r/l), gaussian exp(-r^2/l^2),
-                            ///< markaussian exp(-(r/l)^exponent), matern length
+                            ///< markaussian exp(-(r/l)^exponent), matern length, the
+                            ///< oscillatory models' envelope
+    double omega = 0.5;     ///< oscillatory models: cos(omega r), radians per unit, >= 0
     double exponent = 1.4;  ///< markaussian exponent in (0, 2] (1.4: Lewis 1987 "Markaussian")
     double nu = 1.5;        ///< matern smoothness nu > 0 (0.5 is markov)
     double k0 = 0.02;       ///< lorentzian corner: S ~ (1 + (k/k0)^2)^(-3/2), > 0
@@ -87,7 +98,8 @@ struct ModelParams {
 
 /// Model from its name; nullopt when unknown ("exponential" maps to Markov).
 std::optional<SpectralModel> spectral_model_from_string(std::string_view name);
-/// True for models defined by their autocorrelation (markov, gaussian, markaussian, matern).
+/// True for models defined by their autocorrelation (markov, gaussian, markaussian, matern and
+/// the two oscillatory ones).
 bool defined_by_autocorrelation(SpectralModel model);
 /// Throws ValueError naming the first invalid parameter of the model.
 void validate(const ModelParams& params);
@@ -109,7 +121,8 @@ struct Autocorrelation {
 /// power) or, for markaussian, the numerical Hankel transform of R tabulated on [0, k_max]
 /// (zero beyond: pass the design's nyquist). Validates (ValueError).
 Spectrum model_spectrum(const ModelParams& params, double k_max = 0.5);
-/// The autocorrelation of a model defined by one (markov, gaussian, markaussian, matern);
+/// The autocorrelation of a model defined by one (markov, gaussian, markaussian, matern,
+/// oscillatory_markov, oscillatory_gaussian);
 /// ValueError for the spectrum-defined ones.
 Autocorrelation model_autocorrelation(const ModelParams& params);
 /// S from an expression of k (cycles per unit) and theta (radians). ValueError on syntax.
@@ -123,6 +136,11 @@ Autocorrelation expression_autocorrelation(std::string_view text);
 Spectrum table_spectrum_text(std::string_view text, const std::string& name);
 /// Same, read from a file (IoError when it cannot be read).
 Spectrum table_spectrum(const std::string& path);
+/// R from CSV text: rows "r,R" with the grammar of table_spectrum_text (R(r) = R(r_first)
+/// below the first row, 0 beyond the last; R(-r) = R(r)). ValueError "NAME:LINE: ...".
+Autocorrelation table_autocorrelation_text(std::string_view text, const std::string& name);
+/// Same, read from a file (IoError when it cannot be read).
+Autocorrelation table_autocorrelation(const std::string& path);
 
 /// Spectrum of an autocorrelation by the Wiener–Khinchine relation,
 /// S(k) = 2 pi int_0^inf R(r) J0(2 pi k r) r dr, tabulated on [0, k_max] and interpolated.

@@ -391,9 +391,9 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
         const toml::node* sn = r.node(source);
 
         // Model parameters: read the ones the model uses, warn about the others.
-        const std::array<const char*, 10> model_keys = {"variance", "length", "exponent", "nu",
+        const std::array<const char*, 11> model_keys = {"variance", "length", "exponent", "nu",
                                                         "k0",       "f0",     "width",    "slope",
-                                                        "k_low",    "k_high"};
+                                                        "k_low",    "k_high", "omega"};
         K::ModelParams mp;
         std::vector<const char*> used;
         if (source == "model") {
@@ -408,7 +408,8 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
             if (acf && !K::defined_by_autocorrelation(*m))
                 r.fail(sn, "model",
                        "defined by its spectrum: expected one of markov, gaussian, markaussian, "
-                       "matern for an autocorrelation kernel (or use type = \"spectrum\")");
+                       "matern, oscillatory_markov, oscillatory_gaussian for an autocorrelation "
+                       "kernel (or use type = \"spectrum\")");
             mp.model = *m;
             used.push_back("variance");
             switch (mp.model) {
@@ -421,6 +422,10 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
                     break;
                 case K::SpectralModel::Matern:
                     used.insert(used.end(), {"length", "nu"});
+                    break;
+                case K::SpectralModel::OscillatoryMarkov:
+                case K::SpectralModel::OscillatoryGaussian:
+                    used.insert(used.end(), {"length", "omega"});
                     break;
                 case K::SpectralModel::Lorentzian:
                     used.push_back("k0");
@@ -448,6 +453,9 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
                 mp.nu = r.number(
                     "nu", mp.nu, [](double v) { return v > 0 && v <= 50; },
                     "a smoothness in (0, 50]");
+            if (uses("omega"))
+                mp.omega = r.number("omega", mp.omega, kNonNegative,
+                                    "an angular frequency >= 0 (radians per unit)");
             if (uses("k0"))
                 mp.k0 =
                     r.number("k0", mp.k0, kPositive, "a corner frequency > 0 (cycles per unit)");
