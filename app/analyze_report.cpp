@@ -768,6 +768,15 @@ std::string to_text(const AnalysisResult& r) {
         o << "stationary: " << yes_no(st.stationary) << " (" << stationarity_verdict(st) << ")\n";
     else
         o << "stationary: n/a (" << st.reason << ")\n";
+    if (r.structure) {
+        const auto& S = *r.structure;
+        std::string hs;
+        for (size_t s = 0; s < S.hurst.size(); ++s)
+            hs += (s ? ", " : "") + fmt(S.hurst[s], 3) +
+                  (S.realizations > 1 ? " +- " + fmt(S.hurst_stderr[s], 2) : "");
+        line("H(s)", "s = 0.." + std::to_string(S.hurst.size() - 1) + ": " + hs +
+                         " (Kaplan & Kuo eq. 21, f along x and y)");
+    }
     for (const auto& n : r.notes) o << "note: " << n << "\n";
 
     // Tables.
@@ -961,6 +970,18 @@ std::string to_json(const AnalysisResult& r) {
         j.close('}');
     } else {
         j.null();
+    }
+    if (r.structure) {
+        const auto& S = *r.structure;
+        j.key("structure").open('{').key("lags").nums(S.lags).key("f").nums(S.f);
+        j.key("fx").nums(S.fx).key("fy").nums(S.fy).key("diagonal").nums(S.diagonal);
+        j.key("realizations").integer(S.realizations).key("hurst").open('[');
+        for (size_t s = 0; s < S.hurst.size(); ++s)
+            j.open('{').key("s").integer(long(s)).key("H").num(S.hurst[s])
+                .key("stderr").num(S.hurst_stderr[s]).key("H_x").num(S.hurst_x[s])
+                .key("H_y").num(S.hurst_y[s]).key("H_diagonal").num(S.hurst_diagonal[s])
+                .close('}');
+        j.close(']').close('}');
     }
     j.key("notes").open('[');
     for (const auto& n : r.notes) j.str(n);

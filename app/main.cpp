@@ -8,6 +8,7 @@
 
 #include "app/analyze.h"
 #include "app/commands.h"
+#include "app/synth_fbm.h"
 #include "util/errors.h"
 
 int main(int argc, char** argv) {
@@ -55,10 +56,18 @@ int main(int argc, char** argv) {
     analyze->add_option("--scene", ao.scene, "Scene file or built-in name to compare with");
     analyze->add_option("--set", ao.sets, "Override a scene key (with --scene)");
     analyze->add_flag("--json", ao.json, "Print one JSON object instead of text");
+    analyze->add_flag("--structure", ao.structure,
+                      "Structure function along x, y, diagonal and the generalised Hurst "
+                      "exponent H(s) (with its band over frames)");
     analyze->add_option("--report", ao.report, "Write a self-contained HTML report (plots as SVG)");
     analyze->add_option("--frames", ao.frames, "Inclusive 0-based frame range A-B, or one frame A");
     analyze->add_option("--max-frames", ao.max_frames, "Analyse at most N frames")
         ->check(CLI::PositiveNumber);
+
+    CLI::App* synth = app.add_subcommand("synth", "Synthesize a surface: fractional Brownian motion");
+    synth->require_subcommand(1);
+    impulse::app::SynthFbmOptions fo;
+    CLI::App* synth_fbm = impulse::app::add_synth_fbm(*synth, fo);
 
     try {
         app.parse(argc, argv);
@@ -70,6 +79,7 @@ int main(int argc, char** argv) {
         if (*scenes) return impulse::app::run_scenes();
         if (*info) return impulse::app::run_info(io);
         if (*analyze) return impulse::app::run_analyze(ao);
+        if (*synth_fbm) return impulse::app::run_synth_fbm(fo);
     } catch (const impulse::Error& e) {
         std::cerr << "error: " << e.what() << "\n";
         return 1;
