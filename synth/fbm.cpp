@@ -42,6 +42,12 @@ double default_memory_budget() {
 }
 
 namespace {
+std::string number(double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.17g", v);
+    return b;
+}
+
 std::string gib(double bytes) {
     char b[32];
     std::snprintf(b, sizeof b, "%.2f GiB", bytes / double(1ull << 30));
@@ -51,7 +57,7 @@ std::string gib(double bytes) {
 
 void check_fbm(const FbmOptions& o, double budget_bytes) {
     if (!(o.hurst > 0.0 && o.hurst < 1.0))
-        throw ValueError("hurst = " + std::to_string(o.hurst) + ": expected H in (0, 1)");
+        throw ValueError("hurst = " + number(o.hurst) + ": expected H in (0, 1)");
     if (o.size < 2 || o.size > 8192 || (o.size & (o.size - 1)) != 0)
         throw ValueError("size = " + std::to_string(o.size) +
                          ": expected a power of two from 2 to 8192");

@@ -52,7 +52,7 @@ public:
           m_G(exact_grid(o.size, o.hurst)), m_amp(eigenvalues()) {}
 
     Field realize(uint64_t seed) const override {
-        PeriodicField field(m_G);
+        PeriodicField field(m_G, m_size);
         field.fill(m_amp, seed, kStreamField);
         field.inverse();
         // The random plane's X1, X2: real and imaginary parts of one complex normal, each

@@ -30,15 +30,15 @@ std::vector<float> fbm_amplitudes(int n, double hurst) {
     const int h = n / 2 + 1;
     std::vector<double> spectrum(size_t(h) * h);
     const int grain = 64;
-    std::vector<double> partial((h + grain - 1) / grain, 0.0);
+    std::vector<double> partial((h + grain - 1) / grain, 0.0), step(h);
+    for (int kx = 0; kx < h; ++kx) step[kx] = 1.0 - std::cos(2.0 * M_PI * kx / n);
     parallel_blocks(h, grain, [&](int y0, int y1) {
         double sum = 0.0;
         for (int ky = y0; ky < y1; ++ky)
             for (int kx = 0; kx < h; ++kx) {
                 const double s = fbm_spectrum(kx, ky, hurst);
                 spectrum[size_t(ky) * h + kx] = s;
-                sum += fold_weight(kx, n) * fold_weight(ky, n) * s *
-                       (1.0 - std::cos(2.0 * M_PI * kx / n));
+                sum += fold_weight(kx, n) * fold_weight(ky, n) * s * step[kx];
             }
         partial[y0 / grain] = sum;
     });

@@ -137,7 +137,7 @@ public:
 
     Field realize(uint64_t seed) const override {
         const int M = m_M, N = 2 * M;
-        PeriodicField field(N);
+        PeriodicField field(N, M);
         field.fill(m_spectra.amp2, seed, kStreamField);  // steps 1 and 5
         const EdgeSums e = edge_sums(field, m_spectra.ampx, seed);
         field.inverse();  // step 6, eq. 16

@@ -27,14 +27,28 @@ int fast_size(int n) {
 
 namespace {
 
+// FFTW threads of every transform here: a constant, not the machine's core count, so the plan
+// (FFTW_ESTIMATE) and hence the bits are the same on every machine and under any --threads.
+// Set and reset under the planner lock, so other libraries' plans stay serial.
+constexpr int kFftThreads = 4;
+
+// Runs `plan` with the planner lock held and FFTW threads set to kFftThreads (float and double
+// planners alike).
+template <class Plan>
+auto with_threads(Plan plan) {
+    std::lock_guard<std::mutex> lock(fftw_planner_mutex());
+    static const bool threads = fftwf_init_threads() != 0 && fftw_init_threads() != 0;
+    if (threads) fftwf_plan_with_nthreads(kFftThreads), fftw_plan_with_nthreads(kFftThreads);
+    auto p = plan();
+    if (threads) fftwf_plan_with_nthreads(1), fftw_plan_with_nthreads(1);
+    return p;
+}
+
 // Plans and runs one in-place FFTW r2r (REDFT00 per axis) transform of `dims` sizes.
 void redft00(double* data, int rank, const int* dims) {
     const fftw_r2r_kind kinds[2] = {FFTW_REDFT00, FFTW_REDFT00};
-    fftw_plan plan;
-    {
-        std::lock_guard<std::mutex> lock(fftw_planner_mutex());
-        plan = fftw_plan_r2r(rank, dims, data, data, kinds, FFTW_ESTIMATE);
-    }
+    const fftw_plan plan =
+        with_threads([&] { return fftw_plan_r2r(rank, dims, data, data, kinds, FFTW_ESTIMATE); });
     if (plan == nullptr) throw Error("fftw: cannot plan a DCT-I of " + std::to_string(dims[0]));
     fftw_execute(plan);
     std::lock_guard<std::mutex> lock(fftw_planner_mutex());
@@ -95,23 +109,23 @@ void parallel_blocks(int count, int grain, const std::function<void(int, int)>& 
 
 namespace {
 
-// FFTW threads of every 2-D field transform: a constant, not the machine's core count, so the
-// plan (FFTW_ESTIMATE) and hence the bits are the same on every machine and under any
-// --threads. Set and reset under the planner lock, so other libraries' plans stay serial.
-constexpr int kFftThreads = 4;
-
-fftwf_plan plan_field(int n, fftwf_complex* spec, float* real) {
-    std::lock_guard<std::mutex> lock(fftw_planner_mutex());
-    static const bool threads = fftwf_init_threads() != 0;
-    if (threads) fftwf_plan_with_nthreads(kFftThreads);
-    fftwf_plan plan = fftwf_plan_dft_c2r_2d(n, n, spec, real, FFTW_ESTIMATE);
-    if (threads) fftwf_plan_with_nthreads(1);
-    return plan;
+// The two passes of the 2-D inverse: along y (every column k_x, stride n/2 + 1) and along x
+// (only the first `rows` rows, each n/2 + 1 complex in, n real out in place).
+std::pair<fftwf_plan, fftwf_plan> plan_field(int n, int rows, fftwf_complex* spec) {
+    return with_threads([&] {
+        const int h = n / 2 + 1;
+        fftwf_plan y = fftwf_plan_many_dft(1, &n, h, spec, nullptr, h, 1, spec, nullptr, h, 1,
+                                           FFTW_BACKWARD, FFTW_ESTIMATE);
+        float* real = reinterpret_cast<float*>(spec);
+        fftwf_plan x = fftwf_plan_many_dft_c2r(1, &n, rows, spec, nullptr, 1, h, real, nullptr,
+                                               1, 2 * h, FFTW_ESTIMATE);
+        return std::pair{y, x};
+    });
 }
 
 }  // namespace
 
-PeriodicField::PeriodicField(int n) : m_n(n) {
+PeriodicField::PeriodicField(int n, int rows) : m_n(n) {
     const size_t count = size_t(n) * half();
     auto* spec = fftwf_alloc_complex(count);
     if (spec == nullptr)
@@ -120,24 +134,32 @@ PeriodicField::PeriodicField(int n) : m_n(n) {
     // fftwf_complex is float[2], layout-compatible with std::complex<float> (FFTW manual §4.1.1).
     m_spec = reinterpret_cast<std::complex<float>*>(spec);
     m_real = reinterpret_cast<float*>(spec);
-    const fftwf_plan plan = plan_field(n, spec, m_real);
-    if (plan == nullptr) {
-        fftwf_free(spec);
+    const auto [y, x] = plan_field(n, std::clamp(rows, 1, n), spec);
+    m_plan_y = y, m_plan_x = x;
+    if (y == nullptr || x == nullptr) {
+        release();
         throw Error("fftw: cannot plan a " + std::to_string(n) + "x" + std::to_string(n) +
                     " inverse transform");
     }
-    m_plan = plan;
 }
 
-PeriodicField::~PeriodicField() {
+PeriodicField::~PeriodicField() { release(); }
+
+void PeriodicField::release() {
     {
         std::lock_guard<std::mutex> lock(fftw_planner_mutex());
-        fftwf_destroy_plan(static_cast<fftwf_plan>(m_plan));
+        if (m_plan_y) fftwf_destroy_plan(static_cast<fftwf_plan>(m_plan_y));
+        if (m_plan_x) fftwf_destroy_plan(static_cast<fftwf_plan>(m_plan_x));
     }
+    m_plan_y = m_plan_x = nullptr;
     fftwf_free(reinterpret_cast<fftwf_complex*>(m_spec));
+    m_spec = nullptr;
 }
 
-void PeriodicField::inverse() { fftwf_execute(static_cast<fftwf_plan>(m_plan)); }
+void PeriodicField::inverse() {
+    fftwf_execute(static_cast<fftwf_plan>(m_plan_y));
+    fftwf_execute(static_cast<fftwf_plan>(m_plan_x));
+}
 
 void PeriodicField::fill(const std::vector<float>& amp, uint64_t seed, uint32_t stream,
                          bool quarter) {
@@ -179,7 +201,7 @@ void PeriodicField::fill(const std::vector<float>& amp, uint64_t seed, uint32_t 
 
 std::vector<float> periodic_crop(int n, const std::vector<float>& amp, uint64_t seed, int size,
                                  bool quarter) {
-    PeriodicField field(n);
+    PeriodicField field(n, size);
     field.fill(amp, seed, kStreamField, quarter);
     field.inverse();
     std::vector<float> out(size_t(size) * size);

@@ -39,7 +39,10 @@ std::complex<double> complex_normal(uint64_t seed, uint32_t stream, int64_t a, i
 /// of stride 2 (n/2 + 1) floats).
 class PeriodicField {
 public:
-    explicit PeriodicField(int n);
+    /// `rows`: how many rows m_y in [0, rows) `inverse` must produce (the rest is left
+    /// undefined): the transform along x is skipped for the others (Kaplan & Kuo keep M of N
+    /// rows, Stein's embedding N of G).
+    PeriodicField(int n, int rows);
     ~PeriodicField();
     PeriodicField(const PeriodicField&) = delete;
     PeriodicField& operator=(const PeriodicField&) = delete;
@@ -57,16 +60,20 @@ public:
     /// k' = min(k, n - k) per axis; with quarter = false amp is the whole half spectrum's table,
     /// n rows k_y of n/2 + 1 (a density even only under k -> -k, e.g. an oriented kernel's).
     void fill(const std::vector<float>& amp, uint64_t seed, uint32_t stream, bool quarter = true);
-    /// In place: X -> x(m) = sum_k X(k) e^{+2 pi i k.m / n} (unnormalised inverse DFT, eq. 16).
+    /// In place: X -> x(m) = sum_k X(k) e^{+2 pi i k.m / n} (unnormalised inverse DFT, eq. 16)
+    /// for m_y < rows: complex transforms along y for every k_x, then c2r along x row by row.
     void inverse();
     /// x(m_x, m_y) after `inverse`.
     float at(int mx, int my) const { return m_real[size_t(my) * 2 * half() + mx]; }
 
 private:
+    void release();  ///< plans and buffer (the destructor's work; a failed constructor's too)
+
     int m_n;
     std::complex<float>* m_spec = nullptr;
     float* m_real = nullptr;
-    void* m_plan = nullptr;
+    void* m_plan_y = nullptr;  ///< n/2 + 1 complex columns of length n, in place
+    void* m_plan_x = nullptr;  ///< `rows` c2r rows of length n, in place
 };
 
 /// The periodic field with amplitude table `amp` (see fill), cropped to its top-left size^2.
