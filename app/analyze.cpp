@@ -1167,6 +1167,14 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
     if (kind == "video")
         R.notes.push_back("video: lossy compression alters the fine-scale spectrum and adds noise");
     if (opt.structure) R.structure = structure_of(frames);
+    if (!opt.variance_map.empty()) {
+        if (n < 2)
+            throw ValueError("--variance-map " + opt.variance_map +
+                             ": needs a sequence of at least 2 frames (realizations)");
+        analysis::PixelVariance pv;
+        for (const Image& f : frames) pv.add(f);
+        R.variance_map = pv.variance();
+    }
 
     return R;
 }

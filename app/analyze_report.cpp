@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "app/analyze.h"
+#include "render/render.h"
 #include "util/errors.h"
 
 namespace impulse::app {
@@ -1085,8 +1086,18 @@ std::string to_html(const AnalysisResult& r) {
 }
 
 int run_analyze(const AnalyzeOptions& options) {
+    if (!options.variance_map.empty() && !render::is_image_path(options.variance_map))
+        throw ValueError("--variance-map " + options.variance_map + ": expected an image path "
+                         "(.exr for the raw variances)");
     const AnalysisResult r = analyze_input(options);
     if (!options.report.empty()) write_atomically(options.report, to_html(r));
+    if (r.variance_map) {
+        const auto& v = *r.variance_map;
+        const auto [lo, hi] = std::minmax_element(v.data.begin(), v.data.end());
+        render::write_image(options.variance_map, render::Frame{v.width, v.height, v.data},
+                            {*lo, *hi > *lo ? *hi : *lo + 1.0}, {{"analysis", "pixel variance"}},
+                            true);
+    }
     std::cout << (options.json ? to_json(r) : to_text(r));
     if (!options.report.empty() && !options.json) std::cout << "wrote " << options.report << "\n";
     return 0;

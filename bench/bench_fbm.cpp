@@ -85,6 +85,7 @@ int main(int argc, char** argv) {
             const synth::FbmOptions o{method, H, N, false};
             const double busy0 = machine_busy_s(), own0 = own_cpu_s();
             const auto t0 = Clock::now();
+            std::fflush(stdout);  // the child must not inherit unwritten output
             const Result r = run_row(o);
             const double wall_s = ms_since(t0) / 1e3;
             // Other processes' CPU while the row ran, % of one core (the child's own CPU out).

@@ -73,3 +73,24 @@ TEST_CASE("synth fbm writes the field and analyze --structure measures it", "[cl
     // band of 0.0002, tests/synth); 0.03 is five of it.
     CHECK(std::abs(std::stod(a.out.substr(at + key.size())) - 0.3) < 0.03);
 }
+
+TEST_CASE("analyze --variance-map writes the per-pixel variance over frames", "[cli][synth]") {
+    TempDir dir;
+    for (int s = 0; s < 8; ++s)
+        REQUIRE(run(dir, "synth fbm --method exact --hurst 0.5 --size 64 --seed " +
+                             std::to_string(s) + " -o " +
+                             quote(dir / ("f_000" + std::to_string(s) + ".exr")))
+                    .status == 0);
+    const Result a = run(dir, "analyze " + quote(dir / "f_####.exr") + " --variance-map " +
+                                  quote(dir / "v.exr"));
+    REQUIRE(a.status == 0);
+    const impulse::render::Frame v = impulse::render::read_image(dir / "v.exr");
+    CHECK(v.at(0, 0) == 0.0f);  // B(0, 0) = 0 in every realization
+    // VAR B(m) = |m|^{2H} = |m| for H = 1/2: the far corner (89.1) against (1, 1) (1.41); with 8
+    // realizations each estimate is within a factor of ~3 (chi-square with 7 degrees of freedom).
+    CHECK(v.at(63, 63) > 10.0f * v.at(1, 1));
+    const Result one = run(dir, "analyze " + quote(dir / "f_0000.exr") + " --variance-map " +
+                                    quote(dir / "w.exr"));
+    CHECK(one.status != 0);
+    CHECK_THAT(one.err, Contains("at least 2 frames"));
+}
