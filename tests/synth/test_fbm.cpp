@@ -155,9 +155,23 @@ TEST_CASE("fBm: standard Fourier synthesis drifts (Kaplan & Kuo Fig. 3)", "[synt
 }
 
 TEST_CASE("fBm: sigma^2 = 1 and B(0, 0) = 0", "[synth]") {
-    for (FbmMethod m : {FbmMethod::Exact, FbmMethod::Incremental}) {
-        const synth::Field f = synth::fbm({m, 0.5, 64, false}, 7);
-        CHECK(f.at(0, 0) == 0.0f);
+    const int lag1[] = {1};
+    for (FbmMethod m : {FbmMethod::Exact, FbmMethod::Incremental, FbmMethod::Fourier}) {
+        const synth::FbmSynth synth({m, 0.5, 128, false});
+        std::vector<double> f1;
+        for (int r = 0; r < 16; ++r) {
+            const analysis::Image im = to_image(synth.realize(7 + r));
+            if (m != FbmMethod::Fourier) CHECK(im.at(0, 0) == 0.0f);
+            f1.push_back(analysis::structure_function(im, lag1).f[0]);
+        }
+        // sigma^2 = E[(B(m + e) - B(m))^2] = 1 within kZ standard errors of the mean over the
+        // realizations (the pixels of one realization are correlated: their spread is what counts).
+        double mean = 0, var = 0;
+        for (double v : f1) mean += v / f1.size();
+        for (double v : f1) var += (v - mean) * (v - mean) / (f1.size() - 1);
+        const double se = std::sqrt(var / f1.size());
+        INFO(synth::to_string(m) << ": f(1) = " << mean << " +- " << se);
+        CHECK(std::abs(mean - 1.0) < kZ * se);
     }
 }
 
@@ -208,4 +222,24 @@ TEST_CASE("fBm: bad input is refused", "[synth][errors]") {
                         Contains("GiB"));
     CHECK(synth::fbm_memory_bytes({FbmMethod::Exact, 0.8, 8192, false}) > 4.0 * (1 << 30));
     CHECK_NOTHROW(synth::check_fbm({FbmMethod::Incremental, 0.5, 8192, false}, 4.0 * (1 << 30)));
+}
+
+TEST_CASE("incremental synthesis of an arbitrary structure function (Kaplan & Kuo §VI)",
+          "[synth][stats]") {
+    // f~(r) = r^{0.6} up to 16 px, then growing as r^{1.4}: H(s) = 0.3 at the fine scales, 0.7
+    // at the coarse ones (an "extended self-similar" surface).
+    const auto ft = [](double r) {
+        return r <= 16.0 ? std::pow(r, 0.6) : std::pow(16.0, 0.6) * std::pow(r / 16.0, 1.4);
+    };
+    analysis::StructureAccumulator acc(5);
+    for (int r = 0; r < 32; ++r) acc.add(to_image(synth::incremental_synthesis(256, ft, 500 + r)));
+    const auto S = acc.summary();
+    for (int s : {0, 1, 2}) {
+        INFO("s = " << s << ": H(s) = " << S.hurst[s] << " +- " << S.hurst_stderr[s]);
+        CHECK(std::abs(S.hurst[s] - 0.3) <= 0.05 + kZ * S.hurst_stderr[s]);
+    }
+    for (int s : {4, 5}) {
+        INFO("s = " << s << ": H(s) = " << S.hurst[s] << " +- " << S.hurst_stderr[s]);
+        CHECK(std::abs(S.hurst[s] - 0.7) <= 0.05 + kZ * S.hurst_stderr[s]);
+    }
 }
