@@ -896,6 +896,17 @@ TheoryComparison compare_with_theory(const scenes::Scene& scene, const std::stri
     return T;
 }
 
+// Structure function at dyadic lags up to a quarter of the smaller side, H(s) pooled over the
+// frames (Kaplan & Kuo eq. 21).
+analysis::StructureSummary structure_of(std::span<const Image> frames) {
+    const int quarter = std::min(frames.front().width, frames.front().height) / 4;
+    int max_s = 0;
+    while ((4 << max_s) <= quarter) ++max_s;  // lags up to 2^{max_s + 1} <= quarter
+    analysis::StructureAccumulator acc(max_s);
+    for (const Image& f : frames) acc.add(f);
+    return acc.summary();
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -1148,6 +1159,15 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
             "back to field values and compare with theory");
     if (kind == "video")
         R.notes.push_back("video: lossy compression alters the fine-scale spectrum and adds noise");
+    if (opt.structure) R.structure = structure_of(frames);
+    if (!opt.variance_map.empty()) {
+        if (n < 2)
+            throw ValueError("--variance-map " + opt.variance_map +
+                             ": needs a sequence of at least 2 frames (realizations)");
+        analysis::PixelVariance pv;
+        for (const Image& f : frames) pv.add(f);
+        R.variance_map = pv.variance();
+    }
 
     return R;
 }

@@ -20,6 +20,8 @@ struct AnalyzeOptions {
     std::vector<std::string> sets;  ///< --set overrides of the scene
     std::string frames;             ///< "A-B" or "A", inclusive and 0-based; empty: from 0
     long long max_frames = 0;       ///< > 0: analyse at most this many frames
+    bool structure = false;         ///< structure function and H(s) (Kaplan & Kuo eq. 21)
+    std::string variance_map;       ///< CLI only: write the per-pixel variance over frames (EXR)
     bool json = false;              ///< CLI only: print JSON instead of text
     std::string json_file;          ///< CLI only: --json FILE writes the JSON there (text printed)
     std::string report;             ///< CLI only: write an HTML report here
@@ -121,6 +123,12 @@ struct AnalysisResult {
     double tau_mean = 1.0, tau_variance = 1.0, tau_spectrum = 1.0;
     Stationarity stationarity;
     std::optional<TheoryComparison> theory;
+    /// With --structure: f(d) along x, y and the diagonal at dyadic lags up to a quarter of the
+    /// frame, H(s) with its band over the frames (analysis/structure.cpp).
+    std::optional<analysis::StructureSummary> structure;
+    /// With a variance map requested: the per-pixel variance over the frames (Kaplan & Kuo
+    /// Figs. 1-2; >= 2 frames).
+    std::optional<analysis::Image> variance_map;
     std::vector<std::string> notes;
 };
 

@@ -17,6 +17,7 @@
 
 #include "app/analyze.h"
 #include "numeric/errors.h"
+#include "output/output.h"
 
 namespace impulse::app {
 namespace {
@@ -771,6 +772,15 @@ std::string to_text(const AnalysisResult& r) {
         o << "stationary: " << yes_no(st.stationary) << " (" << stationarity_verdict(st) << ")\n";
     else
         o << "stationary: n/a (" << st.reason << ")\n";
+    if (r.structure) {
+        const auto& S = *r.structure;
+        std::string hs;
+        for (size_t s = 0; s < S.hurst.size(); ++s)
+            hs += (s ? ", " : "") + fmt(S.hurst[s], 3) +
+                  (S.realizations > 1 ? " +- " + fmt(S.hurst_stderr[s], 2) : "");
+        line("H(s)", "s = 0.." + std::to_string(S.hurst.size() - 1) + ": " + hs +
+                         " (Kaplan & Kuo eq. 21, f along x and y)");
+    }
     for (const auto& n : r.notes) o << "note: " << n << "\n";
 
     // Tables.
@@ -965,6 +975,18 @@ std::string to_json(const AnalysisResult& r) {
     } else {
         j.null();
     }
+    if (r.structure) {
+        const auto& S = *r.structure;
+        j.key("structure").open('{').key("lags").nums(S.lags).key("f").nums(S.f);
+        j.key("fx").nums(S.fx).key("fy").nums(S.fy).key("diagonal").nums(S.diagonal);
+        j.key("realizations").integer(S.realizations).key("hurst").open('[');
+        for (size_t s = 0; s < S.hurst.size(); ++s)
+            j.open('{').key("s").integer(long(s)).key("H").num(S.hurst[s])
+                .key("stderr").num(S.hurst_stderr[s]).key("H_x").num(S.hurst_x[s])
+                .key("H_y").num(S.hurst_y[s]).key("H_diagonal").num(S.hurst_diagonal[s])
+                .close('}');
+        j.close(']').close('}');
+    }
     j.key("notes").open('[');
     for (const auto& n : r.notes) j.str(n);
     j.close(']');
@@ -1067,8 +1089,18 @@ std::string to_html(const AnalysisResult& r) {
 }
 
 int run_analyze(const AnalyzeOptions& options) {
+    if (!options.variance_map.empty() && !output::is_image_path(options.variance_map))
+        throw ValueError("--variance-map " + options.variance_map + ": expected an image path "
+                         "(.exr for the raw variances)");
     const AnalysisResult r = analyze_input(options);
     if (!options.report.empty()) write_atomically(options.report, to_html(r));
+    if (r.variance_map) {
+        const auto& v = *r.variance_map;
+        const auto [lo, hi] = std::minmax_element(v.data.begin(), v.data.end());
+        output::write_image(options.variance_map, numeric::Frame{v.width, v.height, v.data},
+                            {*lo, *hi > *lo ? *hi : *lo + 1.0}, {{"analysis", "pixel variance"}},
+                            true);
+    }
     if (!options.json_file.empty()) write_atomically(options.json_file, to_json(r));
     std::cout << (options.json && options.json_file.empty() ? to_json(r) : to_text(r));
     if (!options.report.empty() && !options.json) std::cout << "wrote " << options.report << "\n";

@@ -8,6 +8,7 @@
 
 #include "app/analyze.h"
 #include "app/commands.h"
+#include "app/synth_fbm.h"
 #include "app/synth_gss.h"
 #include "numeric/errors.h"
 
@@ -73,6 +74,11 @@ int main(int argc, char** argv) {
     analyze->add_option("--json", ao.json_file,
                         "Print one JSON object instead of text; --json FILE writes it to FILE")
         ->expected(0, 1);
+    analyze->add_flag("--structure", ao.structure,
+                      "Structure function along x, y, diagonal and the generalised Hurst "
+                      "exponent H(s) (with its band over frames)");
+    analyze->add_option("--variance-map", ao.variance_map,
+                        "Write the per-pixel variance over the frames (realizations) as an image");
     analyze->add_option("--report", ao.report, "Write a self-contained HTML report (plots as SVG)");
     analyze->add_option("--frames", ao.frames, "Inclusive 0-based frame range A-B, or one frame A");
     analyze->add_option("--max-frames", ao.max_frames, "Analyse at most N frames")
@@ -83,9 +89,12 @@ int main(int argc, char** argv) {
     std::signal(SIGXFSZ, SIG_IGN);
 
     CLI::App* synth = app.add_subcommand(
-        "synth", "Synthesize a field with another algorithm than the point process");
+        "synth", "Synthesize a field with another algorithm than the point process: "
+                 "stochastic subdivision (gss), fractional Brownian surfaces (fbm)");
     synth->require_subcommand(1);
     impulse::app::add_synth_gss(*synth);
+    impulse::app::SynthFbmOptions fo;
+    CLI::App* synth_fbm = impulse::app::add_synth_fbm(*synth, fo);
 
     try {
         app.parse(argc, argv);
@@ -101,7 +110,8 @@ int main(int argc, char** argv) {
         if (*scenes) return impulse::app::run_scenes();
         if (*info) return impulse::app::run_info(io);
         if (*analyze) return impulse::app::run_analyze(ao);
-        if (*synth) return 0;  // its subcommands ran in their callbacks
+        if (*synth_fbm) return impulse::app::run_synth_fbm(fo);
+        if (*synth) return 0;  // gss ran in its callback
     } catch (const impulse::Error& e) {
         std::cerr << "error: " << e.what() << "\n";
         return 1;
