@@ -13,6 +13,7 @@
 #include "numeric/rng.h"
 #include "numeric/errors.h"
 #include "numeric/fft.h"
+#include "numeric/fft.h"
 
 namespace impulse::synth::detail {
 
