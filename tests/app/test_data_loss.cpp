@@ -77,8 +77,12 @@ void on_small_disks(int kib, Body body) {
                  "below stands in for a full disk");
         } else {
             ++tried;
+            // Unmounted however the body ends (a failed REQUIRE throws).
+            struct Unmount {
+                fs::path at;
+                ~Unmount() { ::umount(at.c_str()); }
+            } unmount{disk.mount};
             body(disk, dir);
-            ::umount(disk.mount.c_str());
         }
     }
     TempDir dir("fsize");
@@ -271,7 +275,7 @@ void copy(const std::string& from, const std::string& to) {
 
 }  // namespace
 
-TEST_CASE("--resume renders again the frames that do not check out, and says why",
+TEST_CASE("render --resume renders again the frames that do not check out, and says why",
           "[cli][dataloss]") {
     TempDir dir("resume");
     write_file(dir / "four.toml", kFour);
@@ -313,7 +317,7 @@ TEST_CASE("--resume renders again the frames that do not check out, and says why
     CHECK(impulse::output::probe_image(dir / "t_0003.tif").width == 96);
 }
 
-TEST_CASE("--resume removes the temporaries of killed runs of its own pattern", "[cli][dataloss]") {
+TEST_CASE("render --resume removes the temporaries of killed runs of its own pattern", "[cli][dataloss]") {
     TempDir dir("stale");
     write_file(dir / "four.toml", kFour);
     fs::create_directories(dir.path() / "seq");
