@@ -207,13 +207,12 @@ bool fit_markaussian(const std::vector<std::pair<double, double>>& pts, double& 
         sx += x, sy += y, sxx += x * x, sxy += x * y, ++n;
     }
     if (n == 0) return false;
-    if (n == 1) {  // one usable lag: a Markov fit through it
+    const double den = n * sxx - sx * sx;
+    if (!(den > 1e-9 * n * n)) {  // one lag (along x, y or both): a Markov fit through it
         exponent = 1;
-        length = std::exp(sx - sy);
+        length = std::exp((sx - sy) / n);
         return true;
     }
-    const double den = n * sxx - sx * sx;
-    if (!(den > 0)) return false;
     exponent = std::clamp((n * sxy - sx * sy) / den, 0.1, 2.0);
     // y = a x - a log l, so log l = (a mean(x) - mean(y)) / a.
     length = std::exp((exponent * sx / n - sy / n) / exponent);
