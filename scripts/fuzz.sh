@@ -47,7 +47,7 @@ fuzz() {
         max_len=65536
     fi
     ./build-fuzz/fuzz/"$target" "$found" "$corpus" "${seeds[@]}" -max_total_time="$seconds" \
-        -timeout=30 -rss_limit_mb=2048 -max_len="$max_len" -artifact_prefix=build-fuzz/crashes/"$name"- \
+        -timeout=60 -rss_limit_mb=2048 -max_len="$max_len" -artifact_prefix=build-fuzz/crashes/"$name"- \
         -print_final_stats=1 > build-fuzz/"$target".log 2>&1 \
         || { tail -60 build-fuzz/"$target".log; rm -rf "$found"; return 1; }
     ./build-fuzz/fuzz/"$target" -merge=1 -max_len="$max_len" "$corpus" "$found" \

@@ -222,7 +222,7 @@ TEST_CASE("a spectrum table whose last row is at the Nyquist frequency renders",
     write_text(dir / "scene.toml", "[output]\nsize = [48, 32]\n[[layer]]\n[layer.kernel]\n"
                                    "type = \"spectrum\"\ntable = \"tab.csv\"\n");
     const Result r = run(dir, "render " + quote(dir / "scene.toml") + " -o " + quote(dir / "f.exr"));
-    CHECK(r.err.empty());
+    CHECK_THAT(r.err, !Contains("error"));  // the design's warnings only
     REQUIRE(r.status == 0);
     CHECK(impulse::output::read_image(dir / "f.exr").width == 48);
 }
