@@ -98,6 +98,8 @@ int main(int argc, char** argv) {
 
     try {
         app.parse(argc, argv);
+    } catch (const CLI::RuntimeError& e) {
+        return e.get_exit_code();  // a subcommand that ran in its callback (synth gss) failed
     } catch (const CLI::ParseError& e) {
         // CLI11's own codes (105, 106, ...) are not what scripts test for: 2, as getopt tools.
         return app.exit(e) == 0 ? 0 : 2;
