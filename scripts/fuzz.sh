@@ -50,7 +50,8 @@ fuzz() {
         -timeout=60 -rss_limit_mb=2048 -max_len="$max_len" -artifact_prefix=build-fuzz/crashes/"$name"- \
         -print_final_stats=1 > build-fuzz/"$target".log 2>&1 \
         || { tail -60 build-fuzz/"$target".log; rm -rf "$found"; return 1; }
-    ./build-fuzz/fuzz/"$target" -merge=1 -max_len="$max_len" "$corpus" "$found" \
+    ./build-fuzz/fuzz/"$target" -merge=1 -max_len="$max_len" -timeout=60 \
+        -artifact_prefix=build-fuzz/crashes/"$name"- "$corpus" "$found" \
         > build-fuzz/"$target"-merge.log 2>&1 || { tail -20 build-fuzz/"$target"-merge.log; return 1; }
     rm -rf "$found"
     local runs cov
