@@ -493,15 +493,22 @@ int run_info(const InfoOptions& opt) {
     std::printf("output     %dx%d, %lld frame%s at %g fps\n", scene.output.width, scene.output.height,
                 nframes, nframes == 1 ? "" : "s", scene.output.fps);
     bool keyframed = false;
-    for (const auto& l : scene.layers) keyframed = keyframed || l.keyframed();
+    bool sources = false;  // layers drawn by another synthesizer state their own theory
+    for (const auto& l : scene.layers) keyframed = keyframed || l.keyframed(), sources = sources || l.source;
     std::printf("mean       %.6g\nvariance   %.6g (%s%s)\n", t.mean, t.variance,
-                scenes::is_sum_of_layers(scene)
-                    ? "Campbell's theorem"
-                    : "Campbell's theorem, layers composed: docs/scenes.md \"Composition\"",
+                scenes::is_sum_of_layers(scene) ? "Campbell's theorem"
+                : sources ? "each layer's closed form, composed: docs/scenes.md \"Composition\""
+                          : "Campbell's theorem, layers composed: docs/scenes.md \"Composition\"",
                 keyframed ? ", at t = 0: layers are keyframed" : "");
     for (size_t i = 0; i < scene.layers.size(); ++i) {
         const auto& l = scene.layers[i];
         const auto lt = scenes::layer_theory(l);
+        if (l.source) {  // another synthesizer's field (scenes/source.h)
+            std::printf("layer[%zu]   %s source, mean=%.6g variance=%.6g%s%s\n", i,
+                        std::string(l.source->kind()).c_str(), lt.mean, lt.variance,
+                        l.keyframed() ? " (keyframed)" : "", composition_text(l).c_str());
+            continue;
+        }
         std::printf("layer[%zu]   %s r=%g density=%g lambda=%.4g/unit^2 variance=%.6g%s%s%s\n", i,
                     std::string(kernels::to_string(l.kernel.type)).c_str(), l.kernel.radius,
                     l.density.value(0.0), l.process.intensity, lt.variance,

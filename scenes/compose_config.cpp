@@ -216,6 +216,10 @@ void CompositionReader::resolve(Scene& scene) {
                 auto unfit = [&](const std::string& why) {
                     ref.reader.fail(ref.node, ref.key, src + " " + why);
                 };
+                if (source.source)
+                    unfit("is a " + std::string(source.source->kind()) +
+                          " layer: a stream function is an impulse layer's field, whose "
+                          "derivatives the flow takes in closed form");
                 const auto& p = source.process;
                 if (p.lifetime_s > 0)
                     unfit("has lifetime = " + num(p.lifetime_s) +

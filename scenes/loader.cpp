@@ -18,6 +18,7 @@
 #include "scenes/compose_detail.h"
 #include "scenes/marginal.h"
 #include "scenes/reader.h"
+#include "scenes/source_detail.h"
 #include "scenes/scenes.h"
 #include "numeric/errors.h"
 
@@ -122,6 +123,28 @@ void apply_override(toml::table& root, const std::string& text, Source& src) {
     }
     t->insert_or_assign(last, *doc.get("v"));
     src.overrides[shown] = text;
+}
+
+/// A [[layer]] drawn by another synthesizer (source = "fbm"): its seed, mean, gain, marginal and
+/// composition; the impulse process's keys are refused (scenes/source.h).
+void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path& base,
+                       detail::CompositionReader& compose, LayerConfig& L) {
+    const std::string kind(detail::kLayerSourceNames[r.choice("source", detail::kLayerSourceNames, 0)]);
+    for (std::string_view key : {"kernel", "density", "amplitude", "period", "lifetime", "envelope",
+                                 "loop", "integrator", "substeps", "jacobian", "orientation",
+                                 "region", "max_travel", "flow"})
+        if (r.has(key))
+            r.fail(r.node(key), key,
+                   "a " + kind + " layer has no " + std::string(key) +
+                       ": it belongs to the impulse process (source = \"impulses\")");
+    L.process.layer = static_cast<uint32_t>(i);
+    L.process.seed = mix_seed(global_seed, static_cast<uint64_t>(r.integer("seed", 1, 0, INT64_MAX)));
+    L.mean = r.keyframed("mean", 0.0);
+    L.gain = r.keyframed("gain", 1.0);
+    L.source = detail::read_fbm_source(r.table(kind), L.process.seed);
+    detail::read_marginal(r, L, base);
+    compose.read_layer(r, i, L);
+    r.finish();
 }
 
 CameraConfig read_camera(std::optional<Reader> r, int width, int height) {
@@ -708,6 +731,11 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base, Out
     for (size_t i = 0; i < layers.size(); ++i) {
         Reader& r = layers[i];
         LayerConfig L;
+        if (r.has("source") && r.choice("source", detail::kLayerSourceNames, 0) != 0) {
+            read_source_layer(r, i, global_seed, base, compose, L);
+            s.layers.push_back(std::move(L));
+            continue;
+        }
         const bool pyramid = s.camera.type == CameraConfig::Type::Perspective || s.camera.antialiased();
         L.kernel = read_kernel(r.table("kernel"), r, base, L.kernel_keys, pyramid);
         if (!r.has("kernel")) r.node("kernel");

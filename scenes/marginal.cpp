@@ -178,6 +178,10 @@ void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base)
         m->fail(m->node("type"), "type", e.what());
     }
     if (!precorrect) return;
+    if (L.source)
+        m->fail(m->node("precorrect"), "precorrect",
+                "needs an impulse layer's kernel to correct; a " + std::string(L.source->kind()) +
+                    " layer's spectrum is its synthesizer's");
     try {
         const kernels::Precorrection pc =
             kernels::precorrect_spectrum(kernels::Kernel(L.kernel), *L.marginal);

@@ -91,6 +91,24 @@ int FbmSynth::fft_size() const { return m_impl->fft_size(); }
 
 Surface fbm(const FbmOptions& options, uint64_t seed) { return FbmSynth(options).realize(seed); }
 
+double fbm_tile_variance(double hurst, int n) {
+    // (1/2) (1/n^4) sum over lags (dx, dy) of (n - |dx|)(n - |dy|) |d|^{2H}, by symmetry over
+    // dx, dy >= 0 with weight 2 for each non-zero component.
+    double sum = 0.0;
+    for (int dy = 0; dy < n; ++dy) {
+        const double wy = (dy == 0 ? 1.0 : 2.0) * (n - dy);
+        double row = 0.0;
+        for (int dx = 0; dx < n; ++dx) {
+            if (dx == 0 && dy == 0) continue;
+            const double wx = (dx == 0 ? 1.0 : 2.0) * (n - dx);
+            row += wx * std::pow(double(dx) * dx + double(dy) * dy, hurst);
+        }
+        sum += wy * row;
+    }
+    const double n2 = double(n) * n;
+    return 0.5 * sum / (n2 * n2);
+}
+
 Surface incremental_synthesis(int size, const std::function<double(double)>& structure,
                             uint64_t seed) {
     if (size < 2 || (size & (size - 1)) != 0)

@@ -75,6 +75,16 @@ Surface fbm(const FbmOptions& options, uint64_t seed);
 /// sigma^2 = 1. Exact fBm has d^{2H}; this saturates at the period.
 std::vector<double> fourier_fbm_structure(const FbmOptions& options, const std::vector<int>& lags);
 
+/// R(0), the variance of the seamless Fourier field (options.seamless, a stationary field on the
+/// N-torus with sigma^2 = 1): (1/n^2) sum_k R^(k) with C set by sigma^2 (eq. 14). Its spatial
+/// mean is 0 (no DC term), so this is also the expected variance about a tile's mean.
+double fourier_fbm_variance(const FbmOptions& options);
+/// The expected variance of fBm (sigma^2 = 1 per sample step, E[(B(x) - B(y))^2] = |x - y|^{2H}
+/// in samples) about its own mean over an n x n tile of samples: (1/2) E|x - y|^{2H} over pairs
+/// of the tile's samples (the mean over x of (B(x) - mean B)^2 is half the mean over pairs of
+/// (B(x) - B(y))^2). Sums the lag multiplicities (n - |dx|)(n - |dy|): O(n^2).
+double fbm_tile_variance(double hurst, int n);
+
 /// Incremental Fourier synthesis of a surface with an arbitrary isotropic structure function
 /// f~(r) (Kaplan & Kuo §VI: f~ substituted in eqs. 6-8), f~(0) = 0, f~(1) = 1 for sigma^2 = 1;
 /// r^{2H} gives fBm. Output N x N, N a power of two.

@@ -96,6 +96,20 @@ std::vector<double> fourier_fbm_structure(const FbmOptions& o, const std::vector
     return f;
 }
 
+double fourier_fbm_variance(const FbmOptions& o) {
+    // R(0) = (1/n^2) sum_k R^(k) and sigma^2 = (2/n^2) sum_k R^(k) (1 - cos(2 pi k_x / n)) = 1.
+    const int n = o.seamless ? o.size : 2 * o.size, h = n / 2 + 1;
+    double all = 0.0, step = 0.0;
+    for (int ky = 0; ky < h; ++ky)
+        for (int kx = 0; kx < h; ++kx) {
+            const double w = detail::fold_weight(kx, n) * detail::fold_weight(ky, n) *
+                             detail::fbm_spectrum(kx, ky, o.hurst);
+            all += w;
+            step += w * (1.0 - std::cos(2.0 * M_PI * kx / n));
+        }
+    return all / (2.0 * step);
+}
+
 Surface fourier_synthesis(int n, const std::function<double(double, double)>& density,
                         uint64_t seed) {
     const int h = n / 2 + 1;

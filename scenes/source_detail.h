@@ -1,0 +1,23 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// Layer sources read from scene files (internal to impulse::scenes): [[layer]] source = "fbm".
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string_view>
+
+#include "scenes/reader.h"
+#include "scenes/source.h"
+
+namespace impulse::scenes::detail {
+
+/// The values of a [[layer]]'s `source` key: "impulses" (the default) draws the point process.
+inline constexpr std::array<std::string_view, 2> kLayerSourceNames = {"impulses", "fbm"};
+
+/// A fractional Brownian surface layer from its [layer.fbm] table (absent: the defaults) and
+/// the layer's seed: the realised grid is made here, once. Throws SceneError at the key.
+std::shared_ptr<const LayerSource> read_fbm_source(std::optional<Reader> fbm, uint64_t seed);
+
+}  // namespace impulse::scenes::detail
