@@ -128,7 +128,7 @@ void apply_override(toml::table& root, const std::string& text, Source& src) {
 /// A [[layer]] drawn by another synthesizer (source = "fbm"): its seed, mean, gain, marginal and
 /// composition; the impulse process's keys are refused (scenes/source.h).
 void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path& base,
-                       detail::CompositionReader& compose, LayerConfig& L) {
+                       const Limits& limits, detail::CompositionReader& compose, LayerConfig& L) {
     const std::string kind(detail::kLayerSourceNames[r.choice("source", detail::kLayerSourceNames, 0)]);
     for (std::string_view key : {"kernel", "density", "amplitude", "period", "lifetime", "envelope",
                                  "loop", "integrator", "substeps", "jacobian", "orientation",
@@ -141,7 +141,7 @@ void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path
     L.process.seed = mix_seed(global_seed, static_cast<uint64_t>(r.integer("seed", 1, 0, INT64_MAX)));
     L.mean = r.keyframed("mean", 0.0);
     L.gain = r.keyframed("gain", 1.0);
-    L.source = detail::read_fbm_source(r.table(kind), L.process.seed);
+    L.source = detail::read_fbm_source(r.table(kind), L.process.seed, limits.max_memory_mib);
     detail::read_marginal(r, L, base);
     compose.read_layer(r, i, L);
     r.finish();
@@ -732,7 +732,7 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base, Out
         Reader& r = layers[i];
         LayerConfig L;
         if (r.has("source") && r.choice("source", detail::kLayerSourceNames, 0) != 0) {
-            read_source_layer(r, i, global_seed, base, compose, L);
+            read_source_layer(r, i, global_seed, base, s.limits, compose, L);
             s.layers.push_back(std::move(L));
             continue;
         }

@@ -17,7 +17,9 @@ namespace impulse::scenes::detail {
 inline constexpr std::array<std::string_view, 2> kLayerSourceNames = {"impulses", "fbm"};
 
 /// A fractional Brownian surface layer from its [layer.fbm] table (absent: the defaults) and
-/// the layer's seed: the realised grid is made here, once. Throws SceneError at the key.
-std::shared_ptr<const LayerSource> read_fbm_source(std::optional<Reader> fbm, uint64_t seed);
+/// the layer's seed: the realised grid is made here, once. Throws SceneError at the key, also
+/// when making it would need more than `max_memory_mib` (limits.max_memory_mib).
+std::shared_ptr<const LayerSource> read_fbm_source(std::optional<Reader> fbm, uint64_t seed,
+                                                   double max_memory_mib);
 
 }  // namespace impulse::scenes::detail

@@ -122,6 +122,8 @@ TEST_CASE("an fbm layer's bad input is one line at the key", "[scenes][source][f
     fails_with(base + "[layer.fbm]\nhurst = 1.5\n", "bad.toml:6:9: layer[0].fbm.hurst = 1.5");
     fails_with(base + "[layer.fbm]\nsamples = 100\n", "expected a power of two in [2, 4096]");
     fails_with(base + "[layer.fbm]\nmethod = \"wavelet\"\n", "fourier, incremental, exact");
+    fails_with("[limits]\nmax_memory_mib = 64\n" + base + "[layer.fbm]\nsamples = 4096\n",
+               "layer[0].fbm.samples = 4096: the surface needs an estimated");
     fails_with(base + "density = 4.0\n", "a fbm layer has no density");
     fails_with(base + "[layer.kernel]\ntype = \"cosine\"\n", "a fbm layer has no kernel");
     fails_with("[[layer]]\nsource = \"fbmish\"\n", "impulses, fbm");
