@@ -144,7 +144,6 @@ struct StillCell {
     Kept kept = All;
     uint64_t mask = 0;
 };
-class DrawBatch;
 class NormalBatch;
 /// Plan the cells [cx0, cx1] of row cy of a still process against `keep` into plans[0, ...];
 /// returns how many of their impulses fall in `keep`. `draws` is scratch.
