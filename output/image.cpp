@@ -15,6 +15,7 @@
 #include <sstream>
 #include <system_error>
 
+#include "output/image_input.h"
 #include "output/output.h"
 #include "numeric/errors.h"
 
@@ -203,8 +204,9 @@ bool keeps_metadata(const std::string& path) {
 
 std::string image_mismatch(const std::string& path, int width, int height, int channels,
                            bool bits16, const Metadata& metadata) {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) return "unreadable: " + one_line(OIIO::geterror());
+    std::string error;
+    auto in = open_image_input(path, error);
+    if (!in) return "unreadable: " + error;
     const OIIO::ImageSpec& spec = in->spec();
     std::ostringstream why;
     if (spec.width != width || spec.height != height)
@@ -236,8 +238,9 @@ std::string image_mismatch(const std::string& path, int width, int height, int c
 }
 
 Frame read_image(const std::string& path) {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) throw IoError(path + ": cannot read: " + OIIO::geterror());
+    std::string error;
+    auto in = open_image_input(path, error);
+    if (!in) throw IoError(path + ": " + error);
     const OIIO::ImageSpec& spec = in->spec();
     const int w = spec.width, h = spec.height, nc = spec.nchannels;
     if (const std::string bad = image_size_problem(w, h, spec.depth, nc); !bad.empty())
@@ -260,8 +263,9 @@ Frame read_image(const std::string& path) {
 }
 
 ImageInfo probe_image(const std::string& path) {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) throw IoError(path + ": cannot read: " + OIIO::geterror());
+    std::string error;
+    auto in = open_image_input(path, error);
+    if (!in) throw IoError(path + ": " + error);
     const OIIO::ImageSpec& spec = in->spec();
     ImageInfo info;
     info.width = spec.width;

@@ -2,14 +2,13 @@
 // [camera] beyond the orthographic center/zoom (type, perspective placement, anti-aliasing) and
 // layer.orientation fields (docs/scenes.md).
 
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <set>
 #include <sstream>
 
+#include "output/image_input.h"
 #include "scenes/camera_detail.h"
 #include "numeric/errors.h"
 
@@ -232,12 +231,9 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
                        "expected the path of an orientation image (1 channel: angle in "
                        "radians; 2 channels: direction x, y)");
             const fs::path path = resolve_path(pn, rel, base);
-            auto in = OIIO::ImageInput::open(path.string());
-            if (!in) {
-                std::string e = OIIO::geterror();
-                std::replace(e.begin(), e.end(), '\n', ' ');
-                f.fail(pn, "path", "cannot read: " + e);
-            }
+            std::string error;
+            auto in = output::open_image_input(path.string(), error);
+            if (!in) f.fail(pn, "path", error);
             const auto& spec = in->spec();
             if (const std::string bad = output::image_size_problem(spec.width, spec.height,
                                                                    spec.depth, spec.nchannels);

@@ -1,8 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // Scene files -> typed configuration (schema: docs/scenes.md).
 
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
@@ -14,6 +12,7 @@
 #include <optional>
 #include <sstream>
 
+#include "output/image_input.h"
 #include "scenes/camera_detail.h"
 #include "scenes/compose_detail.h"
 #include "scenes/marginal.h"
@@ -257,8 +256,9 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
                 const std::string rel = f.string("path", "");
                 if (rel.empty()) f.fail(pn, "path", "expected the path of a 2-channel velocity image");
                 const fs::path p = detail::resolve_path(pn, rel, base);
-                auto in = OIIO::ImageInput::open(p.string());
-                if (!in) f.fail(pn, "path", "cannot read: " + OIIO::geterror());
+                std::string error;
+                auto in = output::open_image_input(p.string(), error);
+                if (!in) f.fail(pn, "path", error);
                 const auto& spec = in->spec();
                 if (const std::string bad = output::image_size_problem(
                         spec.width, spec.height, spec.depth, spec.nchannels);

@@ -1,14 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 // The [shading] table: colour ramps (named or explicit), height-field relief, background.
 
-#include <OpenImageIO/imageio.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <map>
 
+#include "output/image_input.h"
 #include "numeric/gaussian.h"
 #include "scenes/reader.h"
 #include "scenes/scenes.h"
@@ -36,11 +35,8 @@ const std::map<std::string, Ramp>& named_ramps() {
 
 /// Reads an image's pixels as floats (all channels); false with a message on failure.
 bool read_rgb_pixels(const std::string& path, std::vector<float>& px, int& channels, std::string& error) {
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) {
-        error = "cannot read: " + OIIO::geterror();
-        return false;
-    }
+    auto in = output::open_image_input(path, error);
+    if (!in) return false;
     const auto& spec = in->spec();
     channels = spec.nchannels;
     error = output::image_size_problem(spec.width, spec.height, spec.depth, channels);

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Builds impulse with AddressSanitizer and UBSan (RelWithDebInfo, -fno-sanitize-recover, in
-# build-asan/) and runs the test suite under it with ctest -j2; fails on a failing test and on any
+# Builds impulse with AddressSanitizer and UBSan (scripts/sanitized_build.sh: clang,
+# RelWithDebInfo, -fno-sanitize-recover, in build-asan/, shared with the fuzz targets) and runs the test suite under it with ctest -j2; fails on a failing test and on any
 # sanitizer report, including one from a child process (the CLI tests run the impulse binary and
 # may expect it to fail: its report goes to a log file, not to the exit status a test checks).
 #   scripts/sanitize.sh          the whole suite
@@ -11,17 +11,11 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 fast=0
 [ "${1:-}" = "--fast" ] && fast=1
-bash scripts/setup.sh --deps-only
 build=build-asan
-launcher=()
-command -v ccache > /dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DIMPULSE_SANITIZE=ON \
-    -DIMPULSE_BUILD_BENCH=OFF "${launcher[@]}" > "$build.log" 2>&1 || { cat "$build.log"; exit 1; }
 targets=(all)
 selection=()
 [ "$fast" -eq 1 ] && targets=(test_kernels test_scenes) && selection=(-L '^(kernels|scenes)$')
-cmake --build "$build" -j"$(nproc)" --target "${targets[@]}" >> "$build.log" 2>&1 \
-    || { tail -50 "$build.log"; exit 1; }
+bash scripts/sanitized_build.sh "${targets[@]}"
 
 reports="$PWD/$build/sanitizer-reports"
 rm -rf "$reports" && mkdir -p "$reports"

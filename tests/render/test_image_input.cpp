@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <string>
 
+#include "output/image_input.h"
 #include "output/output.h"
 #include "render/render.h"
 #include "tests/support.h"
@@ -34,6 +35,21 @@ std::string tiff_header(uint32_t width, uint32_t height) {
     return t;
 }
 
+/// An OpenEXR header (magic, version 2 single-part) with one attribute whose int32 size field
+/// says `declared` while `actual` bytes of value follow, then the header's end.
+std::string exr_header(uint32_t version, int32_t declared, size_t actual) {
+    std::string e = "\x76\x2f\x31\x01";
+    auto u32 = [&](uint32_t v) {
+        for (int i = 0; i < 4; ++i) e += char(v >> (8 * i) & 0xff);
+    };
+    u32(version);
+    e += std::string("comments") + '\0' + "string" + '\0';
+    u32(uint32_t(declared));
+    e += std::string(actual, 'x');
+    e += '\0';
+    return e;
+}
+
 }  // namespace
 
 TEST_CASE("an image whose header claims more than the size limit is refused before reading",
@@ -50,4 +66,36 @@ TEST_CASE("an image whose header claims more than the size limit is refused befo
     CHECK(impulse::output::image_size_problem(4, 3, 1, 2).empty());
     CHECK_THAT(impulse::output::image_size_problem(4, 3, 2, 1), Contains("4x3x2 pixels"));
     CHECK_THAT(impulse::output::image_size_problem(0, 3, 1, 1), Contains("expected a 2-D image"));
+}
+
+// A fuzzing finding (fuzz_image, a mask image): OpenEXR 3.1 sizes a string attribute to its
+// declared length before reading it, so a 748-byte file declaring 1836216126 bytes made the
+// reader allocate 1.8 GB. The header is walked and refused before OpenImageIO sees it.
+TEST_CASE("an EXR header declaring an attribute larger than the file is refused before reading",
+          "[render][errors]") {
+    impulse::test::TempDir dir;
+    const std::string hostile = dir / "hostile.exr", exact = dir / "exact.exr",
+                      negative = dir / "negative.exr", cut = dir / "cut.exr";
+    impulse::test::write_file(hostile, exr_header(2, 1836216126, 16));
+    impulse::test::write_file(exact, exr_header(2, 5, 5));  // consistent, if not a whole image
+    impulse::test::write_file(negative, exr_header(2, -4, 16));
+    impulse::test::write_file(cut, exr_header(2, 5, 5).substr(0, 20));
+    using impulse::output::exr_header_problem;
+    CHECK_THAT(exr_header_problem(hostile),
+               Contains("attribute 'comments' declares 1836216126 bytes, more than the 17 left"));
+    CHECK(exr_header_problem(exact).empty());
+    CHECK_THAT(exr_header_problem(negative), Contains("declares -4 bytes"));
+    CHECK_THAT(exr_header_problem(cut), Contains("OpenEXR header"));
+    CHECK_THROWS_WITH(impulse::output::read_image(hostile),
+                      Contains("hostile.exr: OpenEXR header attribute 'comments' declares"));
+    CHECK_THROWS_AS(impulse::output::probe_image(hostile), impulse::IoError);
+    // A real EXR, and a file that is not one, pass the walk untouched.
+    impulse::numeric::Frame f;
+    f.resize(4, 3);
+    const std::string good = dir / "good.exr", text = dir / "text.exr";
+    impulse::output::write_image(good, f, {}, {{"scene", "a long enough metadata value"}});
+    impulse::test::write_file(text, "not an image");
+    CHECK(exr_header_problem(good).empty());
+    CHECK(exr_header_problem(text).empty());
+    CHECK(impulse::output::read_image(good).width == 4);
 }

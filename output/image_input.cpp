@@ -1,0 +1,86 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "output/image_input.h"
+
+#include <algorithm>
+#include <array>
+#include <fstream>
+
+namespace impulse::output {
+namespace {
+
+constexpr std::array<unsigned char, 4> kExrMagic = {0x76, 0x2f, 0x31, 0x01};
+constexpr uint32_t kLongNames = 0x400, kMultiPart = 0x1000;
+
+/// A null-terminated header string of at most `max` characters; false when the file ends or
+/// the string is longer.
+bool read_name(std::istream& in, size_t max, std::string& out) {
+    out.clear();
+    for (char c; in.get(c);) {
+        if (c == '\0') return true;
+        if (out.size() == max) return false;
+        out.push_back(c);
+    }
+    return false;
+}
+
+uint32_t read_u32(std::istream& in) {
+    std::array<unsigned char, 4> b{};
+    in.read(reinterpret_cast<char*>(b.data()), 4);
+    return uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24;
+}
+
+/// Walks one part's attributes up to its terminating empty name. Sets `empty` when the part
+/// has no attribute at all (the end of a multi-part file's header list).
+std::string walk_part(std::istream& in, uint64_t file_size, size_t max_name, bool& empty) {
+    std::string name, type;
+    empty = true;
+    for (;;) {
+        if (!read_name(in, max_name, name)) return "header attribute name unterminated or too long";
+        if (name.empty()) return "";
+        empty = false;
+        if (!read_name(in, max_name, type))
+            return "header attribute '" + name + "' has an unterminated or too long type name";
+        const uint32_t declared = read_u32(in);
+        if (!in) return "header ends inside attribute '" + name + "'";
+        const uint64_t left = file_size - uint64_t(in.tellg());
+        if (int32_t(declared) < 0 || declared > left)
+            return "header attribute '" + name + "' declares " + std::to_string(int32_t(declared)) +
+                   " bytes, more than the " + std::to_string(left) + " left in the file";
+        in.seekg(std::streamoff(declared), std::ios::cur);
+    }
+}
+
+}  // namespace
+
+std::string exr_header_problem(const std::string& path) {
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    if (!in) return "";  // OpenImageIO says why it cannot open it
+    const uint64_t file_size = uint64_t(in.tellg());
+    in.seekg(0);
+    std::array<unsigned char, 4> magic{};
+    in.read(reinterpret_cast<char*>(magic.data()), 4);
+    if (!in || magic != kExrMagic) return "";
+    const uint32_t version = read_u32(in);
+    if (!in) return "OpenEXR header cut short";
+    const size_t max_name = (version & kLongNames) ? 255 : 31;
+    const bool multipart = version & kMultiPart;
+    // A multi-part header list ends with an empty part; a single part is one list.
+    for (bool empty = false;;) {
+        if (std::string bad = walk_part(in, file_size, max_name, empty); !bad.empty())
+            return "OpenEXR " + bad;
+        if (!multipart || empty) return "";
+    }
+}
+
+std::unique_ptr<OIIO::ImageInput> open_image_input(const std::string& path, std::string& error) {
+    error = exr_header_problem(path);
+    if (!error.empty()) return nullptr;
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) {
+        error = "cannot read: " + OIIO::geterror();
+        std::replace(error.begin(), error.end(), '\n', ' ');
+    }
+    return in;
+}
+
+}  // namespace impulse::output

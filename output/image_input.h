@@ -1,0 +1,27 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// Opening untrusted image files (part of impulse::output). Every reader of an image file goes
+// through open_image_input, so a hostile header is refused before a decoder sizes a buffer from
+// it. Unlike image.h this header names OpenImageIO's types: include it only where OIIO is used.
+
+#include <cstdint>
+#include <memory>
+#include <string>
+
+#include <OpenImageIO/imageio.h>
+
+namespace impulse::output {
+
+/// "" when the bytes at `path` are not an OpenEXR file or are one whose header is consistent
+/// with the file's length; else what is wrong ("header attribute 'x' declares 1836216126 bytes,
+/// more than the 700 left in the file"). OpenEXR sizes an attribute's value to its declared
+/// length before reading it, so a 748-byte file can make it allocate gigabytes: the header's
+/// attributes (name, type, int32 size, value; every part of a multi-part file) are walked and
+/// each declared size is held against the bytes that remain.
+std::string exr_header_problem(const std::string& path);
+
+/// OIIO::ImageInput::open after exr_header_problem; nullptr with `error` set (one line) when
+/// the file is refused or OpenImageIO cannot open it.
+std::unique_ptr<OIIO::ImageInput> open_image_input(const std::string& path, std::string& error);
+
+}  // namespace impulse::output
