@@ -124,7 +124,7 @@ void apply_override(toml::table& root, const std::string& text, Source& src) {
     src.overrides[shown] = text;
 }
 
-/// A [[layer]] drawn by another synthesizer (source = "fbm"): its seed, mean, gain, marginal and
+/// A [[layer]] drawn by another synthesizer (source = "fbm", "subdivision"): its seed, mean, gain, marginal and
 /// composition; the impulse process's keys are refused (scenes/source.h).
 void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path& base,
                        const Limits& limits, detail::CompositionReader& compose, LayerConfig& L) {
@@ -140,7 +140,16 @@ void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path
     L.process.seed = mix_seed(global_seed, static_cast<uint64_t>(r.integer("seed", 1, 0, INT64_MAX)));
     L.mean = r.keyframed("mean", 0.0);
     L.gain = r.keyframed("gain", 1.0);
-    L.source = detail::read_fbm_source(r.table(kind), L.process.seed, limits.max_memory_mib);
+    if (kind == "fbm") {
+        L.source = detail::read_fbm_source(r.table(kind), L.process.seed, limits.max_memory_mib);
+    } else {
+        std::optional<Reader> t = r.table(kind);
+        if (!t)
+            r.fail(r.node("source"), "source",
+                   "a subdivision layer needs its [layer.subdivision] table with acf (markov, "
+                   "gaussian, oscillatory_markov, ...) and the model's lengths");
+        L.source = detail::read_subdivision_source(&*t, L.process.seed, base, limits.max_memory_mib);
+    }
     detail::read_marginal(r, L, base);
     compose.read_layer(r, i, L);
     r.finish();

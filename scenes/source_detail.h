@@ -1,9 +1,11 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// Layer sources read from scene files (internal to impulse::scenes): [[layer]] source = "fbm".
+// Layer sources read from scene files (internal to impulse::scenes): [[layer]] source = "fbm" or
+// "subdivision".
 
 #include <array>
 #include <cstdint>
+#include <filesystem>
 #include <memory>
 #include <optional>
 #include <string_view>
@@ -14,12 +16,19 @@
 namespace impulse::scenes::detail {
 
 /// The values of a [[layer]]'s `source` key: "impulses" (the default) draws the point process.
-inline constexpr std::array<std::string_view, 2> kLayerSourceNames = {"impulses", "fbm"};
+inline constexpr std::array<std::string_view, 3> kLayerSourceNames = {"impulses", "fbm",
+                                                                        "subdivision"};
 
 /// A fractional Brownian surface layer from its [layer.fbm] table (absent: the defaults) and
 /// the layer's seed: the realised grid is made here, once. Throws SceneError at the key, also
 /// when making it would need more than `max_memory_mib` (limits.max_memory_mib).
 std::shared_ptr<const LayerSource> read_fbm_source(std::optional<Reader> fbm, uint64_t seed,
                                                    double max_memory_mib);
+/// A generalized stochastic subdivision layer from its [layer.subdivision] table (acf and the
+/// model's keys, lengths in texture units; samples, size, neighbors, displacement) and the
+/// layer's seed. Throws SceneError at the key.
+std::shared_ptr<const LayerSource> read_subdivision_source(Reader* subdivision, uint64_t seed,
+                                                           const std::filesystem::path& base,
+                                                           double max_memory_mib);
 
 }  // namespace impulse::scenes::detail

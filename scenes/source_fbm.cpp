@@ -13,6 +13,7 @@
 
 #include "numeric/errors.h"
 #include "scenes/source_detail.h"
+#include "scenes/source_grid.h"
 #include "synth/synth.h"
 
 namespace impulse::scenes::detail {
@@ -20,50 +21,25 @@ namespace {
 
 class FbmSource final : public LayerSource {
 public:
-    FbmSource(const synth::FbmOptions& o, double size, uint64_t seed)
-        : m_n(o.size), m_cell(size / o.size), m_periodic(o.method == synth::FbmMethod::Fourier),
-          m_grid(synth::fbm(o, seed).data) {
+    FbmSource(const synth::FbmOptions& o, double size, uint64_t seed) {
+        m_grid.n = o.size;
+        m_grid.cell = size / o.size;
+        m_grid.periodic = o.method == synth::FbmMethod::Fourier;
+        m_grid.values = synth::fbm(o, seed).data;
         double sum = 0.0;  // the tile's mean, in a fixed order
-        for (float v : m_grid) sum += v;
-        const double mean = sum / double(m_grid.size());
-        for (float& v : m_grid) v = static_cast<float>(v - mean);
-        m_variance = m_periodic ? synth::fourier_fbm_variance(o) : synth::fbm_tile_variance(o.hurst, m_n);
+        for (float v : m_grid.values) sum += v;
+        const double mean = sum / double(m_grid.values.size());
+        for (float& v : m_grid.values) v = static_cast<float>(v - mean);
+        m_variance = m_grid.periodic ? synth::fourier_fbm_variance(o)
+                                     : synth::fbm_tile_variance(o.hurst, o.size);
     }
     std::string_view kind() const override { return "fbm"; }
-    void add(const numeric::View& v, double, numeric::Frame& out) const override {
-        for (int j = 0; j < v.height; ++j) {
-            const double y = (v.y0 + (j + 0.5) * v.scale) / m_cell;
-            float* row = out.data.data() + size_t(j) * v.width;
-            for (int i = 0; i < v.width; ++i)
-                row[i] = static_cast<float>(row[i] + sample((v.x0 + (i + 0.5) * v.scale) / m_cell, y));
-        }
-    }
+    void add(const numeric::View& v, double, numeric::Frame& out) const override { m_grid.add(v, out); }
     Theory theory(double) const override { return {0.0, m_variance}; }
-    double correlation_length() const override { return 8.0 * m_cell; }
+    double correlation_length() const override { return 8.0 * m_grid.cell; }
 
 private:
-    /// Grid index k folded into [0, n): wrapped (periodic) or mirrored at the edges.
-    int64_t fold(int64_t k) const {
-        if (m_periodic) return ((k % m_n) + m_n) % m_n;
-        const int64_t p = 2 * (int64_t(m_n) - 1);
-        if (p == 0) return 0;
-        k = ((k % p) + p) % p;
-        return k < m_n ? k : p - k;
-    }
-    /// The bilinear interpolant at grid coordinates (u, v) (samples at integers).
-    double sample(double u, double v) const {
-        const double fu = std::floor(u), fv = std::floor(v), a = u - fu, b = v - fv;
-        const int64_t i0 = fold(int64_t(fu)), i1 = fold(int64_t(fu) + 1);
-        const int64_t j0 = fold(int64_t(fv)), j1 = fold(int64_t(fv) + 1);
-        const float* r0 = m_grid.data() + size_t(j0) * m_n;
-        const float* r1 = m_grid.data() + size_t(j1) * m_n;
-        return (1 - b) * ((1 - a) * r0[i0] + a * r0[i1]) + b * ((1 - a) * r1[i0] + a * r1[i1]);
-    }
-
-    int m_n;
-    double m_cell;
-    bool m_periodic;
-    std::vector<float> m_grid;
+    SampleGrid m_grid;
     double m_variance = 0.0;
 };
 
