@@ -266,11 +266,14 @@ void add_synth_gss(CLI::App& synth) {
         "or refine existing data");
     g->add_option("--acf", c->acf,
                   "Autocorrelation: markov, gaussian, markaussian, matern, oscillatory_markov, "
-                  "oscillatory_gaussian, expression (--param expr=...), table (--param file=...); "
-                  "with --refine and no --acf it is estimated from the data");
+                  "oscillatory_gaussian; the spectrum-defined lorentzian, bandpass, power (R by "
+                  "the inverse Hankel transform); expression (--param expr=...), table (--param "
+                  "file=...); with --refine and no --acf it is estimated from the data");
     g->add_option("--param", c->params,
-                  "KEY=VALUE of the model: variance, length, exponent, nu, omega; aspect, angle "
-                  "(degrees), separable (2-D anisotropy); lengths in output samples")
+                  "KEY=VALUE of the model: variance, length, exponent, nu, omega; k0, f0, width, "
+                  "slope, k_low, k_high, nyquist (spectrum-defined models, cycles per sample; "
+                  "nyquist default 0.5); aspect, angle (degrees), separable (2-D anisotropy); "
+                  "lengths in output samples")
         ->allow_extra_args(false);
     g->add_option("--size", c->size, "N (1-D) or WxH: 2^k + 1 per axis, 2^k with --periodic");
     g->add_option("--dim", c->dim, "1 or 2 (default 2)");

@@ -12,6 +12,9 @@
 #include <cstring>
 #include <fstream>
 #include <iomanip>
+#include <map>
+#include <memory>
+#include <mutex>
 #include <numbers>
 #include <sstream>
 
@@ -881,6 +884,48 @@ Spectrum spectrum_of_autocorrelation(const Autocorrelation& acf, double k_max) {
         return std::max(s, 0.0);
     };
     return out;
+}
+
+Autocorrelation autocorrelation_of_spectrum(const Spectrum& spectrum, double k_max) {
+    require(k_max > 0, "nyquist", k_max, "a frequency > 0 (cycles per unit)");
+    if (!spectrum.isotropic)
+        throw ValueError(spectrum.name +
+                         ": an anisotropic spectrum has no radial autocorrelation (make the "
+                         "autocorrelation anisotropic instead)");
+    const auto S = spectrum.density;
+    auto integrate = [S, k_max](double r) {
+        Nodes n;
+        n.add(0.0, k_max, std::max(64, 32 + static_cast<int>(std::ceil(2.0 * k_max * r))));
+        double sum = 0.0;
+        for (size_t j = 0; j < n.x.size(); ++j)
+            sum += 2 * kPi * n.w[j] * n.x[j] * S(n.x[j], 0.0) * detail::bessel_j0(2 * kPi * n.x[j] * r);
+        return sum;
+    };
+    const double r0 = integrate(0.0);
+    if (!(r0 > 0) || !std::isfinite(r0))
+        throw ValueError(spectrum.name + ": R(0) = " + num(r0) +
+                         ": expected a finite variance > 0 (energy below k_max = " + num(k_max) + ")");
+    struct Memo {
+        std::mutex lock;
+        std::map<double, double> values;
+    };
+    auto memo = std::make_shared<Memo>();
+    memo->values[0.0] = r0;
+    Autocorrelation a;
+    a.name = spectrum.name + " (band-limited to " + num(k_max) + ")";
+    a.function = [memo, integrate](double r) {
+        r = std::abs(r);
+        if (r > kAcfMaxRadius) return 0.0;  // past the design's reach (see the header)
+        {
+            const std::lock_guard<std::mutex> g(memo->lock);
+            if (auto it = memo->values.find(r); it != memo->values.end()) return it->second;
+        }
+        const double v = integrate(r);
+        const std::lock_guard<std::mutex> g(memo->lock);
+        memo->values.emplace(r, v);
+        return v;
+    };
+    return a;
 }
 
 // ---------------------------------------------------------------------------------------------

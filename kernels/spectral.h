@@ -149,6 +149,15 @@ Autocorrelation table_autocorrelation(const std::string& path);
 /// -0.034, ...") when S < -1e-6 max S anywhere in [0, k_max] (the threshold is far above the
 /// quadrature's noise, ~1e-9 max S, and far below any real negative lobe).
 Spectrum spectrum_of_autocorrelation(const Autocorrelation& acf, double k_max);
+/// The autocorrelation of an isotropic spectrum band-limited to |k| <= k_max, by the inverse
+/// Wiener–Khinchine relation R(r) = 2 pi int_0^k_max S(k) J0(2 pi k r) k dk (Gauss–Legendre
+/// panels over [0, k_max], two per period of J0 at r, at least 64). Each distinct |r| is
+/// integrated once and remembered (thread-safe): the consumers (stochastic subdivision) ask for
+/// the same lags many times. Beyond 4096 units (the reach of every design here) R is taken as 0:
+/// a band-limited spectrum's J0 tail there is ~1e-5 R(0) and would cost 2 k_max r panels a lag.
+/// ValueError for an anisotropic S or when R(0) is not finite and
+/// > 0 (a spectrum with no energy below k_max).
+Autocorrelation autocorrelation_of_spectrum(const Spectrum& spectrum, double k_max);
 
 // ---------------------------------------------------------------------------------------------
 // Kernels from a spectrum or an autocorrelation

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "kernels/spectral.h"
 #include "numeric/errors.h"
 #include "scenes/source_detail.h"
 #include "scenes/source_grid.h"
@@ -55,18 +56,21 @@ private:
     double m_variance = 0.0, m_length = 1.0;
 };
 
+/// A number as synth::make_acf parses it back, to the last bit.
+std::string precise(double v) {
+    std::ostringstream s;
+    s.precision(17);
+    s << v;
+    return s.str();
+}
+
 /// The model's parameters as synth::make_acf takes them (lengths converted from texture units
 /// to samples by wrapping R below, so only dimensionless values and the table's path pass).
 std::vector<synth::AcfParam> read_acf_params(Reader& t, const std::filesystem::path& base) {
     std::vector<synth::AcfParam> params;
-    auto text = [](double v) {
-        std::ostringstream s;
-        s.precision(17);
-        s << v;
-        return s.str();
-    };
-    for (std::string_view key : {"variance", "length", "exponent", "nu", "omega", "aspect", "angle"})
-        if (t.has(key)) params.emplace_back(std::string(key), text(t.number(key, 0.0)));
+    for (std::string_view key : {"variance", "length", "exponent", "nu", "omega", "aspect", "angle",
+                                 "k0", "f0", "width", "slope", "k_low", "k_high", "nyquist"})
+        if (t.has(key)) params.emplace_back(std::string(key), precise(t.number(key, 0.0)));
     if (t.has("separable")) params.emplace_back("separable", t.boolean("separable", false) ? "1" : "0");
     if (t.has("expr")) params.emplace_back("expr", t.string("expr", ""));
     if (t.has("file"))
@@ -105,9 +109,15 @@ std::shared_ptr<const LayerSource> read_subdivision_source(Reader* t, uint64_t s
                 "the field needs an estimated " + std::to_string(std::lround(mib)) +
                     " MiB, over limits.max_memory_mib = " + std::to_string(std::lround(max_memory_mib)) +
                     " (fewer samples, or raise the limit)");
+    const double cell = size / double(n);
+    // A model defined by its spectrum is band-limited to the samples' Nyquist frequency in
+    // texture units unless the scene says otherwise.
+    const auto m = kernels::spectral_model_from_string(model);
+    if (m && !kernels::defined_by_autocorrelation(*m) && !t->has("nyquist")) {
+        params.emplace_back("nyquist", precise(0.5 / cell));
+    }
     try {
         const synth::Acf texture = synth::make_acf(model, params);
-        const double cell = size / double(n);
         synth::Acf samples{[R = texture.R, cell](double x, double y) { return R(x * cell, y * cell); },
                            texture.name};
         return std::make_shared<const SubdivisionSource>(samples, o, int(n), size);

@@ -243,7 +243,8 @@ Field synthesize(const Acf& acf, const GssOptions& o, int64_t x0, int64_t y0, in
     check_size(o, x0, y0, width, height, periodic);
     int top = 0;
     if (periodic) {  // the coarsest spacing must divide the period
-        top = std::min(auto_top_spacing(acf, o), o.top_spacing ? o.top_spacing : 1 << 30);
+        const int period = std::min(width, o.dims == 2 ? height : width);
+        top = std::min(auto_top_spacing(acf, o, period), o.top_spacing ? o.top_spacing : 1 << 30);
         top = std::min({top, width, o.dims == 2 ? height : width});
     }
     return synthesize(plan_subdivision(acf, o, top), o, x0, y0, width, height, periodic);

@@ -121,8 +121,9 @@ Plan plan_subdivision(const Acf& acf, const GssOptions& options, int top_spacing
 DisplacementFilter displacement_filter(const Acf& acf, int dims, double s,
                                        const std::vector<ClassCoefficients>& classes);
 
-/// The automatic top spacing (GssOptions::top_spacing = 0).
-int auto_top_spacing(const Acf& acf, const GssOptions& options);
+/// The automatic top spacing (GssOptions::top_spacing = 0), R scanned to lags of `limit`
+/// samples (a periodic field's period: a coarser top is clipped to it anyway).
+int auto_top_spacing(const Acf& acf, const GssOptions& options, int limit = 1 << 22);
 
 /// Coefficients of one class for coarse spacing s and the observation offsets given (for
 /// neighbourhoods clipped by a boundary). Exposed for tests and the refinement.

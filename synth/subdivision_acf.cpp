@@ -44,6 +44,14 @@ std::vector<std::string> model_keys(K::SpectralModel m) {
         case K::SpectralModel::OscillatoryMarkov:
         case K::SpectralModel::OscillatoryGaussian:
             return {"variance", "length", "omega"};
+        // Defined by a spectrum (frequencies in cycles per output sample), band-limited to
+        // `nyquist` (default 0.5, the finest level's).
+        case K::SpectralModel::Lorentzian:
+            return {"variance", "k0", "nyquist"};
+        case K::SpectralModel::Bandpass:
+            return {"variance", "f0", "width", "nyquist"};
+        case K::SpectralModel::Power:
+            return {"variance", "slope", "k_low", "k_high", "nyquist"};
         default:
             return {"variance", "length"};
     }
@@ -114,20 +122,15 @@ Acf make_acf(const std::string& model, const std::vector<AcfParam>& params) {
         name = given["file"];
     } else {
         const auto m = K::spectral_model_from_string(model);
-        std::string list;
-        for (auto n : K::kSpectralModelNames)
-            if (K::defined_by_autocorrelation(*K::spectral_model_from_string(n)))
-                list += std::string(n) + ", ";
-        if (!m)
+        if (!m) {
+            std::string list;
+            for (auto n : K::kSpectralModelNames) list += std::string(n) + ", ";
             throw ValueError("--acf " + model + ": unknown model: expected one of " + list +
                              "expression, table");
-        if (!K::defined_by_autocorrelation(*m))
-            throw ValueError("--acf " + model +
-                             ": defined by its spectrum, not an autocorrelation: expected one "
-                             "of " +
-                             list + "expression, table");
+        }
         K::ModelParams mp;
         mp.model = *m;
+        double nyquist = 0.5;
         for (const auto& k : model_keys(*m)) {
             keys.push_back(k);
             if (!given.count(k)) continue;
@@ -137,8 +140,18 @@ Acf make_acf(const std::string& model, const std::vector<AcfParam>& params) {
             if (k == "exponent") mp.exponent = v;
             if (k == "nu") mp.nu = v;
             if (k == "omega") mp.omega = v;
+            if (k == "k0") mp.k0 = v;
+            if (k == "f0") mp.f0 = v;
+            if (k == "width") mp.width = v;
+            if (k == "slope") mp.slope = v;
+            if (k == "k_low") mp.k_low = v;
+            if (k == "k_high") mp.k_high = v;
+            if (k == "nyquist") nyquist = v;
         }
-        profile = K::model_autocorrelation(mp).function;  // validates (ValueError)
+        // validates (ValueError); a spectrum-defined model through its inverse transform
+        profile = K::defined_by_autocorrelation(*m)
+                      ? K::model_autocorrelation(mp).function
+                      : K::autocorrelation_of_spectrum(K::model_spectrum(mp, nyquist), nyquist).function;
     }
     for (const auto& [k, v] : given)
         if (std::find(keys.begin(), keys.end(), k) == keys.end()) {

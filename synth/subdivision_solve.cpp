@@ -158,12 +158,12 @@ ClassCoefficients choose(const Acf& acf, const GssOptions& o, double s, int tx2,
 
 /// The smallest power of two T such that |R| <= c R(0) at every lag >= T along the axes and
 /// diagonals (scanned to 2^22 at 1/64 of the lag).
-int auto_top(const Acf& acf, int dims, double c) {
+int auto_top(const Acf& acf, int dims, double c, int limit) {
     const double r0 = acf.R(0, 0);
     const double d = std::sqrt(0.5);
     const double dirs[4][2] = {{1, 0}, {0, 1}, {d, d}, {d, -d}};
     double last = 0;
-    for (double t = 1; t <= double(1 << 22); t += std::max(1.0, t / 64))
+    for (double t = 1; t <= double(limit); t += std::max(1.0, t / 64))
         for (int k = 0; k < (dims == 1 ? 1 : 4); ++k)
             if (std::abs(acf.R(t * dirs[k][0], t * dirs[k][1])) > c * r0) last = t;
     int top = 1;
@@ -179,8 +179,8 @@ int LevelPlan::max_n() const {
     return n;
 }
 
-int auto_top_spacing(const Acf& acf, const GssOptions& options) {
-    return auto_top(acf, options.dims, options.top_correlation);
+int auto_top_spacing(const Acf& acf, const GssOptions& options, int limit) {
+    return auto_top(acf, options.dims, options.top_correlation, std::min(limit, 1 << 22));
 }
 
 void validate(const GssOptions& o) {

@@ -674,3 +674,34 @@ TEST_CASE("scene kernels of type spectrum and autocorrelation", "[kernels][scene
                 "expected one of cosine, gaussian, gabor, spectrum, autocorrelation, exemplar"));
     }
 }
+
+TEST_CASE("the autocorrelation of a spectrum is its inverse Hankel transform",
+          "[kernels][spectral]") {
+    namespace K = impulse::kernels;
+    // lorentzian is the 2-D spectrum of markov (k0 = 1 / (2 pi l)): band-limited at k_max = 40
+    // cycles a unit, R(r) = exp(-r / l) up to the lost tail, R(0) (1 + (k_max / k0)^2)^-1/2 =
+    // 4e-4 of the variance.
+    const double l = 8.0;
+    K::ModelParams lor;
+    lor.model = K::SpectralModel::Lorentzian;
+    lor.k0 = 1.0 / (2.0 * std::numbers::pi * l);
+    const K::Autocorrelation a = K::autocorrelation_of_spectrum(K::model_spectrum(lor, 40.0), 40.0);
+    for (double r : {0.0, 0.5, 1.0, 3.0, 8.0, 20.0, 40.0}) {
+        CAPTURE(r);
+        CHECK(std::abs(a.function(r) - std::exp(-r / l)) < 1e-3);
+        CHECK(a.function(-r) == a.function(r));  // even, remembered
+    }
+    // A band-pass ring well inside k_max keeps all of its variance.
+    K::ModelParams bp;
+    bp.model = K::SpectralModel::Bandpass;
+    bp.variance = 2.0, bp.f0 = 0.1, bp.width = 0.02;
+    CHECK(K::autocorrelation_of_spectrum(K::model_spectrum(bp, 0.5), 0.5).function(0.0) ==
+          Approx(2.0).epsilon(1e-6));
+    // No energy below k_max, or an anisotropic spectrum: refused.
+    K::Spectrum none;
+    none.name = "nothing";
+    none.density = [](double, double) { return 0.0; };
+    CHECK_THROWS_WITH(K::autocorrelation_of_spectrum(none, 0.5), Catch::Contains("R(0) = 0"));
+    none.isotropic = false;
+    CHECK_THROWS_WITH(K::autocorrelation_of_spectrum(none, 0.5), Catch::Contains("anisotropic"));
+}

@@ -240,6 +240,15 @@ TEST_CASE(
         WARN("oscillatory markov 1-D: construction - R up to " << c.construction);
         CHECK(c.construction < 0.01);
     }
+    SECTION("bandpass 1-D (a model defined by its spectrum, R by its inverse transform)") {
+        // A ring of frequencies around f0 = 0.08 cycles a sample: R oscillates with period
+        // ~12 samples, which the lags 3, 5, 8 and 13 see.
+        const AcfCheck c = check_acf(make_acf("bandpass", {{"f0", "0.08"}, {"width", "0.02"}}),
+                                     opts(1, 8, 1e-4), 512, 200, lags1);
+        CHECK(c.worst_z < 5);
+        WARN("bandpass 1-D: construction - R up to " << c.construction);
+        CHECK(c.construction < 0.02);
+    }
     SECTION("anisotropic 2-D (stretched markaussian)") {
         const std::vector<std::pair<int, int>> lags2 = {{0, 0}, {1, 0}, {0, 1}, {1, 1},
                                                         {3, 0}, {0, 3}, {2, 2}, {4, 1}};
