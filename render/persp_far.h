@@ -96,6 +96,8 @@ public:
                   FarScratch& scratch) const;
 
 private:
+    struct Setup;  // the steps of setup (persp_far.cpp)
+    struct Pass;   // the steps of render (persp_far.cpp)
     /// A sub-row: its circle, the across coordinate, node grid and, per segment of columns,
     /// the filter.
     struct Row {
