@@ -9,7 +9,8 @@
 // circles around the camera's foot (the major axis of every footprint points at the foot), and,
 // for kernels that are not radially symmetric, onto direction bins; each sub-row is convolved
 // across with its profiles, and each pixel filters the sub-rows along: a few additions per
-// impulse, a bounded amount of work per pixel.
+// impulse, a bounded amount of work per pixel. docs/perspective.md §5 derives it: the circles,
+// the Moebius map Y(rho), the expansion around the bin's mean Gaussian and the deposit.
 
 #include <array>
 #include <cmath>

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // Anti-aliased evaluation through cameras: orthographic zoom-out with blended pyramid levels,
 // and the perspective camera (geometry, region of the plane to populate, per-impulse filters,
-// tiled evaluation). Lewis 1986 §3.1: band-limited kernels selected by depth.
+// tiled evaluation). Lewis 1986 §3.1: band-limited kernels selected by depth. The derivation:
+// docs/perspective.md.
 
 #include "render/perspective.h"
 
@@ -93,6 +94,7 @@ namespace detail {
 
 double filter_sigma_px(const AntiAlias& aa) { return aa.filter_px * aa.footprint_scale; }
 
+// docs/perspective.md §2 (the split (2.1) and the order of the choices), §3-4 (the forms).
 Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_major,
               double s_minor) {
     Plan p;
