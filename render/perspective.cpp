@@ -94,6 +94,73 @@ namespace detail {
 
 double filter_sigma_px(const AntiAlias& aa) { return aa.filter_px * aa.footprint_scale; }
 
+namespace {
+
+/// Single form (docs/perspective.md §3.1): the isotropic blend for `sigma`, its support both ways.
+Plan single_plan(Plan& p, const kernels::KernelPyramid& pyr, const AntiAlias& aa, double sigma) {
+    p.mode = detail::kPerspSingle;
+    p.blend = pyr.select(sigma, aa.blend);
+    p.along = p.across = pyr.radius(std::max(p.blend.lo, p.blend.hi));
+    return p;
+}
+
+/// Axial form (docs/perspective.md §3.2), for radial kernels where the levels' axial tables
+/// cover the blur each needs: one evaluation per pixel (the variance along adds: h_l * g_(var_l)
+/// has sM^2 more than h along). False, `p` untouched, where they do not.
+bool axial_plan(Plan& p, const kernels::KernelPyramid& pyr, double sM) {
+    const int lo = p.blend.lo, hi = p.blend.hi;
+    if (!pyr.radial()) return false;
+    const double vlo = std::max(0.0, sM * sM - blur2(pyr, lo)),
+                 vhi = std::max(0.0, sM * sM - blur2(pyr, hi));
+    if (!(vlo <= pyr.tables(lo).axial_var_max && vhi <= pyr.tables(hi).axial_var_max))
+        return false;
+    p.mode = detail::kPerspAxial;
+    p.var_lo = vlo, p.var_hi = vhi;
+    p.across = pyr.radius(std::max(lo, hi));
+    p.along = std::max(axial_along(pyr, lo, vlo), axial_along(pyr, hi, vhi));
+    return true;
+}
+
+/// Line form (docs/perspective.md §4): the variances the levels lack along the axis, the support
+/// across and 4 sd of the widest chord Gaussian along.
+Plan line_plan(Plan& p, const kernels::KernelPyramid& pyr, double sM) {
+    p.mode = detail::kPerspLine;
+    p.var_lo = std::max(0.0, sM * sM - blur2(pyr, p.blend.lo));
+    p.var_hi = std::max(0.0, sM * sM - blur2(pyr, p.blend.hi));
+    const double R = pyr.radius(std::max(p.blend.lo, p.blend.hi));
+    p.across = R;
+    p.along = 4.0 * std::sqrt(sM * sM + R * R / 3.0) + R;
+    return p;
+}
+
+/// Too anisotropic for the probe budget (grid kernels): the isotropic part widened until
+/// 3 sqrt(sM^2 - si^2) <= 2 m sqrt(s0^2 + si^2) with m = kMaxProbeHalf (docs/perspective.md
+/// eq. 3.3).
+double widened_sigma(double sM, double si, double s0) {
+    const double mm = kMaxProbeHalf;
+    const double s2 = (9.0 * sM * sM - 4.0 * mm * mm * s0 * s0) / (9.0 + 4.0 * mm * mm);
+    return std::max(si, std::sqrt(std::max(0.0, s2)));
+}
+
+/// Probe form (docs/perspective.md §3.3): probes add what the blended levels do not carry
+/// along the axis.
+Plan probe_plan(Plan& p, const kernels::KernelPyramid& pyr, double sM, double spacing) {
+    const double carried =
+        (1.0 - p.blend.weight) * blur2(pyr, p.blend.lo) + p.blend.weight * blur2(pyr, p.blend.hi);
+    const double se = std::sqrt(std::max(0.0, sM * sM - carried));
+    const int m = std::clamp(static_cast<int>(std::ceil(3.0 * se / spacing)), 1, kMaxProbeHalf);
+    p.mode = detail::kPerspProbes;
+    p.m = m;
+    p.sigma_e = se;
+    p.step = 3.0 * se / m;
+    const double R = pyr.radius(std::max(p.blend.lo, p.blend.hi));
+    p.across = R;
+    p.along = R + 3.1 * se;
+    return p;
+}
+
+}  // namespace
+
 // docs/perspective.md §2 (the split (2.1) and the order of the choices), §3-4 (the forms).
 Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_major,
               double s_minor) {
@@ -104,75 +171,30 @@ Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_m
     p.fade = aa.fade ? fade_weight(pyr.sd_fraction(sM), aa.cutoff) : 1.0;
     if (!(p.fade > 0.0)) return p;
     p.keep = true;
-    auto single = [&](double sigma) {
-        p.mode = detail::kPerspSingle;
-        p.blend = pyr.select(sigma, aa.blend);
-        p.along = p.across = pyr.radius(std::max(p.blend.lo, p.blend.hi));
-        return p;
-    };
-    if (!aa.enabled) return single(0.0);
+    if (!aa.enabled) return single_plan(p, pyr, aa, 0.0);
     const double s0 = pyr.sigma(0);
-    if (!aa.anisotropic || sM <= s0) return single(sM);
+    if (!aa.anisotropic || sM <= s0) return single_plan(p, pyr, aa, sM);
     // Isotropic part from the minor axis (level 0 stands for sigma_0), the rest along the major.
     double si = std::max(sm, s0);
     p.blend = pyr.select(si, aa.blend);
     double spacing = pyr.probe_spacing(p.blend.lo);
     double se = std::sqrt(std::max(0.0, sM * sM - si * si));
-    if (3.0 * se < spacing) return single(sM);  // sM <= 1.2 si: anisotropy below notice
+    if (3.0 * se < spacing) return single_plan(p, pyr, aa, sM);  // sM <= 1.2 si: below notice
     const bool line_ok =
         pyr.radial() && pyr.tables(p.blend.lo).nonnegative && pyr.tables(p.blend.hi).nonnegative;
-    // Radial kernels, where the levels' axial tables cover the blur each needs: one evaluation
-    // per pixel (the variance along adds: h_l * g_(var_l) has sM^2 more than h along).
-    auto axial = [&] {
-        const int lo = p.blend.lo, hi = p.blend.hi;
-        if (!pyr.radial()) return false;
-        const double vlo = std::max(0.0, sM * sM - blur2(pyr, lo)),
-                     vhi = std::max(0.0, sM * sM - blur2(pyr, hi));
-        if (!(vlo <= pyr.tables(lo).axial_var_max && vhi <= pyr.tables(hi).axial_var_max))
-            return false;
-        p.mode = detail::kPerspAxial;
-        p.var_lo = vlo, p.var_hi = vhi;
-        p.across = pyr.radius(std::max(lo, hi));
-        p.along = std::max(axial_along(pyr, lo, vlo), axial_along(pyr, hi, vhi));
-        return true;
-    };
-    int m = static_cast<int>(std::ceil(3.0 * se / spacing));
-    if (line_ok && (se >= kLineFrom * pyr.radius(p.blend.lo) || m > kMaxProbeHalf)) {
-        p.mode = detail::kPerspLine;
-        p.var_lo = std::max(0.0, sM * sM - blur2(pyr, p.blend.lo));
-        p.var_hi = std::max(0.0, sM * sM - blur2(pyr, p.blend.hi));
-        const double R = pyr.radius(std::max(p.blend.lo, p.blend.hi));
-        p.across = R;
-        p.along = 4.0 * std::sqrt(sM * sM + R * R / 3.0) + R;
-        return p;
-    }
-    if (axial()) return p;
+    const int m = static_cast<int>(std::ceil(3.0 * se / spacing));
+    if (line_ok && (se >= kLineFrom * pyr.radius(p.blend.lo) || m > kMaxProbeHalf))
+        return line_plan(p, pyr, sM);
+    if (axial_plan(p, pyr, sM)) return p;
     if (m > kMaxProbeHalf) {
-        // Too anisotropic for the probe budget (grid kernels): widen the isotropic part until
-        // 3 sqrt(sM^2 - si^2) <= 2 m sqrt(s0^2 + si^2) with m = kMaxProbeHalf.
-        const double mm = kMaxProbeHalf;
-        const double s2 = (9.0 * sM * sM - 4.0 * mm * mm * s0 * s0) / (9.0 + 4.0 * mm * mm);
-        si = std::max(si, std::sqrt(std::max(0.0, s2)));
+        si = widened_sigma(sM, si, s0);
         p.blend = pyr.select(si, aa.blend);
         spacing = pyr.probe_spacing(p.blend.lo);
         se = std::sqrt(std::max(0.0, sM * sM - si * si));
-        if (3.0 * se < spacing) return single(sM);
-        if (axial()) return p;
-        m = std::min(kMaxProbeHalf, static_cast<int>(std::ceil(3.0 * se / spacing)));
+        if (3.0 * se < spacing) return single_plan(p, pyr, aa, sM);
+        if (axial_plan(p, pyr, sM)) return p;
     }
-    // Probes add what the blended levels do not carry along the axis.
-    const double carried =
-        (1.0 - p.blend.weight) * blur2(pyr, p.blend.lo) + p.blend.weight * blur2(pyr, p.blend.hi);
-    se = std::sqrt(std::max(0.0, sM * sM - carried));
-    m = std::clamp(static_cast<int>(std::ceil(3.0 * se / spacing)), 1, kMaxProbeHalf);
-    p.mode = detail::kPerspProbes;
-    p.m = m;
-    p.sigma_e = se;
-    p.step = 3.0 * se / m;
-    const double R = pyr.radius(std::max(p.blend.lo, p.blend.hi));
-    p.across = R;
-    p.along = R + 3.1 * se;
-    return p;
+    return probe_plan(p, pyr, sM, spacing);
 }
 
 }  // namespace detail
