@@ -4,6 +4,7 @@
 // eval_detail.h: one source (persp_loops.inc) compiled for baseline x86-64 and for AVX2 with FMA
 // contraction off, so both round identically. Everything here is in texture units relative to
 // the frame origin, except image positions (continuous pixels, pixel i spans [i, i + 1)).
+// docs/perspective.md derives each mode (§3-4) and the plan (§2).
 
 #include <cstddef>
 #include <cstdint>

@@ -9,7 +9,8 @@
 // circles around the camera's foot (the major axis of every footprint points at the foot), and,
 // for kernels that are not radially symmetric, onto direction bins; each sub-row is convolved
 // across with its profiles, and each pixel filters the sub-rows along: a few additions per
-// impulse, a bounded amount of work per pixel.
+// impulse, a bounded amount of work per pixel. docs/perspective.md §5 derives it: the circles,
+// the Moebius map Y(rho), the expansion around the bin's mean Gaussian and the deposit.
 
 #include <array>
 #include <cmath>
@@ -96,6 +97,8 @@ public:
                   FarScratch& scratch) const;
 
 private:
+    struct Setup;  // the steps of setup (persp_far.cpp)
+    struct Pass;   // the steps of render (persp_far.cpp)
     /// A sub-row: its circle, the across coordinate, node grid and, per segment of columns,
     /// the filter.
     struct Row {

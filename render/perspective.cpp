@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // Anti-aliased evaluation through cameras: orthographic zoom-out with blended pyramid levels,
 // and the perspective camera (geometry, region of the plane to populate, per-impulse filters,
-// tiled evaluation). Lewis 1986 §3.1: band-limited kernels selected by depth.
+// tiled evaluation). Lewis 1986 §3.1: band-limited kernels selected by depth. The derivation:
+// docs/perspective.md.
 
 #include "render/perspective.h"
 
@@ -93,6 +94,74 @@ namespace detail {
 
 double filter_sigma_px(const AntiAlias& aa) { return aa.filter_px * aa.footprint_scale; }
 
+namespace {
+
+/// Single form (docs/perspective.md §3.1): the isotropic blend for `sigma`, its support both ways.
+Plan single_plan(Plan& p, const kernels::KernelPyramid& pyr, const AntiAlias& aa, double sigma) {
+    p.mode = detail::kPerspSingle;
+    p.blend = pyr.select(sigma, aa.blend);
+    p.along = p.across = pyr.radius(std::max(p.blend.lo, p.blend.hi));
+    return p;
+}
+
+/// Axial form (docs/perspective.md §3.2), for radial kernels where the levels' axial tables
+/// cover the blur each needs: one evaluation per pixel (the variance along adds: h_l * g_(var_l)
+/// has sM^2 more than h along). False, `p` untouched, where they do not.
+bool axial_plan(Plan& p, const kernels::KernelPyramid& pyr, double sM) {
+    const int lo = p.blend.lo, hi = p.blend.hi;
+    if (!pyr.radial()) return false;
+    const double vlo = std::max(0.0, sM * sM - blur2(pyr, lo)),
+                 vhi = std::max(0.0, sM * sM - blur2(pyr, hi));
+    if (!(vlo <= pyr.tables(lo).axial_var_max && vhi <= pyr.tables(hi).axial_var_max))
+        return false;
+    p.mode = detail::kPerspAxial;
+    p.var_lo = vlo, p.var_hi = vhi;
+    p.across = pyr.radius(std::max(lo, hi));
+    p.along = std::max(axial_along(pyr, lo, vlo), axial_along(pyr, hi, vhi));
+    return true;
+}
+
+/// Line form (docs/perspective.md §4): the variances the levels lack along the axis, the support
+/// across and 4 sd of the widest chord Gaussian along.
+Plan line_plan(Plan& p, const kernels::KernelPyramid& pyr, double sM) {
+    p.mode = detail::kPerspLine;
+    p.var_lo = std::max(0.0, sM * sM - blur2(pyr, p.blend.lo));
+    p.var_hi = std::max(0.0, sM * sM - blur2(pyr, p.blend.hi));
+    const double R = pyr.radius(std::max(p.blend.lo, p.blend.hi));
+    p.across = R;
+    p.along = 4.0 * std::sqrt(sM * sM + R * R / 3.0) + R;
+    return p;
+}
+
+/// Too anisotropic for the probe budget (grid kernels): the isotropic part widened until
+/// 3 sqrt(sM^2 - si^2) <= 2 m sqrt(s0^2 + si^2) with m = kMaxProbeHalf (docs/perspective.md
+/// eq. 3.3).
+double widened_sigma(double sM, double si, double s0) {
+    const double mm = kMaxProbeHalf;
+    const double s2 = (9.0 * sM * sM - 4.0 * mm * mm * s0 * s0) / (9.0 + 4.0 * mm * mm);
+    return std::max(si, std::sqrt(std::max(0.0, s2)));
+}
+
+/// Probe form (docs/perspective.md §3.3): probes add what the blended levels do not carry
+/// along the axis.
+Plan probe_plan(Plan& p, const kernels::KernelPyramid& pyr, double sM, double spacing) {
+    const double carried =
+        (1.0 - p.blend.weight) * blur2(pyr, p.blend.lo) + p.blend.weight * blur2(pyr, p.blend.hi);
+    const double se = std::sqrt(std::max(0.0, sM * sM - carried));
+    const int m = std::clamp(static_cast<int>(std::ceil(3.0 * se / spacing)), 1, kMaxProbeHalf);
+    p.mode = detail::kPerspProbes;
+    p.m = m;
+    p.sigma_e = se;
+    p.step = 3.0 * se / m;
+    const double R = pyr.radius(std::max(p.blend.lo, p.blend.hi));
+    p.across = R;
+    p.along = R + 3.1 * se;
+    return p;
+}
+
+}  // namespace
+
+// docs/perspective.md §2 (the split (2.1) and the order of the choices), §3-4 (the forms).
 Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_major,
               double s_minor) {
     Plan p;
@@ -102,75 +171,30 @@ Plan plan_for(const kernels::KernelPyramid& pyr, const AntiAlias& aa, double s_m
     p.fade = aa.fade ? fade_weight(pyr.sd_fraction(sM), aa.cutoff) : 1.0;
     if (!(p.fade > 0.0)) return p;
     p.keep = true;
-    auto single = [&](double sigma) {
-        p.mode = detail::kPerspSingle;
-        p.blend = pyr.select(sigma, aa.blend);
-        p.along = p.across = pyr.radius(std::max(p.blend.lo, p.blend.hi));
-        return p;
-    };
-    if (!aa.enabled) return single(0.0);
+    if (!aa.enabled) return single_plan(p, pyr, aa, 0.0);
     const double s0 = pyr.sigma(0);
-    if (!aa.anisotropic || sM <= s0) return single(sM);
+    if (!aa.anisotropic || sM <= s0) return single_plan(p, pyr, aa, sM);
     // Isotropic part from the minor axis (level 0 stands for sigma_0), the rest along the major.
     double si = std::max(sm, s0);
     p.blend = pyr.select(si, aa.blend);
     double spacing = pyr.probe_spacing(p.blend.lo);
     double se = std::sqrt(std::max(0.0, sM * sM - si * si));
-    if (3.0 * se < spacing) return single(sM);  // sM <= 1.2 si: anisotropy below notice
+    if (3.0 * se < spacing) return single_plan(p, pyr, aa, sM);  // sM <= 1.2 si: below notice
     const bool line_ok =
         pyr.radial() && pyr.tables(p.blend.lo).nonnegative && pyr.tables(p.blend.hi).nonnegative;
-    // Radial kernels, where the levels' axial tables cover the blur each needs: one evaluation
-    // per pixel (the variance along adds: h_l * g_(var_l) has sM^2 more than h along).
-    auto axial = [&] {
-        const int lo = p.blend.lo, hi = p.blend.hi;
-        if (!pyr.radial()) return false;
-        const double vlo = std::max(0.0, sM * sM - blur2(pyr, lo)),
-                     vhi = std::max(0.0, sM * sM - blur2(pyr, hi));
-        if (!(vlo <= pyr.tables(lo).axial_var_max && vhi <= pyr.tables(hi).axial_var_max))
-            return false;
-        p.mode = detail::kPerspAxial;
-        p.var_lo = vlo, p.var_hi = vhi;
-        p.across = pyr.radius(std::max(lo, hi));
-        p.along = std::max(axial_along(pyr, lo, vlo), axial_along(pyr, hi, vhi));
-        return true;
-    };
-    int m = static_cast<int>(std::ceil(3.0 * se / spacing));
-    if (line_ok && (se >= kLineFrom * pyr.radius(p.blend.lo) || m > kMaxProbeHalf)) {
-        p.mode = detail::kPerspLine;
-        p.var_lo = std::max(0.0, sM * sM - blur2(pyr, p.blend.lo));
-        p.var_hi = std::max(0.0, sM * sM - blur2(pyr, p.blend.hi));
-        const double R = pyr.radius(std::max(p.blend.lo, p.blend.hi));
-        p.across = R;
-        p.along = 4.0 * std::sqrt(sM * sM + R * R / 3.0) + R;
-        return p;
-    }
-    if (axial()) return p;
+    const int m = static_cast<int>(std::ceil(3.0 * se / spacing));
+    if (line_ok && (se >= kLineFrom * pyr.radius(p.blend.lo) || m > kMaxProbeHalf))
+        return line_plan(p, pyr, sM);
+    if (axial_plan(p, pyr, sM)) return p;
     if (m > kMaxProbeHalf) {
-        // Too anisotropic for the probe budget (grid kernels): widen the isotropic part until
-        // 3 sqrt(sM^2 - si^2) <= 2 m sqrt(s0^2 + si^2) with m = kMaxProbeHalf.
-        const double mm = kMaxProbeHalf;
-        const double s2 = (9.0 * sM * sM - 4.0 * mm * mm * s0 * s0) / (9.0 + 4.0 * mm * mm);
-        si = std::max(si, std::sqrt(std::max(0.0, s2)));
+        si = widened_sigma(sM, si, s0);
         p.blend = pyr.select(si, aa.blend);
         spacing = pyr.probe_spacing(p.blend.lo);
         se = std::sqrt(std::max(0.0, sM * sM - si * si));
-        if (3.0 * se < spacing) return single(sM);
-        if (axial()) return p;
-        m = std::min(kMaxProbeHalf, static_cast<int>(std::ceil(3.0 * se / spacing)));
+        if (3.0 * se < spacing) return single_plan(p, pyr, aa, sM);
+        if (axial_plan(p, pyr, sM)) return p;
     }
-    // Probes add what the blended levels do not carry along the axis.
-    const double carried =
-        (1.0 - p.blend.weight) * blur2(pyr, p.blend.lo) + p.blend.weight * blur2(pyr, p.blend.hi);
-    se = std::sqrt(std::max(0.0, sM * sM - carried));
-    m = std::clamp(static_cast<int>(std::ceil(3.0 * se / spacing)), 1, kMaxProbeHalf);
-    p.mode = detail::kPerspProbes;
-    p.m = m;
-    p.sigma_e = se;
-    p.step = 3.0 * se / m;
-    const double R = pyr.radius(std::max(p.blend.lo, p.blend.hi));
-    p.across = R;
-    p.along = R + 3.1 * se;
-    return p;
+    return probe_plan(p, pyr, sM, spacing);
 }
 
 }  // namespace detail
@@ -514,122 +538,165 @@ std::vector<detail::PerspLevel> loop_levels(const kernels::KernelPyramid& pyr) {
 
 }  // namespace
 
-numeric::Region perspective_region(const kernels::KernelPyramid& pyr, const PerspectiveView& view,
-                               const AntiAlias& aa) {
-    const auto& cam = view.camera();
-    const int W = cam.width, H = cam.height;
-    // A row of pixels maps to a straight segment of the plane, so samples along each row bound
-    // it; the fade varies smoothly along the row, so a sample next to a kept one is kept too.
-    constexpr int kSamples = 16;  // segments per row
-    struct Sample {
-        double x = 0, y = 0, ext = 0;
-        bool hit = false, kept = false, near = false;
-    };
-    auto sample_px = [&](int k) {
-        return k == 0 ? 0.5 : k == kSamples ? W - 0.5 : W * double(k) / kSamples;
-    };
-    // Whether the impulses at image point (px, py) are drawn, and their extent.
-    auto probe = [&](double px, double py, Sample& s) {
-        s.hit = view.texture_point(px, py, s.x, s.y);
-        s.kept = false;
-        if (!s.hit) return;
-        if (aa.max_distance > 0.0 && std::hypot(s.x - cam.x, s.y - cam.y) > aa.max_distance) return;
-        const auto f = view.footprint(s.x, s.y);
-        const detail::Plan p = detail::plan_for(pyr, aa, f.s_major, f.s_minor);
-        s.kept = p.keep;
-        // The line form's long axis points along the depth, where the neighbouring rows are
-        // (the region spans the rows between samples): only its across extent widens it.
-        s.ext = 1.25 * (p.mode == detail::kPerspLine ? p.across : std::max(p.along, p.across));
-    };
-    std::vector<Sample> grid(size_t(H) * (kSamples + 1));
-    tbb::parallel_for(0, H, [&](int j) {
-        Sample* row = grid.data() + size_t(j) * (kSamples + 1);
-        for (int k = 0; k <= kSamples; ++k) probe(sample_px(k), j + 0.5, row[k]);
-        // A sample next to a kept one along the row counts as kept, with its neighbour's extent.
-        std::array<double, kSamples + 1> ext{};
-        for (int k = 0; k <= kSamples; ++k) {
-            const bool left = k > 0 && row[k - 1].kept, right = k < kSamples && row[k + 1].kept;
-            row[k].near = row[k].hit && (row[k].kept || left || right);
-            double e = row[k].kept ? row[k].ext : 0.0;
-            if (left) e = std::max(e, row[k - 1].ext);
-            if (right) e = std::max(e, row[k + 1].ext);
-            ext[size_t(k)] = e;
+// ---------------------------------------------------------------------------------------------
+// The region of the plane to populate (docs/perspective.md §6, "The cut-off and the region")
+
+namespace {
+
+/// A sample of the image for perspective_region: the texture point it sees, whether impulses
+/// there are drawn (or a neighbour's along the row are: `near`), and the support they reach.
+struct RegionSample {
+    double x = 0, y = 0, ext = 0;
+    bool hit = false, kept = false, near = false;
+};
+
+/// The grid of samples of perspective_region: kSamples + 1 points along every image row. A row
+/// of pixels maps to a straight segment of the plane, so samples along each row bound it; the
+/// fade varies smoothly along the row, so a sample next to a kept one is kept too.
+class RegionSampler {
+public:
+    static constexpr int kSamples = 16;  // segments per row
+
+    RegionSampler(const kernels::KernelPyramid& pyr, const PerspectiveView& view,
+                  const AntiAlias& aa)
+        : m_pyr(pyr), m_view(view), m_aa(aa), m_W(view.camera().width),
+          m_H(view.camera().height) {}
+
+    /// Samples every row (parallel by rows).
+    void sample() {
+        m_grid.assign(size_t(m_H) * (kSamples + 1), RegionSample{});
+        tbb::parallel_for(0, m_H, [&](int j) { sample_row(j); });
+    }
+    /// The texture box of cell (j, k) of the sample grid (rows j, j + 1 and samples k, k + 1):
+    /// the box of the corners that see the plane (a corner past the cut-off moved back to it),
+    /// expanded by the largest extent among the kept ones; false when nothing there is drawn.
+    bool cell_box(int j, int k, numeric::Box& b) const;
+
+private:
+    const kernels::KernelPyramid& m_pyr;
+    const PerspectiveView& m_view;
+    const AntiAlias& m_aa;
+    int m_W, m_H;
+    std::vector<RegionSample> m_grid;
+
+    double sample_px(int k) const {
+        return k == 0 ? 0.5 : k == kSamples ? m_W - 0.5 : m_W * double(k) / kSamples;
+    }
+    const RegionSample& at(int j, int k) const {
+        return m_grid[size_t(j) * (kSamples + 1) + size_t(k)];
+    }
+    void probe(double px, double py, RegionSample& s) const;
+    void sample_row(int j);
+    void boundary(int k, int jk, int ju, double& x, double& y) const;
+};
+
+/// Whether the impulses at image point (px, py) are drawn, and their extent.
+void RegionSampler::probe(double px, double py, RegionSample& s) const {
+    const auto& cam = m_view.camera();
+    s.hit = m_view.texture_point(px, py, s.x, s.y);
+    s.kept = false;
+    if (!s.hit) return;
+    if (m_aa.max_distance > 0.0 && std::hypot(s.x - cam.x, s.y - cam.y) > m_aa.max_distance)
+        return;
+    const auto f = m_view.footprint(s.x, s.y);
+    const detail::Plan p = detail::plan_for(m_pyr, m_aa, f.s_major, f.s_minor);
+    s.kept = p.keep;
+    // The line form's long axis points along the depth, where the neighbouring rows are
+    // (the region spans the rows between samples): only its across extent widens it.
+    s.ext = 1.25 * (p.mode == detail::kPerspLine ? p.across : std::max(p.along, p.across));
+}
+
+void RegionSampler::sample_row(int j) {
+    RegionSample* row = m_grid.data() + size_t(j) * (kSamples + 1);
+    for (int k = 0; k <= kSamples; ++k) probe(sample_px(k), j + 0.5, row[k]);
+    // A sample next to a kept one along the row counts as kept, with its neighbour's extent.
+    std::array<double, kSamples + 1> ext{};
+    for (int k = 0; k <= kSamples; ++k) {
+        const bool left = k > 0 && row[k - 1].kept, right = k < kSamples && row[k + 1].kept;
+        row[k].near = row[k].hit && (row[k].kept || left || right);
+        double e = row[k].kept ? row[k].ext : 0.0;
+        if (left) e = std::max(e, row[k - 1].ext);
+        if (right) e = std::max(e, row[k + 1].ext);
+        ext[size_t(k)] = e;
+    }
+    for (int k = 0; k <= kSamples; ++k) row[k].ext = ext[size_t(k)];
+}
+
+/// Where column k of samples passes from kept (row jk) to not kept (row ju), the texture point
+/// just past the cut-off (bisection in the image row): rows near the horizon lie far apart on
+/// the plane, and the region should end at the cut-off, not at the next row.
+void RegionSampler::boundary(int k, int jk, int ju, double& x, double& y) const {
+    double a = jk + 0.5, b = ju + 0.5;  // kept, not kept
+    for (int it = 0; it < 16; ++it) {
+        RegionSample s;
+        probe(sample_px(k), 0.5 * (a + b), s);
+        (s.kept ? a : b) = 0.5 * (a + b);
+    }
+    if (m_view.texture_point(sample_px(k), b, x, y)) return;
+    x = at(jk, k).x, y = at(jk, k).y;
+}
+
+bool RegionSampler::cell_box(int j, int k, numeric::Box& b) const {
+    b = {1e300, 1e300, -1e300, -1e300};
+    double e = -1.0;
+    const int rows = m_H > 1 ? 2 : 1;
+    for (int dj = 0; dj < rows; ++dj)
+        for (int dk = 0; dk <= 1; ++dk) {
+            const RegionSample& s = at(j + dj, k + dk);
+            if (s.near) e = std::max(e, s.ext);
+            double x = s.x, y = s.y;
+            const int other = j + (rows - 1 - dj);
+            if (!s.kept && other != j + dj && at(other, k + dk).kept)
+                boundary(k + dk, other, j + dj, x, y);
+            else if (!s.hit)
+                continue;
+            b.x0 = std::min(b.x0, x), b.x1 = std::max(b.x1, x);
+            b.y0 = std::min(b.y0, y), b.y1 = std::max(b.y1, y);
         }
-        for (int k = 0; k <= kSamples; ++k) row[k].ext = ext[size_t(k)];
-    });
-    auto at = [&](int j, int k) -> const Sample& {
-        return grid[size_t(j) * (kSamples + 1) + size_t(k)];
-    };
-    // Where a column of samples passes from kept (row jk) to not kept (row ju), the texture point
-    // just past the cut-off (bisection in the image row): rows near the horizon lie far apart on
-    // the plane, and the region should end at the cut-off, not at the next row.
-    auto boundary = [&](int k, int jk, int ju, double& x, double& y) {
-        double a = jk + 0.5, b = ju + 0.5;  // kept, not kept
-        for (int it = 0; it < 16; ++it) {
-            Sample s;
-            probe(sample_px(k), 0.5 * (a + b), s);
-            (s.kept ? a : b) = 0.5 * (a + b);
-        }
-        if (view.texture_point(sample_px(k), b, x, y)) return;
-        x = at(jk, k).x, y = at(jk, k).y;
-    };
-    // Cells of the sample grid (rows j, j + 1 and samples k, k + 1): the box of the corners
-    // that see the plane (a corner past the cut-off moved back to it), expanded by the largest
-    // extent among the kept ones.
-    auto cell_box = [&](int j, int k, numeric::Box& b) {
-        b = {1e300, 1e300, -1e300, -1e300};
-        double e = -1.0;
-        const int rows = H > 1 ? 2 : 1;
-        for (int dj = 0; dj < rows; ++dj)
-            for (int dk = 0; dk <= 1; ++dk) {
-                const Sample& s = at(j + dj, k + dk);
-                if (s.near) e = std::max(e, s.ext);
-                double x = s.x, y = s.y;
-                const int other = j + (rows - 1 - dj);
-                if (!s.kept && other != j + dj && at(other, k + dk).kept)
-                    boundary(k + dk, other, j + dj, x, y);
-                else if (!s.hit)
-                    continue;
-                b.x0 = std::min(b.x0, x), b.x1 = std::max(b.x1, x);
-                b.y0 = std::min(b.y0, y), b.y1 = std::max(b.y1, y);
-            }
-        if (!(e >= 0.0) || !(b.x1 >= b.x0)) return false;
-        b = b.expanded(e);
-        return true;
-    };
-    // Merge: first along each row of cells, then down the rows, while a merged box wastes at
-    // most kWaste of its area: the covered area of a merged box is tracked as the sum of its
-    // parts less their overlaps with the part merged before them (the union of a wedge's row
-    // boxes is the wedge; its bounding box would be about twice as large).
-    constexpr double kWaste = 0.1;
-    struct Merged {
-        numeric::Box box, last;
-        double covered = 0.0;
-    };
-    auto overlap = [](const numeric::Box& a, const numeric::Box& b) {
-        const double w = std::min(a.x1, b.x1) - std::max(a.x0, b.x0);
-        const double h = std::min(a.y1, b.y1) - std::max(a.y0, b.y0);
-        return w > 0.0 && h > 0.0 ? w * h : 0.0;
-    };
-    auto try_merge = [&](Merged& m, const numeric::Box& b) {
-        const numeric::Box u{std::min(m.box.x0, b.x0), std::min(m.box.y0, b.y0),
+    if (!(e >= 0.0) || !(b.x1 >= b.x0)) return false;
+    b = b.expanded(e);
+    return true;
+}
+
+/// Boxes are merged while a merged box wastes at most kWaste of its area: the covered area of
+/// a merged box is tracked as the sum of its parts less their overlaps with the part merged
+/// before them (the union of a wedge's row boxes is the wedge; its bounding box would be about
+/// twice as large).
+constexpr double kWaste = 0.1;
+struct MergedBox {
+    numeric::Box box, last;
+    double covered = 0.0;
+};
+
+double overlap_area(const numeric::Box& a, const numeric::Box& b) {
+    const double w = std::min(a.x1, b.x1) - std::max(a.x0, b.x0);
+    const double h = std::min(a.y1, b.y1) - std::max(a.y0, b.y0);
+    return w > 0.0 && h > 0.0 ? w * h : 0.0;
+}
+
+bool try_merge(MergedBox& m, const numeric::Box& b) {
+    const numeric::Box u{std::min(m.box.x0, b.x0), std::min(m.box.y0, b.y0),
                          std::max(m.box.x1, b.x1), std::max(m.box.y1, b.y1)};
-        const double covered = m.covered + b.area() - overlap(m.last, b);
-        if (u.area() > (1.0 + kWaste) * covered) return false;
-        m.box = u, m.last = b, m.covered = covered;
-        return true;
-    };
+    const double covered = m.covered + b.area() - overlap_area(m.last, b);
+    if (u.area() > (1.0 + kWaste) * covered) return false;
+    m.box = u, m.last = b, m.covered = covered;
+    return true;
+}
+
+/// Merges the cells' boxes: first along each row of cells (parallel by rows), then down the
+/// rows, from the bottom row of cells up.
+numeric::Region merge_cells(const RegionSampler& sampler, int H) {
     const int cell_rows = std::max(1, H - 1);
-    std::vector<std::vector<Merged>> rows(static_cast<size_t>(cell_rows));
+    std::vector<std::vector<MergedBox>> rows(static_cast<size_t>(cell_rows));
     tbb::parallel_for(0, cell_rows, [&](int j) {
         auto& out = rows[size_t(j)];
-        for (int k = 0; k < kSamples; ++k) {
+        for (int k = 0; k < RegionSampler::kSamples; ++k) {
             numeric::Box b;
-            if (!cell_box(j, k, b)) continue;
+            if (!sampler.cell_box(j, k, b)) continue;
             if (out.empty() || !try_merge(out.back(), b)) out.push_back({b, b, b.area()});
         }
     });
-    std::vector<Merged> all;
+    std::vector<MergedBox> all;
     for (int j = cell_rows - 1; j >= 0; --j) {
         auto& r = rows[size_t(j)];
         if (r.size() == 1 && !all.empty() && try_merge(all.back(), r.front().box)) continue;
@@ -637,9 +704,21 @@ numeric::Region perspective_region(const kernels::KernelPyramid& pyr, const Pers
     }
     numeric::Region region;
     region.boxes.reserve(all.size());
-    for (const Merged& m : all) region.boxes.push_back(m.box);
+    for (const MergedBox& m : all) region.boxes.push_back(m.box);
     return region;
 }
+
+}  // namespace
+
+numeric::Region perspective_region(const kernels::KernelPyramid& pyr, const PerspectiveView& view,
+                                   const AntiAlias& aa) {
+    RegionSampler sampler(pyr, view, aa);
+    sampler.sample();
+    return merge_cells(sampler, view.camera().height);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Perspective evaluation (docs/perspective.md §2-4: the filter forms; §5: the far field)
 
 namespace detail {
 /// The per-frame arrays of accumulate_perspective that a PerspectiveWorkspace keeps.
@@ -672,6 +751,339 @@ detail::PerspScratch* PerspectiveWorkspace::acquire() {
 
 void PerspectiveWorkspace::release() { m_busy.store(false, std::memory_order_release); }
 
+namespace {
+
+/// Impulses prepared per chunk (each chunk writes its own items; probes go to per-chunk lists
+/// joined in chunk order, so the layout does not depend on scheduling).
+constexpr size_t kChunk = 1024;
+
+/// Counts of one chunk's preparation (PerspectiveStats).
+struct ChunkCounts {
+    size_t single = 0, probes = 0, line = 0, axial = 0;
+    size_t probe_count = 0;  ///< probes made
+    size_t pixels = 0;       ///< pixel boxes of the items and probes
+};
+
+/// Scratch memory of one call: the workspace's when one is lent and free, else its own.
+class ScratchLease {
+public:
+    explicit ScratchLease(PerspectiveWorkspace* workspace) {
+        m_scratch = workspace ? workspace->acquire() : nullptr;
+        if (m_scratch)
+            m_workspace = workspace;
+        else
+            m_own = std::make_unique<detail::PerspScratch>(), m_scratch = m_own.get();
+    }
+    ~ScratchLease() {
+        if (m_workspace) m_workspace->release();
+    }
+    ScratchLease(const ScratchLease&) = delete;
+    ScratchLease& operator=(const ScratchLease&) = delete;
+    detail::PerspScratch& get() { return *m_scratch; }
+
+private:
+    std::unique_ptr<detail::PerspScratch> m_own;
+    detail::PerspScratch* m_scratch = nullptr;
+    PerspectiveWorkspace* m_workspace = nullptr;
+};
+
+/// Sets the far field up unless the scratch holds the set-up of the same pyramid, rays and
+/// options (the set-up is a function of these alone).
+void ensure_far_setup(detail::PerspScratch& s, const kernels::KernelPyramid& pyr,
+                      const PerspectiveView& view, const PixelCoords& coords, const AntiAlias& aa) {
+    auto& key = s.far_key;
+    if (key.pyramid == pyr.serial() && key.camera.same_rays(view.camera()) && key.aa == aa) return;
+    key.pyramid = 0;  // not valid while set up (an exception leaves it so)
+    s.far_field.setup(pyr, view, coords, aa);
+    key = {pyr.serial(), view.camera(), aa};
+}
+
+size_t box_area(int x0, int y0, int x1, int y1) {
+    return x1 >= x0 && y1 >= y0 ? size_t(x1 - x0 + 1) * size_t(y1 - y0 + 1) : size_t(0);
+}
+
+/// Line form (docs/perspective.md §4): the bend of the footprint's image along its major axis,
+/// its second difference (step 1 % of the depth: the map varies on the scale of the depth), and
+/// the keystone, the log-derivative of the across scale per image pixel along it.
+void line_bend(const PerspectiveView& view, double x, double y,
+               const PerspectiveView::Footprint& f, double sx, double sy, detail::PerspItem& it) {
+    const double h = 0.01 * view.depth(x, y);
+    double ax, ay, bx, by;
+    if (!view.image_point(x + h * f.ex, y + h * f.ey, ax, ay) ||
+        !view.image_point(x - h * f.ex, y - h * f.ey, bx, by))
+        return;
+    const double d2 = (ax - 2.0 * sx + bx) * f.ix + (ay - 2.0 * sy + by) * f.iy;
+    it.curv = static_cast<float>(0.5 * d2 / (h * h));
+    // across scale at +-h along: its log-derivative per image pixel
+    const double sp = view.footprint(x + h * f.ex, y + h * f.ey).s_minor;
+    const double sn = view.footprint(x - h * f.ex, y - h * f.ey).s_minor;
+    const double du = (ax - bx) * f.ix + (ay - by) * f.iy;
+    if (du != 0.0) it.keystone = static_cast<float>(std::log(sp / sn) / du);
+}
+
+/// Line form (docs/perspective.md §4): the item's image-space filter and pixel box.
+bool prepare_line(const PerspectiveView& view, double x, double y,
+                  const PerspectiveView::Footprint& f, const detail::Plan& p, double sx, double sy,
+                  int W, int H, detail::PerspItem& it) {
+    it.ix = static_cast<float>(f.ix), it.iy = static_cast<float>(f.iy);
+    it.inv_smaj = static_cast<float>(1.0 / f.s_major);
+    it.smin = static_cast<float>(f.s_minor);
+    line_bend(view, x, y, f, sx, sy, it);
+    const double ism2 = 1.0 / (f.s_major * f.s_major);
+    it.var_lo = static_cast<float>(p.var_lo * ism2);
+    it.var_hi = static_cast<float>(p.var_hi * ism2);
+    // Along the major axis: the Gaussian in image space (4 sd of the widest level,
+    // chord variance at most R^2/3); across: the projected support.
+    const double R = p.across;
+    const double sd = std::sqrt((std::max(p.var_lo, p.var_hi) + R * R / 3.0) * ism2);
+    const double ax = 4.0 * sd * std::abs(f.ix) + 1.0, ay = 4.0 * sd * std::abs(f.iy) + 1.0;
+    double xa = sx, xb = sx, ya = sy, yb = sy;
+    for (double sgn : {-1.0, 1.0}) {
+        double qx, qy;
+        if (view.image_point(x - sgn * R * f.ey, y + sgn * R * f.ex, qx, qy)) {
+            xa = std::min(xa, qx), xb = std::max(xb, qx);
+            ya = std::min(ya, qy), yb = std::max(yb, qy);
+        } else {
+            xa = ya = -1e12, xb = yb = 1e12;
+        }
+    }
+    pixel_box(xa - ax, xb + ax, ya - ay, yb + ay, W, H, it.x0, it.y0, it.x1, it.y1);
+    return it.x0 <= it.x1 && it.y0 <= it.y1;
+}
+
+/// Axial form (docs/perspective.md §3): the blurred table's variances and the image box of the
+/// rectangle along x across the support.
+bool prepare_axial(const PerspectiveView& view, double x, double y,
+                   const PerspectiveView::Footprint& f, const detail::Plan& p, int W, int H,
+                   detail::PerspItem& it) {
+    it.ex = static_cast<float>(f.ex), it.ey = static_cast<float>(f.ey);
+    it.var_lo = static_cast<float>(p.var_lo), it.var_hi = static_cast<float>(p.var_hi);
+    const double ux = p.along * f.ex, uy = p.along * f.ey;
+    const double vx = -p.across * f.ey, vy = p.across * f.ex;
+    const std::array<std::array<double, 2>, 4> rect = {{{x - ux - vx, y - uy - vy},
+                                                        {x + ux - vx, y + uy - vy},
+                                                        {x + ux + vx, y + uy + vy},
+                                                        {x - ux + vx, y - uy + vy}}};
+    double xa, xb, ya, yb;
+    if (project_box(view, rect, xa, xb, ya, yb))
+        pixel_box(xa, xb, ya, yb, W, H, it.x0, it.y0, it.x1, it.y1);
+    return it.x0 <= it.x1 && it.y0 <= it.y1;
+}
+
+/// Probe form (docs/perspective.md §3): 2m + 1 Gaussian-weighted copies along the major axis,
+/// appended to `probes`; the item's box is the union of theirs.
+bool prepare_probes(const PerspectiveView& view, double x, double y,
+                    const PerspectiveView::Footprint& f, const detail::Plan& p, int W, int H,
+                    detail::PerspItem& it, std::vector<detail::PerspProbe>& probes,
+                    ChunkCounts& counts) {
+    std::array<double, 2 * kMaxProbeHalf + 1> t{}, w{};
+    probe_weights(p, t, w);
+    it.probe0 = static_cast<uint32_t>(probes.size());
+    it.x0 = W, it.y0 = H, it.x1 = -1, it.y1 = -1;
+    for (int j = 0; j <= 2 * p.m; ++j) {
+        detail::PerspProbe pr;
+        const double ox = t[size_t(j)] * f.ex, oy = t[size_t(j)] * f.ey;
+        pr.dx = static_cast<float>(ox), pr.dy = static_cast<float>(oy);
+        pr.w = static_cast<float>(static_cast<double>(it.w) * w[size_t(j)]);
+        if (!square_box(view, x + ox, y + oy, p.across, W, H, pr.x0, pr.y0, pr.x1, pr.y1))
+            continue;
+        it.x0 = std::min(it.x0, pr.x0), it.y0 = std::min(it.y0, pr.y0);
+        it.x1 = std::max(it.x1, pr.x1), it.y1 = std::max(it.y1, pr.y1);
+        counts.pixels += box_area(pr.x0, pr.y0, pr.x1, pr.y1);
+        probes.push_back(pr);
+    }
+    it.nprobe = static_cast<uint32_t>(probes.size()) - it.probe0;
+    ++counts.probes;
+    counts.probe_count += it.nprobe;
+    return it.nprobe > 0;
+}
+
+/// The inputs of the preparation, the same for every impulse of a frame.
+struct PrepareInputs {
+    const kernels::KernelPyramid& pyr;
+    const sim::Impulses& imp;
+    const PerspectiveView& view;
+    const PixelCoords& coords;
+    const AntiAlias& aa;
+    const detail::FarField& far;
+    double orient = 0;  ///< the kernel's own orientation, radians
+};
+
+/// Prepares impulse i of a near place: its plan (docs/perspective.md §2-4), position, weight
+/// and pixel box; false when it adds nothing to the image.
+bool prepare_item(const PrepareInputs& in, size_t i, detail::PerspItem& it,
+                  std::vector<detail::PerspProbe>& probes, ChunkCounts& counts) {
+    const auto& view = in.view;
+    const int W = view.camera().width, H = view.camera().height;
+    const double x = in.imp.x[i], y = in.imp.y[i];
+    if (!(view.depth(x, y) > 0.0)) return false;
+    const auto f = view.footprint(x, y);
+    const detail::Plan p = detail::plan_for(in.pyr, in.aa, f.s_major, f.s_minor);
+    if (!p.keep) return false;
+    it.px = static_cast<float>(x - in.coords.origin_x);
+    it.py = static_cast<float>(y - in.coords.origin_y);
+    double sx = 0, sy = 0;
+    view.image_point(x, y, sx, sy);
+    it.sx = static_cast<float>(sx), it.sy = static_cast<float>(sy);
+    it.w = static_cast<float>(static_cast<double>(in.imp.weight[i]) * p.fade);
+    if (!in.pyr.radial()) {  // only grid levels are turned (a radial kernel has no angle)
+        const double th = in.orient + static_cast<double>(in.imp.theta[i]);
+        it.cs = static_cast<float>(std::cos(th)), it.sn = static_cast<float>(std::sin(th));
+    }
+    it.lo = static_cast<int16_t>(p.blend.lo), it.hi = static_cast<int16_t>(p.blend.hi);
+    it.a = static_cast<float>(p.blend.weight);
+    it.mode = p.mode;
+    bool any = false;
+    if (p.mode == detail::kPerspSingle) {
+        any = square_box(view, x, y, p.across, W, H, it.x0, it.y0, it.x1, it.y1);
+        ++counts.single;
+    } else if (p.mode == detail::kPerspLine) {
+        any = prepare_line(view, x, y, f, p, sx, sy, W, H, it);
+        ++counts.line;
+    } else if (p.mode == detail::kPerspAxial) {
+        any = prepare_axial(view, x, y, f, p, W, H, it);
+        ++counts.axial;
+    } else {
+        return prepare_probes(view, x, y, f, p, W, H, it, probes, counts);
+    }
+    if (any) counts.pixels += box_area(it.x0, it.y0, it.x1, it.y1);
+    return any;
+}
+
+/// Prepares chunk c of the impulses: near ones into the chunk's items (and probes), far ones
+/// given their sub-row coordinate in far_q and counted per band in far_counts (the far field
+/// makes their items itself: stored, they would be tens of megabytes new to every frame).
+ChunkCounts prepare_chunk(const PrepareInputs& in, size_t c, detail::PerspScratch& s) {
+    const auto& cam = in.view.camera();
+    const detail::FarField& far = in.far;
+    auto& probes = s.chunk_probes[c];
+    auto& items = s.chunk_items[c];
+    probes.clear(), items.clear();
+    ChunkCounts counts;
+    const size_t bands = size_t(far.bands());
+    for (size_t i = c * kChunk; i < std::min(in.imp.size(), (c + 1) * kChunk); ++i) {
+        const double x = in.imp.x[i], y = in.imp.y[i];
+        if (far.active()) s.far_q[i] = -1.0;
+        if (in.aa.max_distance > 0.0 && std::hypot(x - cam.x, y - cam.y) > in.aa.max_distance)
+            continue;
+        if (far.contains(x - cam.x, y - cam.y)) {
+            const double q = far.row_coordinate(x - cam.x, y - cam.y);
+            s.far_q[i] = q;
+            if (q >= 0.0) ++s.far_counts[c * bands + size_t(detail::FarField::band_of(q))];
+            continue;
+        }
+        detail::PerspItem it;
+        if (prepare_item(in, i, it, probes, counts)) items.push_back(it);
+    }
+    return counts;
+}
+
+/// Joins the chunks' items and probes in chunk order (the canonical order of the impulses).
+void join_chunks(detail::PerspScratch& s, size_t chunks) {
+    s.probes.clear(), s.items.clear();
+    size_t np = 0, ni = 0;
+    for (size_t c = 0; c < chunks; ++c)
+        np += s.chunk_probes[c].size(), ni += s.chunk_items[c].size();
+    s.probes.reserve(np), s.items.reserve(ni);
+    for (size_t c = 0; c < chunks; ++c) {
+        const auto base = static_cast<uint32_t>(s.probes.size());
+        s.probes.insert(s.probes.end(), s.chunk_probes[c].begin(), s.chunk_probes[c].end());
+        for (detail::PerspItem& it : s.chunk_items[c]) {
+            if (it.mode == detail::kPerspProbes) it.probe0 += base;
+            s.items.push_back(it);
+        }
+    }
+}
+
+/// Prepares every impulse (parallel by chunks); returns the chunks' counts in chunk order.
+std::vector<ChunkCounts> prepare_all(const PrepareInputs& in, detail::PerspScratch& s) {
+    const size_t n = in.imp.size();
+    const size_t chunks = (n + kChunk - 1) / kChunk;
+    if (s.chunk_items.size() < chunks) s.chunk_items.resize(chunks), s.chunk_probes.resize(chunks);
+    std::vector<ChunkCounts> counts(chunks);
+    if (in.far.active()) s.far_q.resize(n);
+    s.far_counts.assign(chunks * size_t(in.far.bands()), 0);
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) { counts[c] = prepare_chunk(in, c, s); });
+    join_chunks(s, chunks);
+    return counts;
+}
+
+/// Enforces the pixel budget and fills the preparation's part of the stats.
+void check_counts(const std::vector<ChunkCounts>& counts, size_t n, const EvalOptions& options,
+                  PerspectiveStats* stats) {
+    size_t pixels = 0;  // the impulses' pixel boxes
+    for (const auto& c : counts) pixels += c.pixels;
+    if (options.max_pixel_evaluations > 0.0 && double(pixels) > options.max_pixel_evaluations)
+        throw PixelBudgetError(double(pixels), options.max_pixel_evaluations);
+    if (!stats) return;
+    *stats = {};
+    stats->impulses = n, stats->pixels = pixels;
+    for (const auto& c : counts) {
+        stats->single += c.single, stats->probes += c.probes, stats->line += c.line,
+            stats->probe_count += c.probe_count;
+        stats->axial += c.axial;
+    }
+}
+
+/// Items binned into square tiles of T pixels by image box: tile t holds
+/// bins[start[t] .. start[t + 1]), in canonical order (a counting sort).
+struct TileBins {
+    int T = 8, ntx = 0, nty = 0;
+    std::vector<uint32_t> start, bins;
+};
+
+TileBins bin_items(const std::vector<detail::PerspItem>& items, int W, int H, int tile_size) {
+    TileBins tb;
+    const int T = tb.T = std::max(8, tile_size);
+    const int ntx = tb.ntx = (W + T - 1) / T;
+    tb.nty = (H + T - 1) / T;
+    std::vector<uint32_t>& count = tb.start;
+    count.assign(size_t(ntx) * tb.nty + 1, 0);
+    for (const auto& it : items)
+        for (int b = it.y0 / T; b <= it.y1 / T; ++b)
+            for (int a = it.x0 / T; a <= it.x1 / T; ++a) ++count[size_t(b) * ntx + a + 1];
+    for (size_t t = 1; t < count.size(); ++t) count[t] += count[t - 1];
+    tb.bins.resize(count.back());
+    std::vector<uint32_t> fill(count.begin(), count.end() - 1);
+    for (size_t i = 0; i < items.size(); ++i) {
+        const auto& it = items[i];
+        for (int b = it.y0 / T; b <= it.y1 / T; ++b)
+            for (int a = it.x0 / T; a <= it.x1 / T; ++a)
+                tb.bins[fill[size_t(b) * ntx + a]++] = uint32_t(i);
+    }
+    return tb;
+}
+
+/// The near field: every tile sums its items in canonical order into a tile of its own, then
+/// adds it to `out` (each pixel written by one task).
+void render_tiles(const TileBins& tb, const detail::PerspScratch& s, const detail::PerspKernel& lk,
+                  const PixelCoords& coords, const detail::PerspLoops& loops, bool parallel,
+                  Frame& out) {
+    const int W = out.width, H = out.height, T = tb.T;
+    auto do_tile = [&](int t) {
+        const int a = t % tb.ntx, b = t / tb.ntx;
+        const int x0 = a * T, y0 = b * T;
+        const int tw = std::min(T, W - x0), th = std::min(T, H - y0);
+        std::vector<float> acc(size_t(tw) * th, 0.0f);
+        const uint32_t* idx = tb.bins.data() + tb.start[size_t(t)];
+        const size_t m = tb.start[size_t(t) + 1] - tb.start[size_t(t)];
+        loops.tile(lk, s.items.data(), s.probes.data(), idx, m, coords.x.data(), coords.y.data(),
+                   W, x0, y0, tw, th, acc.data());
+        for (int y = 0; y < th; ++y) {
+            float* dst = out.data.data() + size_t(y0 + y) * W + x0;
+            const float* src = acc.data() + size_t(y) * tw;
+            for (int x = 0; x < tw; ++x) dst[x] += src[x];
+        }
+    };
+    const int ntiles = tb.ntx * tb.nty;
+    if (parallel)
+        tbb::parallel_for(0, ntiles, do_tile);
+    else
+        for (int t = 0; t < ntiles; ++t) do_tile(t);
+}
+
+}  // namespace
+
 void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impulses& imp,
                             const PerspectiveView& view, const PixelCoords& coords, Frame& out,
                             const AntiAlias& aa, const EvalOptions& options,
@@ -688,255 +1100,30 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
     auto ms = [](Clock::time_point a, Clock::time_point b) {
         return std::chrono::duration<double, std::milli>(b - a).count();
     };
-    // Scratch memory: the workspace's when one is lent and free, else this call's own.
-    std::unique_ptr<detail::PerspScratch> own;
-    detail::PerspScratch* scratch = workspace ? workspace->acquire() : nullptr;
-    struct Release {
-        PerspectiveWorkspace* w;
-        ~Release() {
-            if (w) w->release();
-        }
-    } release{scratch ? workspace : nullptr};
-    if (!scratch) own = std::make_unique<detail::PerspScratch>(), scratch = own.get();
+    ScratchLease lease(workspace);
+    detail::PerspScratch& scratch = lease.get();
     const auto t0 = Clock::now();
-    detail::FarField& far = scratch->far_field;
-    {
-        // The set-up is a function of these alone.
-        auto& key = scratch->far_key;
-        if (!(key.pyramid == pyr.serial() && key.camera.same_rays(cam) && key.aa == aa)) {
-            key.pyramid = 0;  // not valid while set up (an exception leaves it so)
-            far.setup(pyr, view, coords, aa);
-            key = {pyr.serial(), cam, aa};
-        }
-    }
+    ensure_far_setup(scratch, pyr, view, coords, aa);
+    const detail::FarField& far = scratch.far_field;
     const auto t1 = Clock::now();
-
-    // Prepare the impulses in chunks (each writes its own items; probes go to per-chunk lists
-    // joined in chunk order, so the layout does not depend on scheduling).
-    const size_t n = imp.size();
-    constexpr size_t kChunk = 1024;
-    const size_t chunks = (n + kChunk - 1) / kChunk;
-    auto& chunk_items = scratch->chunk_items;
-    auto& chunk_probes = scratch->chunk_probes;
-    if (chunk_items.size() < chunks) chunk_items.resize(chunks), chunk_probes.resize(chunks);
-    std::vector<std::array<size_t, 6>> chunk_counts(chunks);
-    // Far impulses: their sub-row coordinate per impulse and counts per chunk and band, from
-    // which the far field sorts them (the items themselves are made there: stored, they would
-    // be tens of megabytes of memory new to every frame).
-    const int far_bands = far.bands();
-    std::vector<double>& far_q = scratch->far_q;
-    if (far.active()) far_q.resize(n);
-    std::vector<uint32_t>& far_counts = scratch->far_counts;
-    far_counts.assign(chunks * size_t(far_bands), 0);
-    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
-        auto& probes = chunk_probes[c];
-        auto& live_items = chunk_items[c];
-        auto& counts = chunk_counts[c];
-        probes.clear(), live_items.clear();
-        counts = {0, 0, 0, 0, 0, 0};
-        auto area = [](int x0, int y0, int x1, int y1) {
-            return x1 >= x0 && y1 >= y0 ? size_t(x1 - x0 + 1) * size_t(y1 - y0 + 1) : size_t(0);
-        };
-        std::array<double, 2 * kMaxProbeHalf + 1> t{}, w{};
-        for (size_t i = c * kChunk; i < std::min(n, (c + 1) * kChunk); ++i) {
-            const double x = imp.x[i], y = imp.y[i];
-            if (far.active()) far_q[i] = -1.0;
-            if (aa.max_distance > 0.0 && std::hypot(x - cam.x, y - cam.y) > aa.max_distance)
-                continue;
-            if (far.contains(x - cam.x, y - cam.y)) {
-                const double q = far.row_coordinate(x - cam.x, y - cam.y);
-                far_q[i] = q;
-                if (q >= 0.0)
-                    ++far_counts[c * size_t(far_bands) + size_t(detail::FarField::band_of(q))];
-                continue;
-            }
-            if (!(view.depth(x, y) > 0.0)) continue;
-            const auto f = view.footprint(x, y);
-            const detail::Plan p = detail::plan_for(pyr, aa, f.s_major, f.s_minor);
-            if (!p.keep) continue;
-            detail::PerspItem it;
-            it.px = static_cast<float>(x - coords.origin_x);
-            it.py = static_cast<float>(y - coords.origin_y);
-            double sx = 0, sy = 0;
-            view.image_point(x, y, sx, sy);
-            it.sx = static_cast<float>(sx), it.sy = static_cast<float>(sy);
-            it.w = static_cast<float>(static_cast<double>(imp.weight[i]) * p.fade);
-            if (!lk.radial) {  // only grid levels are turned (a radial kernel has no angle)
-                const double th = orient + static_cast<double>(imp.theta[i]);
-                it.cs = static_cast<float>(std::cos(th)), it.sn = static_cast<float>(std::sin(th));
-            }
-            it.lo = static_cast<int16_t>(p.blend.lo), it.hi = static_cast<int16_t>(p.blend.hi);
-            it.a = static_cast<float>(p.blend.weight);
-            it.mode = p.mode;
-            bool any = false;
-            if (p.mode == detail::kPerspSingle) {
-                any = square_box(view, x, y, p.across, W, H, it.x0, it.y0, it.x1, it.y1);
-                ++counts[0];
-            } else if (p.mode == detail::kPerspLine) {
-                it.ix = static_cast<float>(f.ix), it.iy = static_cast<float>(f.iy);
-                it.inv_smaj = static_cast<float>(1.0 / f.s_major);
-                it.smin = static_cast<float>(f.s_minor);
-                {
-                    // Second difference of the image position along the axis (step 1 % of the
-                    // depth: the map varies on the scale of the depth).
-                    const double h = 0.01 * view.depth(x, y);
-                    double ax, ay, bx, by;
-                    if (view.image_point(x + h * f.ex, y + h * f.ey, ax, ay) &&
-                        view.image_point(x - h * f.ex, y - h * f.ey, bx, by)) {
-                        const double d2 = (ax - 2.0 * sx + bx) * f.ix + (ay - 2.0 * sy + by) * f.iy;
-                        it.curv = static_cast<float>(0.5 * d2 / (h * h));
-                        // across scale at +-h along: its log-derivative per image pixel
-                        const double sp = view.footprint(x + h * f.ex, y + h * f.ey).s_minor;
-                        const double sn = view.footprint(x - h * f.ex, y - h * f.ey).s_minor;
-                        const double du = (ax - bx) * f.ix + (ay - by) * f.iy;
-                        if (du != 0.0) it.keystone = static_cast<float>(std::log(sp / sn) / du);
-                    }
-                }
-                const double ism2 = 1.0 / (f.s_major * f.s_major);
-                it.var_lo = static_cast<float>(p.var_lo * ism2);
-                it.var_hi = static_cast<float>(p.var_hi * ism2);
-                // Along the major axis: the Gaussian in image space (4 sd of the widest level,
-                // chord variance at most R^2/3); across: the projected support.
-                const double R = p.across;
-                const double sd = std::sqrt((std::max(p.var_lo, p.var_hi) + R * R / 3.0) * ism2);
-                const double ax = 4.0 * sd * std::abs(f.ix) + 1.0,
-                             ay = 4.0 * sd * std::abs(f.iy) + 1.0;
-                double xa = sx, xb = sx, ya = sy, yb = sy;
-                for (double sgn : {-1.0, 1.0}) {
-                    double qx, qy;
-                    if (view.image_point(x - sgn * R * f.ey, y + sgn * R * f.ex, qx, qy)) {
-                        xa = std::min(xa, qx), xb = std::max(xb, qx);
-                        ya = std::min(ya, qy), yb = std::max(yb, qy);
-                    } else {
-                        xa = ya = -1e12, xb = yb = 1e12;
-                    }
-                }
-                pixel_box(xa - ax, xb + ax, ya - ay, yb + ay, W, H, it.x0, it.y0, it.x1, it.y1);
-                any = it.x0 <= it.x1 && it.y0 <= it.y1;
-                ++counts[2];
-            } else if (p.mode == detail::kPerspAxial) {
-                it.ex = static_cast<float>(f.ex), it.ey = static_cast<float>(f.ey);
-                it.var_lo = static_cast<float>(p.var_lo), it.var_hi = static_cast<float>(p.var_hi);
-                // the image box of the rectangle along x across the support
-                const double ux = p.along * f.ex, uy = p.along * f.ey;
-                const double vx = -p.across * f.ey, vy = p.across * f.ex;
-                const std::array<std::array<double, 2>, 4> rect = {{{x - ux - vx, y - uy - vy},
-                                                                    {x + ux - vx, y + uy - vy},
-                                                                    {x + ux + vx, y + uy + vy},
-                                                                    {x - ux + vx, y - uy + vy}}};
-                double xa, xb, ya, yb;
-                if (project_box(view, rect, xa, xb, ya, yb))
-                    pixel_box(xa, xb, ya, yb, W, H, it.x0, it.y0, it.x1, it.y1);
-                any = it.x0 <= it.x1 && it.y0 <= it.y1;
-                ++counts[5];
-            } else {
-                probe_weights(p, t, w);
-                it.probe0 = static_cast<uint32_t>(probes.size());
-                it.x0 = W, it.y0 = H, it.x1 = -1, it.y1 = -1;
-                for (int j = 0; j <= 2 * p.m; ++j) {
-                    detail::PerspProbe pr;
-                    const double ox = t[size_t(j)] * f.ex, oy = t[size_t(j)] * f.ey;
-                    pr.dx = static_cast<float>(ox), pr.dy = static_cast<float>(oy);
-                    pr.w = static_cast<float>(static_cast<double>(it.w) * w[size_t(j)]);
-                    if (!square_box(view, x + ox, y + oy, p.across, W, H, pr.x0, pr.y0, pr.x1,
-                                    pr.y1))
-                        continue;
-                    it.x0 = std::min(it.x0, pr.x0), it.y0 = std::min(it.y0, pr.y0);
-                    it.x1 = std::max(it.x1, pr.x1), it.y1 = std::max(it.y1, pr.y1);
-                    counts[4] += area(pr.x0, pr.y0, pr.x1, pr.y1);
-                    probes.push_back(pr);
-                }
-                it.nprobe = static_cast<uint32_t>(probes.size()) - it.probe0;
-                any = it.nprobe > 0;
-                ++counts[1];
-                counts[3] += it.nprobe;
-            }
-            if (!any) continue;
-            if (p.mode != detail::kPerspProbes) counts[4] += area(it.x0, it.y0, it.x1, it.y1);
-            live_items.push_back(it);
-        }
-    });
-    // Join the chunks in order (the canonical order of the impulses).
-    std::vector<detail::PerspProbe>& probes = scratch->probes;
-    std::vector<detail::PerspItem>& items = scratch->items;
-    probes.clear(), items.clear();
-    {
-        size_t np = 0, ni = 0;
-        for (size_t c = 0; c < chunks; ++c)
-            np += chunk_probes[c].size(), ni += chunk_items[c].size();
-        probes.reserve(np), items.reserve(ni);
-        for (size_t c = 0; c < chunks; ++c) {
-            const auto base = static_cast<uint32_t>(probes.size());
-            probes.insert(probes.end(), chunk_probes[c].begin(), chunk_probes[c].end());
-            for (detail::PerspItem& it : chunk_items[c]) {
-                if (it.mode == detail::kPerspProbes) it.probe0 += base;
-                items.push_back(it);
-            }
-        }
-    }
-    size_t pixels = 0;  // the impulses' pixel boxes
-    for (const auto& c : chunk_counts) pixels += c[4];
-    if (options.max_pixel_evaluations > 0.0 && double(pixels) > options.max_pixel_evaluations)
-        throw PixelBudgetError(double(pixels), options.max_pixel_evaluations);
-    if (stats) {
-        *stats = {};
-        stats->impulses = n, stats->pixels = pixels;
-        for (const auto& c : chunk_counts) {
-            stats->single += c[0], stats->probes += c[1], stats->line += c[2],
-                stats->probe_count += c[3];
-            stats->axial += c[5];
-        }
-    }
-
+    const std::vector<ChunkCounts> counts =
+        prepare_all({pyr, imp, view, coords, aa, far, orient}, scratch);
+    check_counts(counts, imp.size(), options, stats);
     const auto t2 = Clock::now();
-    // Bin into tiles by image box (counting sort keeps each tile's list in canonical order).
-    const int T = std::max(8, options.tile_size);
-    const int ntx = (W + T - 1) / T, nty = (H + T - 1) / T;
-    std::vector<uint32_t> count(size_t(ntx) * nty + 1, 0);
-    for (const auto& it : items)
-        for (int b = it.y0 / T; b <= it.y1 / T; ++b)
-            for (int a = it.x0 / T; a <= it.x1 / T; ++a) ++count[size_t(b) * ntx + a + 1];
-    for (size_t t = 1; t < count.size(); ++t) count[t] += count[t - 1];
-    std::vector<uint32_t> bins(count.back());
-    std::vector<uint32_t> fill(count.begin(), count.end() - 1);
-    for (size_t i = 0; i < items.size(); ++i) {
-        const auto& it = items[i];
-        for (int b = it.y0 / T; b <= it.y1 / T; ++b)
-            for (int a = it.x0 / T; a <= it.x1 / T; ++a)
-                bins[fill[size_t(b) * ntx + a]++] = uint32_t(i);
-    }
-
-    const detail::PerspLoops& loops =
-        options.use_avx2 && numeric::cpu_has_avx2() ? detail::kPerspLoopsAvx2 : detail::kPerspLoopsBase;
-    auto do_tile = [&](int t) {
-        const int a = t % ntx, b = t / ntx;
-        const int x0 = a * T, y0 = b * T;
-        const int tw = std::min(T, W - x0), th = std::min(T, H - y0);
-        std::vector<float> acc(size_t(tw) * th, 0.0f);
-        const uint32_t* idx = bins.data() + count[size_t(t)];
-        const size_t m = count[size_t(t) + 1] - count[size_t(t)];
-        loops.tile(lk, items.data(), probes.data(), idx, m, coords.x.data(), coords.y.data(), W, x0,
-                   y0, tw, th, acc.data());
-        for (int y = 0; y < th; ++y) {
-            float* dst = out.data.data() + size_t(y0 + y) * W + x0;
-            const float* src = acc.data() + size_t(y) * tw;
-            for (int x = 0; x < tw; ++x) dst[x] += src[x];
-        }
-    };
-    const int ntiles = ntx * nty;
-    if (options.parallel)
-        tbb::parallel_for(0, ntiles, do_tile);
-    else
-        for (int t = 0; t < ntiles; ++t) do_tile(t);
+    const detail::PerspLoops& loops = options.use_avx2 && numeric::cpu_has_avx2()
+                                          ? detail::kPerspLoopsAvx2
+                                          : detail::kPerspLoopsBase;
+    render_tiles(bin_items(scratch.items, W, H, options.tile_size), scratch, lk, coords, loops,
+                 options.parallel, out);
     const auto t3 = Clock::now();
     const size_t far_count =
-        far.active()
-            ? far.render({&imp, cam.x, cam.y, orient, far_q.data(), far_counts.data(), kChunk},
-                         out, loops, options.parallel, scratch->far)
-            : 0;
+        far.active() ? far.render({&imp, cam.x, cam.y, orient, scratch.far_q.data(),
+                                   scratch.far_counts.data(), kChunk},
+                                  out, loops, options.parallel, scratch.far)
+                     : 0;
     if (stats) {
         stats->far = far_count;
-        stats->culled = n - items.size() - far_count;
+        stats->culled = imp.size() - scratch.items.size() - far_count;
         const auto t4 = Clock::now();
         stats->setup_ms = ms(t0, t1), stats->prepare_ms = ms(t1, t2), stats->tiles_ms = ms(t2, t3);
         stats->far_ms = ms(t3, t4);

@@ -38,6 +38,9 @@
 // 2 * cutoff and cutoff, and none are generated beyond, so the work per frame stays bounded
 // however close the horizon is.
 //
+// docs/perspective.md derives the forms (§3-4), the far field (§5) and the cut-off (§6) with
+// these symbols.
+//
 // Determinism: every pixel sums its impulses in canonical order (and an impulse's probes or
 // table slices in order), each pixel is written by one task, and the per-pixel code uses only
 // + - * / sqrt and the polynomial exp of the evaluator, compiled for baseline x86-64 and AVX2
