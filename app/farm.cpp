@@ -124,8 +124,9 @@ std::string array_script(const FarmOptions& o, const Plan& p) {
                     p.scene + " as " + std::to_string(p.tasks) + " array tasks of " + chunk +
                     " frames.\n# Submit with the encode job (it runs when every task succeeded):\n#   " +
                     submit_line(p) +
-                    "\n# A failed or preempted task resumes where it stopped (frames already whole are "
-                    "kept):\n#   sbatch --array=3,7 " + quoted(p.script) + "\n";
+                    "\n# Failed or preempted tasks resubmitted resume where they stopped (whole frames "
+                    "are kept),\n# e.g. task " + std::to_string(p.tasks - 1) + ": sbatch --array=" +
+                    std::to_string(p.tasks - 1) + " " + quoted(p.script) + "\n";
     s += sbatch_header(o, "impulse-" + p.stem, p.logs + "/slurm-%A_%a.out");
     s += "#SBATCH --array=0-" + std::to_string(p.tasks - 1) +
          (o.max_running.empty() ? "" : "%" + o.max_running) + "\n";
