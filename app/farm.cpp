@@ -144,6 +144,9 @@ std::string encode_script(const FarmOptions& o, const Plan& p) {
     std::string s = "#!/bin/bash\n# Written by `impulse farm`: assembles " + p.video +
                     " once every task of " + p.script + " succeeded.\n";
     s += sbatch_header(o, "impulse-" + p.stem + "-encode", p.logs + "/slurm-%j.out");
+    // A task that failed makes afterok unsatisfiable: the job is cancelled rather than left
+    // pending for ever; after resubmitting the tasks, submit this script again after them.
+    s += "#SBATCH --kill-on-invalid-dep=yes\n";
     s += "set -eu\nexec " + quoted(p.impulse) + " encode " + quoted(p.pattern) + " -o " +
          quoted(p.video) + " --frames " + std::to_string(p.first) + "-" + std::to_string(p.last) +
          (o.render.codec.empty() ? "" : " --codec " + quoted(o.render.codec)) + "\n";

@@ -36,12 +36,14 @@ cleanup() {
 trap cleanup EXIT
 trap 'exit 130' INT TERM
 
-# Waits up to $1 seconds for the command after it to succeed.
+# Waits up to $1 seconds for the command after it to succeed; gives up at once if a daemon
+# started here has exited.
 wait_for() {
     local limit=$1; shift
     local end=$((SECONDS + limit))
     until "$@" >/dev/null 2>&1; do
         [ $SECONDS -lt $end ] || return 1
+        for pid in "${pids[@]}"; do kill -0 "$pid" 2>/dev/null || return 1; done
         sleep 0.2
     done
 }
@@ -98,7 +100,7 @@ pids+=($!)
 pids+=($!)
 why_not() { tail -n 4 "$work"/slurmctld.out "$work"/slurmd.out "$work"/slurmctld.log "$work"/slurmd.log 2>/dev/null | tr '\n' ' '; }
 node_idle() { [ "$(sinfo -h -n "$host" -o %t 2>/dev/null)" = idle ]; }
-wait_for 30 node_idle || skip "the single-node cluster did not come up in 30 s: $(why_not)"
+wait_for 30 node_idle || skip "the single-node cluster did not come up (a daemon exited, or not idle in 30 s): $(why_not)"
 echo "cluster up: $host, $cpus CPUs, $memory_mib MiB ($(sinfo --version))"
 
 # --- the farm: 40 frames in 4 array tasks, then the dependent encode job ---
@@ -134,17 +136,18 @@ echo "submitted: $(cat "$work/farm.err")"
 jobs_done() { [ -z "$(squeue -h -o %i 2>/dev/null)" ] && squeue >/dev/null 2>&1; }
 wait_for 90 jobs_done || fail "jobs still queued after 90 s: $(squeue 2>&1 | tr '\n' ' ') $(why_not)"
 
+logs() { tail -n 3 farm/slurm-*.out 2>/dev/null | tr '\n' ' '; }
 "$impulse" render "$work/scene.toml" -o 'local/f_####.exr' --set 'layer.0.seed=6' -q || fail "local render"
 tasks=$(ls farm/slurm-"${job}"_*.out 2>/dev/null | wc -l)
 [ "$tasks" -eq 4 ] || fail "expected 4 array task logs, found $tasks: $(ls farm)"
 frames=0
 for f in local/f_*.exr; do
     # The same absolute scene path in both runs: the metadata (impulse:scene) is identical too.
-    cmp -s "$f" "farm/${f#local/}" || fail "farm/${f#local/} differs from $f (or is missing)"
+    cmp -s "$f" "farm/${f#local/}" || fail "farm/${f#local/} differs from $f (or is missing); job logs: $(logs)"
     frames=$((frames + 1))
 done
 [ "$frames" -eq 40 ] || fail "local run wrote $frames frames, expected 40"
-[ -f farm/scene.mp4 ] || fail "no video from the encode job: $(cat farm/slurm-*.out | tr '\n' ' ')"
+[ -f farm/scene.mp4 ] || fail "no video from the encode job; job logs: $(logs)"
 video_frames=$("$impulse" analyze farm/scene.mp4 --json | grep -o '"frames":[0-9]*' | head -n 1)
 [ "$video_frames" = '"frames":40' ] || fail "farm/scene.mp4: $video_frames, expected 40 frames"
 "$impulse" encode 'local/f_####.exr' -o local/scene.mp4 -q || fail "local encode"
