@@ -86,7 +86,7 @@ TEST_CASE("encode makes from EXR frames the video render makes directly", "[cli]
     CHECK(info.fps == Approx(12.0));
 }
 
-TEST_CASE("encode refuses gaps, mixed scenes and renamed frames, naming them; nothing written",
+TEST_CASE("encode refuses gaps, mixed scenes and renamed frames, naming them, writing nothing",
           "[cli][encode]") {
     TempDir dir("encode-bad");
     write_scene(dir);
