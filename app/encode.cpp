@@ -4,7 +4,6 @@
 #include "app/encode.h"
 
 #include <CLI/CLI.hpp>
-
 #include <filesystem>
 #include <iostream>
 #include <limits>
@@ -38,8 +37,9 @@ output::Display display_from_range(const std::string& path, const std::string& r
     output::Display d;
     std::istringstream in(range);
     if (!(in >> d.mapping.lo >> d.mapping.hi))
-        throw ValueError(path + ": no impulse:display or impulse:range metadata: expected a frame "
-                                "written by `impulse render`");
+        throw ValueError(path +
+                         ": no impulse:display or impulse:range metadata: expected a frame "
+                         "written by `impulse render`");
     return d;
 }
 
@@ -50,14 +50,16 @@ FrameHeader read_header(const std::string& path, long long f) {
     h.width = info.width, h.height = info.height, h.channels = info.channels;
     if (!info.is_float || info.channels != 1)
         throw ValueError(path + ": " + std::to_string(info.channels) + " channel" +
-                         (info.channels == 1 ? "" : "s") + (info.is_float ? " of floats" : " of integers") +
+                         (info.channels == 1 ? "" : "s") +
+                         (info.is_float ? " of floats" : " of integers") +
                          ": expected one channel of raw floats (an EXR from `impulse render`)");
     const output::Metadata m = output::read_metadata(path);
     h.scene_hash = value_of(m, "scene_hash");
     h.scene = value_of(m, "scene");
     if (h.scene_hash.empty())
-        throw ValueError(path + ": no impulse:scene_hash metadata: expected a frame written by "
-                                "`impulse render`");
+        throw ValueError(path +
+                         ": no impulse:scene_hash metadata: expected a frame written by "
+                         "`impulse render`");
     if (const std::string frame = value_of(m, "frame"); frame != std::to_string(f))
         throw ValueError(path + ": impulse:frame is " + (frame.empty() ? "missing" : frame) +
                          ", expected " + std::to_string(f) + " (a renamed or copied frame?)");
@@ -77,9 +79,9 @@ void check_complete(const std::string& pattern, long long first, long long last,
         if (it == present.end() || *it != f) missing.push_back(f);
     }
     if (missing.empty()) return;
-    throw ValueError(pattern + ": frame" + (missing.size() == 1 ? " " : "s ") + frame_list(missing) +
-                     " missing from " + std::to_string(first) + "-" + std::to_string(last) +
-                     " (e.g. " + expand_pattern(pattern, missing.front()) +
+    throw ValueError(pattern + ": frame" + (missing.size() == 1 ? " " : "s ") +
+                     frame_list(missing) + " missing from " + std::to_string(first) + "-" +
+                     std::to_string(last) + " (e.g. " + expand_pattern(pattern, missing.front()) +
                      "): render them with `impulse render SCENE -o " + pattern +
                      " --frames A-B --resume`");
 }
@@ -89,22 +91,24 @@ void check_complete(const std::string& pattern, long long first, long long last,
 void check_one_scene(const std::string& pattern, const std::vector<FrameHeader>& headers,
                      long long first) {
     std::map<std::string, std::vector<long long>> by_hash;
-    for (size_t i = 0; i < headers.size(); ++i) by_hash[headers[i].scene_hash].push_back(first + (long long)i);
+    for (size_t i = 0; i < headers.size(); ++i)
+        by_hash[headers[i].scene_hash].push_back(first + (long long)i);
     if (by_hash.size() > 1) {
         std::string what;
         for (const auto& [hash, frames] : by_hash) {
             const FrameHeader& h = headers[size_t(frames.front() - first)];
-            what += std::string(what.empty() ? "" : "; ") + hash + " (" + (h.scene.empty() ? "?" : h.scene) +
-                    ") frames " + frame_list(frames, 4);
+            what += std::string(what.empty() ? "" : "; ") + hash + " (" +
+                    (h.scene.empty() ? "?" : h.scene) + ") frames " + frame_list(frames, 4);
         }
         throw ValueError(pattern + ": frames of " + std::to_string(by_hash.size()) +
                          " scenes (impulse:scene_hash): " + what);
     }
     for (const FrameHeader& h : headers)
         if (h.width != headers[0].width || h.height != headers[0].height)
-            throw ValueError(h.path + ": " + std::to_string(h.width) + "x" + std::to_string(h.height) +
-                             " pixels, but " + headers[0].path + " has " + std::to_string(headers[0].width) +
-                             "x" + std::to_string(headers[0].height));
+            throw ValueError(h.path + ": " + std::to_string(h.width) + "x" +
+                             std::to_string(h.height) + " pixels, but " + headers[0].path +
+                             " has " + std::to_string(headers[0].width) + "x" +
+                             std::to_string(headers[0].height));
 }
 
 /// "codec=auto crf=18 preset=medium" (impulse:encoder) into the options not given.
@@ -115,7 +119,10 @@ void encoder_defaults(const std::string& encoder, std::string& codec, std::strin
         const size_t eq = field.find('=');
         if (eq == std::string::npos) continue;
         const std::string key = field.substr(0, eq), value = field.substr(eq + 1);
-        std::string* slot = key == "codec" ? &codec : key == "crf" ? &crf : key == "preset" ? &preset : nullptr;
+        std::string* slot = key == "codec"    ? &codec
+                            : key == "crf"    ? &crf
+                            : key == "preset" ? &preset
+                                              : nullptr;
         if (slot && slot->empty()) *slot = value;
     }
 }
@@ -136,10 +143,10 @@ output::VideoOptions video_options(const EncodeOptions& opt, const FrameHeader& 
     output::VideoOptions vo;
     vo.width = h0.width, vo.height = h0.height;
     const std::string fps = opt.fps.empty() ? value_of(m, "fps") : opt.fps;
-    vo.fps = fps.empty() ? 30.0 : parse_fps(fps, opt.fps.empty() ? h0.path + ": impulse:fps" : "--fps");
+    vo.fps =
+        fps.empty() ? 30.0 : parse_fps(fps, opt.fps.empty() ? h0.path + ": impulse:fps" : "--fps");
     vo.codec = output::video_codec_from_string(codec.empty() ? "auto" : codec);
-    if (!crf.empty())
-        vo.crf = int(whole_number("--crf", crf, crf, "an integer in [0, 63]"));
+    if (!crf.empty()) vo.crf = int(whole_number("--crf", crf, crf, "an integer in [0, 63]"));
     if (vo.crf > 63) throw ValueError("--crf " + crf + ": expected an integer in [0, 63]");
     if (!preset.empty()) vo.preset = preset;
     // The container carries what `impulse render -o X.mp4` writes into it.
@@ -166,15 +173,18 @@ std::string frame_list(const std::vector<long long>& frames, size_t limit) {
 
 CLI::App* add_encode(CLI::App& app, EncodeOptions& o) {
     CLI::App* c = app.add_subcommand(
-        "encode", "Assemble a finished EXR sequence into a video with the scene's display mapping "
-                  "(from the frames' metadata); refuses gaps and frames of mixed scenes");
+        "encode",
+        "Assemble a finished EXR sequence into a video with the scene's display mapping "
+        "(from the frames' metadata); refuses gaps and frames of mixed scenes");
     c->add_option("input", o.input, "The sequence pattern, e.g. frames/f_####.exr")->required();
     c->add_option("-o,--output", o.output, "The video (.mp4 .mov .mkv .webm)")->required();
     c->add_option("--frames", o.frames,
                   "Inclusive range A-B that must be complete (default: first to last present)");
-    c->add_option("--codec", o.codec, "auto, h264, prores, ffv1, vp9 (default: the scene's output.codec)");
+    c->add_option("--codec", o.codec,
+                  "auto, h264, prores, ffv1, vp9 (default: the scene's output.codec)");
     c->add_option("--fps", o.fps, "Frames per second (default: the scene's, from impulse:fps)");
-    c->add_option("--crf", o.crf, "Quality for h264 (0..51) and vp9 (0..63) (default: the scene's)");
+    c->add_option("--crf", o.crf,
+                  "Quality for h264 (0..51) and vp9 (0..63) (default: the scene's)");
     c->add_option("--preset", o.preset, "x264 preset (default: the scene's output.preset)");
     c->add_flag("-q,--quiet", o.quiet, "No summary line");
     return c;
@@ -185,17 +195,20 @@ int run_encode(const EncodeOptions& opt) {
         throw ValueError("-o " + opt.output + ": expected a video (.mp4 .mov .mkv .webm)");
     const PatternSpot spot = find_pattern(fs::path(opt.input).filename().string());
     if (!spot.found || fs::path(opt.input).extension() != ".exr")
-        throw ValueError(opt.input + ": expected an EXR sequence pattern in the file name, e.g. "
-                                     "frames/f_####.exr");
+        throw ValueError(opt.input +
+                         ": expected an EXR sequence pattern in the file name, e.g. "
+                         "frames/f_####.exr");
     const std::vector<long long> present = frames_present(opt.input);
     if (present.empty()) throw IoError(opt.input + ": no frames found");
     long long first = present.front(), last = present.back();
     if (!opt.frames.empty())
-        std::tie(first, last) = parse_frame_range(opt.frames, std::numeric_limits<long long>::max());
+        std::tie(first, last) =
+            parse_frame_range(opt.frames, std::numeric_limits<long long>::max());
     check_complete(opt.input, first, last, present);
 
     std::vector<FrameHeader> headers;
-    for (long long f = first; f <= last; ++f) headers.push_back(read_header(expand_pattern(opt.input, f), f));
+    for (long long f = first; f <= last; ++f)
+        headers.push_back(read_header(expand_pattern(opt.input, f), f));
     check_one_scene(opt.input, headers, first);
 
     output::quiet_video_logs();

@@ -17,7 +17,8 @@ namespace impulse::app {
 struct EncodeOptions {
     std::string input;   ///< the sequence pattern, e.g. frames/f_####.exr
     std::string output;  ///< the video (.mp4 .mov .mkv .webm)
-    std::string frames;  ///< "A-B": the frames that must all be present (default: first to last found)
+    std::string
+        frames;  ///< "A-B": the frames that must all be present (default: first to last found)
     std::string codec, fps, crf, preset;  ///< default: the scene's (impulse:encoder, impulse:fps)
     bool quiet = false;
 };

@@ -17,15 +17,15 @@ namespace impulse::app {
 
 /// Options of `impulse farm`, as given (checked by run_farm).
 struct FarmOptions {
-    RenderOptions render;    ///< scene, -o pattern, --frames, --size, --seed, --set, --codec ...
-    std::string chunk;       ///< frames per array task, > 0
-    std::string partition;   ///< sbatch --partition ("": the cluster's default)
-    std::string time;        ///< sbatch --time per task ("": the partition's default)
-    std::string cpus;        ///< sbatch --cpus-per-task, also the render's --threads
-    std::string max_running; ///< at most this many tasks at once (--array=...%N)
-    std::string video;       ///< the encode job's output (default: beside the frames, SCENE.mp4)
-    std::string script;      ///< the array script (default: beside the frames, SCENE.sbatch)
-    bool submit = false;     ///< submit with sbatch and print the job id
+    RenderOptions render;     ///< scene, -o pattern, --frames, --size, --seed, --set, --codec ...
+    std::string chunk;        ///< frames per array task, > 0
+    std::string partition;    ///< sbatch --partition ("": the cluster's default)
+    std::string time;         ///< sbatch --time per task ("": the partition's default)
+    std::string cpus;         ///< sbatch --cpus-per-task, also the render's --threads
+    std::string max_running;  ///< at most this many tasks at once (--array=...%N)
+    std::string video;        ///< the encode job's output (default: beside the frames, SCENE.mp4)
+    std::string script;       ///< the array script (default: beside the frames, SCENE.sbatch)
+    bool submit = false;      ///< submit with sbatch and print the job id
 };
 
 /// Adds the `farm` subcommand to `app`, filling `options`; returns it.

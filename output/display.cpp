@@ -50,20 +50,21 @@ std::string format_display(const Display& d) {
     const Shading& s = d.shading;
     std::string ramp;
     for (const ColorStop& c : s.ramp)
-        ramp += std::string(ramp.empty() ? "" : ";") + number(c.t) + ":" + number(c.r) + "," + number(c.g) +
-                "," + number(c.b) + "," + number(c.a);
-    return "lo=" + number(d.mapping.lo) + " hi=" + number(d.mapping.hi) + " relief=" +
-           number(s.relief) + " azimuth=" + number(s.light_azimuth_deg) + " elevation=" +
-           number(s.light_elevation_deg) + " ambient=" + number(s.ambient) + " top=" +
-           triple(s.top) + " bottom=" + triple(s.bottom) + " ramp=" + ramp;
+        ramp += std::string(ramp.empty() ? "" : ";") + number(c.t) + ":" + number(c.r) + "," +
+                number(c.g) + "," + number(c.b) + "," + number(c.a);
+    return "lo=" + number(d.mapping.lo) + " hi=" + number(d.mapping.hi) +
+           " relief=" + number(s.relief) + " azimuth=" + number(s.light_azimuth_deg) +
+           " elevation=" + number(s.light_elevation_deg) + " ambient=" + number(s.ambient) +
+           " top=" + triple(s.top) + " bottom=" + triple(s.bottom) + " ramp=" + ramp;
 }
 
 Display parse_display(const std::string& text, const std::string& what) {
     Display d;
     Shading& s = d.shading;
-    double* scalars[] = {&d.mapping.lo, &d.mapping.hi, &s.relief, &s.light_azimuth_deg,
-                         &s.light_elevation_deg, &s.ambient};
-    const char* names[] = {"lo", "hi", "relief", "azimuth", "elevation", "ambient", "top", "bottom", "ramp"};
+    double* scalars[] = {&d.mapping.lo,        &d.mapping.hi,          &s.relief,
+                         &s.light_azimuth_deg, &s.light_elevation_deg, &s.ambient};
+    const char* names[] = {"lo",      "hi",  "relief", "azimuth", "elevation",
+                           "ambient", "top", "bottom", "ramp"};
     std::istringstream in(text);
     std::string field;
     for (int i = 0; i < 9; ++i) {
@@ -71,7 +72,9 @@ Display parse_display(const std::string& text, const std::string& what) {
         const auto bad = [&] {
             return ValueError(what + ": impulse:display field " + std::to_string(i + 1) + " \"" +
                               field.substr(0, 60) + "\": expected " + key + "NUMBER" +
-                              (i == 6 || i == 7 ? ",G,B" : i == 8 ? " (T:R,G,B,A;...)" : ""));
+                              (i == 6 || i == 7 ? ",G,B"
+                               : i == 8         ? " (T:R,G,B,A;...)"
+                                                : ""));
         };
         if (!(in >> field)) throw bad();
         if (i == 8 && field == key) break;  // no ramp: grey
@@ -91,10 +94,13 @@ Display parse_display(const std::string& text, const std::string& what) {
             const std::vector<double> v = numbers(value, ":,;", ok);
             if (!ok || v.size() % 5 != 0) throw bad();
             for (size_t k = 0; k < v.size(); k += 5)
-                s.ramp.push_back({v[k], float(v[k + 1]), float(v[k + 2]), float(v[k + 3]), float(v[k + 4])});
+                s.ramp.push_back(
+                    {v[k], float(v[k + 1]), float(v[k + 2]), float(v[k + 3]), float(v[k + 4])});
         }
     }
-    if (in >> field) throw ValueError(what + ": impulse:display: unexpected \"" + field.substr(0, 60) + "\" at the end");
+    if (in >> field)
+        throw ValueError(what + ": impulse:display: unexpected \"" + field.substr(0, 60) +
+                         "\" at the end");
     return d;
 }
 

@@ -32,13 +32,15 @@ Result run(const TempDir& dir, const std::string& args, const std::string& prefi
 /// A small animated scene with a colour ramp (so a grey encoding would differ), 12 frames.
 std::string write_scene(const TempDir& dir, int seed = 21) {
     const std::string path = dir / "scene.toml";
-    write_file(path, "[output]\nsize = [48, 32]\nfps = 24\nframes = 12\npreset = \"ultrafast\"\n\n"
-                     "[[layer]]\nseed = " + std::to_string(seed) +
-                         "\ndensity = 12.0\nlifetime = 1.0\nenvelope = \"hann\"\n"
-                         "[layer.kernel]\ntype = \"cosine\"\nradius = 5.0\n"
-                         "[[layer.flow]]\ntype = \"uniform\"\nvelocity = [16.0, 5.0]\n\n"
-                         "[shading]\nramp = [[0.0, \"#102040\"], [0.6, [0.9, 0.5, 0.2, 0.8]], "
-                         "[1.0, \"#fff0c0\"]]\n");
+    write_file(path,
+               "[output]\nsize = [48, 32]\nfps = 24\nframes = 12\npreset = \"ultrafast\"\n\n"
+               "[[layer]]\nseed = " +
+                   std::to_string(seed) +
+                   "\ndensity = 12.0\nlifetime = 1.0\nenvelope = \"hann\"\n"
+                   "[layer.kernel]\ntype = \"cosine\"\nradius = 5.0\n"
+                   "[[layer.flow]]\ntype = \"uniform\"\nvelocity = [16.0, 5.0]\n\n"
+                   "[shading]\nramp = [[0.0, \"#102040\"], [0.6, [0.9, 0.5, 0.2, 0.8]], "
+                   "[1.0, \"#fff0c0\"]]\n");
     return path;
 }
 
@@ -142,13 +144,16 @@ TEST_CASE("farm: the array script's tasks, run by hand, write the frames of one 
     // Slurm's part done by hand: each task with its SLURM_ARRAY_TASK_ID (the #SBATCH lines are
     // comments to bash), then the encode job.
     for (int task = 0; task < 3; ++task)
-        REQUIRE(in_dir(dir, "SLURM_ARRAY_TASK_ID=" + std::to_string(task) + " bash farm/scene.sbatch")
-                    .status == 0);
-    REQUIRE(in_dir(dir, "bash farm/scene.encode.sbatch").status == 0);
-    REQUIRE(run(dir, "render " + quote(scene) + " -o 'local/f_####.exr' --set layer.0.density=10 -q")
+        REQUIRE(
+            in_dir(dir, "SLURM_ARRAY_TASK_ID=" + std::to_string(task) + " bash farm/scene.sbatch")
                 .status == 0);
+    REQUIRE(in_dir(dir, "bash farm/scene.encode.sbatch").status == 0);
+    REQUIRE(
+        run(dir, "render " + quote(scene) + " -o 'local/f_####.exr' --set layer.0.density=10 -q")
+            .status == 0);
     for (int f = 0; f < 12; ++f) {
-        const std::string name = "/f_00" + std::string(f < 10 ? "0" : "") + std::to_string(f) + ".exr";
+        const std::string name =
+            "/f_00" + std::string(f < 10 ? "0" : "") + std::to_string(f) + ".exr";
         INFO(name);
         REQUIRE(fs::exists(dir / ("farm" + name)));
         CHECK(read_file(dir / ("farm" + name)) == read_file(dir / ("local" + name)));
