@@ -7,6 +7,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <charconv>
 #include <chrono>
@@ -240,14 +241,14 @@ std::string expand_pattern(const std::string& pattern, long long frame) {
     return pattern.substr(0, spot.pos) + s.str() + pattern.substr(spot.pos + spot.length);
 }
 
-long long first_frame_present(const std::string& pattern) {
+std::vector<long long> frames_present(const std::string& pattern) {
     const fs::path p(pattern);
     const std::string name = p.filename().string();
     const PatternSpot spot = find_pattern(name);
-    if (!spot.found) return -1;
+    if (!spot.found) return {};
     const std::regex frame = frame_name_regex(name, spot);
     const fs::path dir = p.parent_path().empty() ? fs::path(".") : p.parent_path();
-    long long first = -1;
+    std::vector<long long> found;
     std::error_code ec;
     for (const auto& e : fs::directory_iterator(dir, ec)) {
         const std::string entry = e.path().filename().string();
@@ -255,9 +256,15 @@ long long first_frame_present(const std::string& pattern) {
         if (!std::regex_match(entry, m, frame) || m[1].length() > 18) continue;
         const long long f = std::stoll(m[1].str());
         // Only names the pattern gives (f_0007.png, not f_7.png for ####).
-        if (expand_pattern(name, f) == entry && (first < 0 || f < first)) first = f;
+        if (expand_pattern(name, f) == entry) found.push_back(f);
     }
-    return first;
+    std::sort(found.begin(), found.end());
+    return found;
+}
+
+long long first_frame_present(const std::string& pattern) {
+    const std::vector<long long> found = frames_present(pattern);
+    return found.empty() ? -1 : found.front();
 }
 
 std::pair<long long, long long> parse_frame_range(const std::string& text, long long frames) {
@@ -275,12 +282,18 @@ std::pair<long long, long long> parse_frame_range(const std::string& text, long 
     return {a, b};
 }
 
-int run_render(const RenderOptions& opt) {
+scenes::Scene load_render_scene(const RenderOptions& opt) {
     const std::string path = scenes::resolve_scene(opt.scene);
     auto overrides = overrides_for(opt.sets, opt.crop, opt.seed);
     if (!opt.codec.empty()) overrides.push_back("output.codec=\"" + opt.codec + "\"");
     scenes::Scene scene = scenes::load_scene(path, overrides, parse_size("--size", opt.size));
     for (const auto& w : scene.warnings) std::cerr << w << "\n";
+    return scene;
+}
+
+int run_render(const RenderOptions& opt) {
+    scenes::Scene scene = load_render_scene(opt);
+    const std::string path = scene.path;
     long long first = 0, last = scene.output.frames - 1;
     if (!opt.frames.empty()) std::tie(first, last) = parse_frame_range(opt.frames, scene.output.frames);
 
@@ -366,6 +379,10 @@ int run_render(const RenderOptions& opt) {
         output::Metadata m = meta;
         m.emplace_back("frame", std::to_string(f));
         m.emplace_back("time", std::to_string(t));
+        // What `impulse encode` needs to make the video render would have made from these frames.
+        m.emplace_back("display", output::format_display({mapping, shading}));
+        m.emplace_back("encoder", "codec=" + out.codec + " crf=" + std::to_string(out.crf) +
+                                      " preset=" + out.preset);
         // EXR keeps the raw field; display formats get the shading (grey by default).
         const bool exr = fs::path(target).extension() == ".exr";
         if (!exr && colour_shading(sc)) {

@@ -5,6 +5,10 @@
 #include <string>
 #include <vector>
 
+namespace impulse::scenes {
+struct Scene;
+}
+
 namespace impulse::app {
 
 struct RenderOptions {
@@ -23,6 +27,9 @@ struct InfoOptions {
 };
 
 int run_render(const RenderOptions& options);
+/// The scene `impulse render` with `options` renders (--set, --crop, --seed, --codec and --size
+/// applied), its warnings printed on stderr. Throws as the loader.
+scenes::Scene load_render_scene(const RenderOptions& options);
 /// A whole number of `option`'s value `text` (its digits `digits`) in [0, 2^63 - 1]; out of
 /// range is an error (ValueError "OPTION TEXT: expected EXPECTED"), not clamped (strtoll and
 /// CLI11 clamp).
@@ -47,6 +54,9 @@ std::string expand_pattern(const std::string& pattern, long long frame);
 /// The smallest frame number whose file exists for `pattern` (a pattern in the file name), or
 /// -1 when there is none.
 long long first_frame_present(const std::string& pattern);
+/// The frame numbers whose files exist for `pattern` (a pattern in the file name), ascending;
+/// empty when there is none or the pattern is in the directory part.
+std::vector<long long> frames_present(const std::string& pattern);
 /// Parse "A-B" or "A" into an inclusive range; throws ValueError.
 std::pair<long long, long long> parse_frame_range(const std::string& text, long long frames);
 

@@ -8,6 +8,8 @@
 
 #include "app/analyze.h"
 #include "app/commands.h"
+#include "app/encode.h"
+#include "app/farm.h"
 #include "app/synth_fbm.h"
 #include "app/synth_gss.h"
 #include "numeric/errors.h"
@@ -84,6 +86,11 @@ int main(int argc, char** argv) {
     analyze->add_option("--max-frames", ao.max_frames, "Analyse at most N frames")
         ->check(CLI::PositiveNumber);
 
+    impulse::app::EncodeOptions eo;
+    CLI::App* encode = impulse::app::add_encode(app, eo);
+    impulse::app::FarmOptions fm;
+    CLI::App* farm = impulse::app::add_farm(app, fm);
+
     // Past a file size limit (ulimit -f) a write fails with EFBIG and is reported with the file's
     // name, instead of the process being killed by SIGXFSZ with nothing said.
     std::signal(SIGXFSZ, SIG_IGN);
@@ -112,6 +119,8 @@ int main(int argc, char** argv) {
         if (*scenes) return impulse::app::run_scenes();
         if (*info) return impulse::app::run_info(io);
         if (*analyze) return impulse::app::run_analyze(ao);
+        if (*encode) return impulse::app::run_encode(eo);
+        if (*farm) return impulse::app::run_farm(fm);
         if (*synth_fbm) return impulse::app::run_synth_fbm(fo);
         if (*synth) return 0;  // gss ran in its callback
     } catch (const impulse::Error& e) {

@@ -197,6 +197,16 @@ std::string image_size_problem(int width, int height, int depth, int channels) {
     return s.str();
 }
 
+Metadata read_metadata(const std::string& path) {
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) throw IoError(path + ": cannot read: " + one_line(OIIO::geterror()));
+    Metadata m;
+    for (const OIIO::ParamValue& p : in->spec().extra_attribs)
+        if (p.name().string().rfind("impulse:", 0) == 0 && p.type() == OIIO::TypeDesc::STRING)
+            m.emplace_back(p.name().string().substr(8), p.get_string());
+    return m;
+}
+
 bool keeps_metadata(const std::string& path) {
     const std::string e = lower_extension(path);
     return e == ".exr" || e == ".png";

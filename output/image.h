@@ -54,6 +54,9 @@ std::string image_size_problem(int width, int height, int depth, int channels);
 /// reason is one line ("truncated or unreadable: ...", "impulse:seed is 7, expected 8").
 std::string image_mismatch(const std::string& path, int width, int height, int channels,
                            bool bits16, const Metadata& metadata);
+/// The impulse:KEY attributes of an image's header (KEY without the prefix, string values), in
+/// the header's order; empty for a file without them. Throws IoError with OIIO's message.
+Metadata read_metadata(const std::string& path);
 /// True when files of this extension keep write_image's metadata (.exr, .png).
 bool keeps_metadata(const std::string& path);
 

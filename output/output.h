@@ -8,3 +8,4 @@
 #include "output/shading.h"    // colour ramps, relief, alpha over a sky
 #include "output/transform.h"  // marble and wood (Lewis 1989 §5.1)
 #include "output/video.h"      // H.264, ProRes, FFV1, VP9
+#include "output/display.h"    // the display mapping as text in a frame's metadata

@@ -596,6 +596,13 @@ void Renderer::State::update_marginal(size_t i, double tl) {
 
 std::string builtin_scene_dir() {
     if (const char* e = std::getenv("IMPULSE_SCENES_DIR")) return e;
+    // An installed tool whose source tree is gone: PREFIX/share/impulse/scenes beside PREFIX/bin.
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (fs::is_directory(IMPULSE_SCENES_DIR, ec)) return IMPULSE_SCENES_DIR;
+    const fs::path installed = fs::read_symlink("/proc/self/exe", ec).parent_path().parent_path() /
+                               "share/impulse/scenes";
+    if (!ec && fs::is_directory(installed, ec)) return installed.string();
     return IMPULSE_SCENES_DIR;
 }
 
