@@ -90,8 +90,10 @@ int main(int argc, char** argv) {
         "preview", "Play a scene in the browser as it renders; follows its file (app/preview.cpp)");
     preview->add_option("scene", po.scene, "Scene file or built-in name")->required();
     preview->add_option("--port", po.port, "Port on 127.0.0.1 (default 8080; 0: any free port)");
-    preview->add_option("--host", po.host, "Address to listen on (default 127.0.0.1: this machine only)");
-    preview->add_option("--size", po.size, "Preview size WxH, the same view (default: within 640x360)");
+    preview->add_option("--host", po.host,
+                        "Address to listen on (default 127.0.0.1: this machine only)");
+    preview->add_option("--size", po.size,
+                        "Preview size WxH, the same view (default: within 640x360)");
     preview->add_option("--expose", po.expose,
                         "Numeric keys with a slider, KEY or KEY=LO:HI, comma-separated, e.g. "
                         "layer.0.kernel.radius,layer.0.density")

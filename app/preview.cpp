@@ -4,9 +4,9 @@
 
 #include "app/preview.h"
 
+#include <arpa/inet.h>
 #include <httplib.h>
 #include <netinet/in.h>
-#include <arpa/inet.h>
 #include <signal.h>
 #include <sys/socket.h>
 #include <unistd.h>
@@ -92,7 +92,8 @@ void add_routes(httplib::Server& svr, Previewer& p) {
     });
     svr.Get("/frame", [&p](const httplib::Request& req, httplib::Response& res) {
         long long g = 0, f = 0;
-        if (!parse_integer(req.get_param_value("g"), g) || !parse_integer(req.get_param_value("i"), f))
+        if (!parse_integer(req.get_param_value("g"), g) ||
+            !parse_integer(req.get_param_value("i"), f))
             return refuse(res, 400, "/frame: expected ?g=GENERATION&i=FRAME");
         const auto im = p.frame(uint64_t(g), f);
         if (!im) return refuse(res, 404, "frame " + std::to_string(f) + " is not rendered yet");
@@ -120,10 +121,11 @@ void add_routes(httplib::Server& svr, Previewer& p) {
     });
     svr.set_error_handler([](const httplib::Request& req, httplib::Response& res) {
         if (res.body.empty())
-            res.set_content(req.path.substr(0, 80) + ": " +
-                                (res.status == 404 ? "not found" : "HTTP " + std::to_string(res.status)) +
-                                " (the preview serves /, /state, /frame and /set)\n",
-                            "text/plain; charset=utf-8");
+            res.set_content(
+                req.path.substr(0, 80) + ": " +
+                    (res.status == 404 ? "not found" : "HTTP " + std::to_string(res.status)) +
+                    " (the preview serves /, /state, /frame and /set)\n",
+                "text/plain; charset=utf-8");
     });
 }
 

@@ -32,8 +32,8 @@ std::vector<FileStamp> scene_files(const std::string& path);
 
 /// A numeric key of the scene with a slider on the page: `--expose key` or `key=lo:hi`.
 struct Exposed {
-    std::string key;       ///< dotted path as for --set: layer.0.kernel.radius
-    double value = 0.0;    ///< current value (the file's, then the page's)
+    std::string key;     ///< dotted path as for --set: layer.0.kernel.radius
+    double value = 0.0;  ///< current value (the file's, then the page's)
     double lo = 0.0, hi = 1.0, step = 0.01;
     bool integer = false;  ///< the file holds an integer: the slider moves in whole steps
     bool moved = false;    ///< the slider moved since the file was read: an override applies
@@ -64,9 +64,9 @@ struct FrameImage {
 };
 
 struct PreviewConfig {
-    std::string path;                ///< resolved scene file
-    std::vector<std::string> sets;   ///< --set from the command line
-    scenes::OutputSize size;         ///< preview size (same view)
+    std::string path;               ///< resolved scene file
+    std::vector<std::string> sets;  ///< --set from the command line
+    scenes::OutputSize size;        ///< preview size (same view)
     std::vector<Exposed> exposed;
 };
 

@@ -3,6 +3,7 @@
 
 #include <toml++/toml.h>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <filesystem>
@@ -117,8 +118,8 @@ Exposed exposed_key(const fs::path& file, const std::string& spec) {
     try {
         n = lookup(file, e.key, doc);
     } catch (const toml::parse_error& err) {
-        throw ValueError("--expose " + e.key + ": " + file.string() + " does not parse: " +
-                         std::string(err.description()));
+        throw ValueError("--expose " + e.key + ": " + file.string() +
+                         " does not parse: " + std::string(err.description()));
     }
     if (!n || !(n->is_integer() || n->is_floating_point()))
         throw ValueError("--expose " + e.key + ": " +
@@ -181,25 +182,33 @@ std::string toml_number(double v, bool integer) {
 }
 
 std::string toml_line(const Exposed& e) {
-    // layer.0.kernel.radius -> "radius = 8.5  # in [layer.kernel] (layer 0)"
-    std::string table, where, last, previous;
-    size_t start = 0;
-    while (true) {
+    // layer.0.kernel.radius -> "radius = 8.5  # in [layer.kernel] of [[layer]] 0";
+    // layer.0.density -> "density = 12.0  # in [[layer]] 0"; output.fps -> "... # in [output]".
+    std::vector<std::string> parts;
+    for (size_t start = 0;;) {
         const size_t dot = e.key.find('.', start);
-        const std::string part = e.key.substr(start, dot == std::string::npos ? dot : dot - start);
-        if (dot == std::string::npos) {
-            last = part;
-            break;
-        }
-        if (!part.empty() && std::all_of(part.begin(), part.end(), ::isdigit))
-            where += (where.empty() ? "" : ", ") + previous + " " + part;
-        else
-            table += (table.empty() ? "" : ".") + part;
-        previous = part;
+        parts.push_back(e.key.substr(start, dot == std::string::npos ? dot : dot - start));
+        if (dot == std::string::npos) break;
         start = dot + 1;
     }
-    std::string line = last + " = " + toml_number(e.value, e.integer);
-    if (!table.empty()) line += "  # in [" + table + "]" + (where.empty() ? "" : " (" + where + ")");
+    const auto is_index = [](const std::string& p) {
+        return !p.empty() && std::all_of(p.begin(), p.end(), ::isdigit);
+    };
+    std::string prefix, header;
+    std::vector<std::string> arrays;  // "[[layer]] 0", outermost first
+    for (size_t i = 0; i + 1 < parts.size(); ++i) {
+        if (is_index(parts[i])) continue;
+        prefix += (prefix.empty() ? "" : ".") + parts[i];
+        if (i + 2 < parts.size() && is_index(parts[i + 1]))
+            arrays.push_back("[[" + prefix + "]] " + parts[i + 1]);
+        header =
+            i + 2 < parts.size() && is_index(parts[i + 1]) ? arrays.back() : "[" + prefix + "]";
+    }
+    std::string line = parts.back() + " = " + toml_number(e.value, e.integer);
+    if (header.empty()) return line;
+    line += "  # in " + header;
+    for (size_t i = arrays.size(); i-- > 0;)
+        if (arrays[i] != header) line += " of " + arrays[i];
     return line;
 }
 

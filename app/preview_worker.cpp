@@ -118,7 +118,8 @@ std::optional<int64_t> Previewer::next_frame() const {
     const int64_t n = m_renderer->scene().output.frames;
     for (int64_t d = 0; d <= std::min(kLookahead, n - 1); ++d) {
         const int64_t f = (m_wanted + d) % n;
-        if (!m_cache.count(f)) return m_cache_bytes < kCacheBytes || d == 0 ? std::optional(f) : std::nullopt;
+        if (!m_cache.count(f))
+            return m_cache_bytes < kCacheBytes || d == 0 ? std::optional(f) : std::nullopt;
     }
     return std::nullopt;
 }

@@ -33,9 +33,8 @@ std::string toml_value(const py::handle& v) {
     if (py::isinstance<py::list>(v) || py::isinstance<py::tuple>(v)) {
         std::string s = "[";
         for (const py::handle& e : v) {
-            const std::string item = py::isinstance<py::str>(e)
-                                         ? "\"" + e.cast<std::string>() + "\""
-                                         : toml_value(e);
+            const std::string item =
+                py::isinstance<py::str>(e) ? "\"" + e.cast<std::string>() + "\"" : toml_value(e);
             s += (s.size() > 1 ? ", " : "") + item;
         }
         return s + "]";
@@ -54,8 +53,10 @@ std::vector<std::string> override_strings(const py::object& overrides) {
         return out;
     }
     if (py::isinstance<py::str>(overrides))
-        throw ValueError("overrides: expected a dict {key: value} or a list of \"key=value\", "
-                         "got the string " + py::repr(overrides).cast<std::string>());
+        throw ValueError(
+            "overrides: expected a dict {key: value} or a list of \"key=value\", "
+            "got the string " +
+            py::repr(overrides).cast<std::string>());
     for (const py::handle& o : overrides) out.push_back(py::str(o).cast<std::string>());
     return out;
 }
@@ -72,7 +73,8 @@ std::shared_ptr<SceneObject> load(const std::string& source, const py::object& o
     if (!size.is_none()) {
         const auto wh = size.cast<std::pair<int, int>>();
         if (wh.first < 1 || wh.second < 1 || wh.first > 32768 || wh.second > 32768)
-            throw ValueError("size (" + std::to_string(wh.first) + ", " + std::to_string(wh.second) +
+            throw ValueError("size (" + std::to_string(wh.first) + ", " +
+                             std::to_string(wh.second) +
                              "): expected (width, height) in pixels, each in [1, 32768]");
         s = {wh.first, wh.second};
     }
@@ -211,8 +213,9 @@ py::object analyze(const py::handle& frames, const py::object& scene, const py::
     if (py::isinstance<SceneObject>(scene)) {
         const auto& s = scene.cast<const SceneObject&>();
         if (s.scene().path == "<string>")
-            throw ValueError("analyze: scene= a scene loaded from TOML text: give its file name "
-                             "(the analysis reloads the scene)");
+            throw ValueError(
+                "analyze: scene= a scene loaded from TOML text: give its file name "
+                "(the analysis reloads the scene)");
         o.scene = s.scene().path;
         o.sets.insert(o.sets.begin(), s.overrides().begin(), s.overrides().end());
     } else if (!scene.is_none()) {
@@ -232,7 +235,8 @@ template <class Grid>
 void place(Grid& g, const py::array& a, double spacing, std::pair<double, double> origin) {
     g.height = int(a.shape(0)), g.width = int(a.shape(1));
     if (!(spacing > 0.0) || !std::isfinite(spacing))
-        throw ValueError("spacing " + std::to_string(spacing) + ": expected texture units per "
+        throw ValueError("spacing " + std::to_string(spacing) +
+                         ": expected texture units per "
                          "array pixel, > 0");
     g.spacing = spacing, g.origin_x = origin.first, g.origin_y = origin.second;
 }
@@ -282,34 +286,47 @@ void register_errors(py::module_& m) {
 PYBIND11_MODULE(impulse, m) {
     using namespace impulse::python;
     namespace scenes = impulse::scenes;
-    m.doc() = "impulse: animated procedural textures from sparse convolution noise (Lewis 1986), "
-              "rendered to numpy arrays";
+    m.doc() =
+        "impulse: animated procedural textures from sparse convolution noise (Lewis 1986), "
+        "rendered to numpy arrays";
     register_errors(m);
 
     py::class_<SceneObject, std::shared_ptr<SceneObject>>(m, "Scene")
         .def_property_readonly("width", [](const SceneObject& s) { return s.scene().output.width; })
-        .def_property_readonly("height", [](const SceneObject& s) { return s.scene().output.height; })
-        .def_property_readonly("frames", [](const SceneObject& s) { return s.scene().output.frames; })
+        .def_property_readonly("height",
+                               [](const SceneObject& s) { return s.scene().output.height; })
+        .def_property_readonly("frames",
+                               [](const SceneObject& s) { return s.scene().output.frames; })
         .def_property_readonly("fps", [](const SceneObject& s) { return s.scene().output.fps; })
         .def_property_readonly("path", [](const SceneObject& s) { return s.scene().path; })
         .def_property_readonly("hash", [](const SceneObject& s) { return s.scene().hash; })
         .def_property_readonly("seed", [](const SceneObject& s) { return s.scene().seed; })
-        .def_property_readonly("layers", [](const SceneObject& s) { return s.scene().layers.size(); })
+        .def_property_readonly("layers",
+                               [](const SceneObject& s) { return s.scene().layers.size(); })
         .def_property_readonly("warnings", [](const SceneObject& s) { return s.scene().warnings; })
-        .def("frame_time", [](const SceneObject& s, int64_t f) { return s.scene().frame_time(f); },
-             py::arg("frame"), "Time of frame `frame` in seconds.")
+        .def("__repr__",
+             [](const SceneObject& s) {
+                 const auto& o = s.scene().output;
+                 return "<impulse.Scene " + s.scene().path + " " + std::to_string(o.width) + "x" +
+                        std::to_string(o.height) + ", " + std::to_string(o.frames) + " frames at " +
+                        py::repr(py::float_(o.fps)).cast<std::string>() + " fps>";
+             })
+        .def(
+            "frame_time", [](const SceneObject& s, int64_t f) { return s.scene().frame_time(f); },
+            py::arg("frame"), "Time of frame `frame` in seconds.")
         .def("render", &render, py::arg("frame") = 0,
              "The float field of a frame as a float32 H x W array (the values `impulse render` "
              "writes to EXR, bit for bit). The GIL is released while it renders.")
         .def("render_rgb", &render_rgb, py::arg("frame") = 0,
              "Display colour of a frame as a float32 H x W x 3 array in [0, 1]: the scene's "
              "value mapping and shading (what PNG and video output show).")
-        .def("mapping",
-             [](SceneObject& s) {
-                 const auto range = s.mapping();
-                 return std::make_pair(range.lo, range.hi);
-             },
-             "The (lo, hi) field values shown as black and white.")
+        .def(
+            "mapping",
+            [](SceneObject& s) {
+                const auto range = s.mapping();
+                return std::make_pair(range.lo, range.hi);
+            },
+            "The (lo, hi) field values shown as black and white.")
         .def("theory", &theory, py::arg("frame") = 0,
              "Closed-form statistics at a frame's time: a dict with mean, variance (Campbell's "
              "theorem) and spectrum {frequency (cycles per pixel), power} radially averaged, or "

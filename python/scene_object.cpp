@@ -96,9 +96,8 @@ void SceneObject::check_layer(size_t layer, const std::string& what) const {
         throw ValueError(what + ": layer " + std::to_string(layer) + ": the scene has " +
                          std::to_string(m_scene.layers.size()) + " layers");
     if (m_scene.layers[layer].source)
-        throw ValueError(what + ": layer " + std::to_string(layer) +
-                         " is drawn by a source (" + std::string(m_scene.layers[layer].source->kind()) +
-                         "), not by impulses");
+        throw ValueError(what + ": layer " + std::to_string(layer) + " is drawn by a source (" +
+                         std::string(m_scene.layers[layer].source->kind()) + "), not by impulses");
 }
 
 void SceneObject::set_flow(size_t layer, sim::VectorGrid grid, double gain) {
