@@ -10,6 +10,7 @@
 #include "app/commands.h"
 #include "app/encode.h"
 #include "app/farm.h"
+#include "app/preview.h"
 #include "app/synth_fbm.h"
 #include "app/synth_gss.h"
 #include "numeric/errors.h"
@@ -90,6 +91,20 @@ int main(int argc, char** argv) {
     CLI::App* encode = impulse::app::add_encode(app, eo);
     impulse::app::FarmOptions fm;
     CLI::App* farm = impulse::app::add_farm(app, fm);
+    impulse::app::PreviewOptions po;
+    CLI::App* preview = app.add_subcommand(
+        "preview", "Play a scene in the browser as it renders; follows its file (app/preview.cpp)");
+    preview->add_option("scene", po.scene, "Scene file or built-in name")->required();
+    preview->add_option("--port", po.port, "Port on 127.0.0.1 (default 8080; 0: any free port)");
+    preview->add_option("--host", po.host,
+                        "Address to listen on (default 127.0.0.1: this machine only)");
+    preview->add_option("--size", po.size,
+                        "Preview size WxH, the same view (default: within 640x360)");
+    preview->add_option("--expose", po.expose,
+                        "Numeric keys with a slider, KEY or KEY=LO:HI, comma-separated, e.g. "
+                        "layer.0.kernel.radius,layer.0.density")
+        ->delimiter(',');
+    preview->add_option("--set", po.sets, "Override a scene key (as render --set)");
 
     // Past a file size limit (ulimit -f) a write fails with EFBIG and is reported with the file's
     // name, instead of the process being killed by SIGXFSZ with nothing said.
@@ -118,6 +133,7 @@ int main(int argc, char** argv) {
         if (*render) return impulse::app::run_render(ro);
         if (*scenes) return impulse::app::run_scenes();
         if (*info) return impulse::app::run_info(io);
+        if (*preview) return impulse::app::run_preview(po);
         if (*analyze) return impulse::app::run_analyze(ao);
         if (*encode) return impulse::app::run_encode(eo);
         if (*farm) return impulse::app::run_farm(fm);
