@@ -10,6 +10,7 @@
 #include "app/commands.h"
 #include "app/synth_fbm.h"
 #include "app/synth_gss.h"
+#include "app/synth_solid.h"
 #include "numeric/errors.h"
 
 int main(int argc, char** argv) {
@@ -90,11 +91,13 @@ int main(int argc, char** argv) {
 
     CLI::App* synth = app.add_subcommand(
         "synth", "Synthesize a field with another algorithm than the point process: "
-                 "stochastic subdivision (gss), fractional Brownian surfaces (fbm)");
+                 "stochastic subdivision (gss), fractional Brownian surfaces (fbm), solid noise (solid)");
     synth->require_subcommand(1);
     impulse::app::add_synth_gss(*synth);
     impulse::app::SynthFbmOptions fo;
     CLI::App* synth_fbm = impulse::app::add_synth_fbm(*synth, fo);
+    impulse::app::SynthSolidOptions so;
+    CLI::App* synth_solid = impulse::app::add_synth_solid(*synth, so);
 
     try {
         app.parse(argc, argv);
@@ -113,6 +116,7 @@ int main(int argc, char** argv) {
         if (*info) return impulse::app::run_info(io);
         if (*analyze) return impulse::app::run_analyze(ao);
         if (*synth_fbm) return impulse::app::run_synth_fbm(fo);
+        if (*synth_solid) return impulse::app::run_synth_solid(so);
         if (*synth) return 0;  // gss ran in its callback
     } catch (const impulse::Error& e) {
         std::cerr << "error: " << e.what() << "\n";
