@@ -19,16 +19,17 @@ struct CellBatch {
     /// in [0, 1), as floats (the same rounding for a point whatever batch holds it).
     std::vector<uint32_t> index;
     std::array<std::vector<float>, D> local;
-    /// Group g holds sorted points [start[g], start[g + 1]) of cell cells[g]; cells ascend
-    /// lexicographically.
+    /// Group g holds sorted points [start[g], start[g + 1]) of group cell cells[g] (cells of
+    /// side 1 / `split`: floor(split w)); cells ascend lexicographically.
     std::vector<Cell> cells;
     std::vector<size_t> start;
 };
 
-/// Groups `n` points given in cell units by position(i, w) (fills w[0..D)). Throws ValueError
-/// naming the first point that is not finite or lies beyond 2^40 cells.
+/// Groups `n` points given in cell units by position(i, w) (fills w[0..D)) into cells of side
+/// 1 / split (split 1 or 2); `local` stays relative to the unit cell. Throws ValueError naming
+/// the first point that is not finite or lies beyond 2^40 cells.
 template <int D, class Position>
-CellBatch<D> group_by_cell(size_t n, const Position& position);
+CellBatch<D> group_by_cell(size_t n, const Position& position, int split = 1);
 
 /// Cells cell + o, o in {-1, 0, 1}^D, in lexicographic order of o (the canonical order in which
 /// every path sums a cell's neighbours).

@@ -23,7 +23,8 @@ namespace {
 
 constexpr uint32_t kSolidStream = 0x534F4C44u;  // "SOLD": the solid noise's counter stream
 constexpr double kPi = std::numbers::pi;
-constexpr size_t kChunkGroups = 4096;  // groups whose impulses are generated together
+constexpr size_t kChunkGroups = 8192;  // groups whose impulses are generated together
+constexpr int kSplit = 2;              // group cells per impulse cell along each axis
 
 /// Poisson count of mean m from one uniform u in (0, 1] by the inverse CDF (L89 §4.1: "N
 /// Poisson-distributed impulses in each voxel"). m <= 750, so e^{-m} stays normal.
@@ -96,21 +97,28 @@ struct CellTable {
     }
 };
 
-/// The impulses that can reach cell g: its 3^D neighbours in lexicographic order, each cell's
-/// impulses in draw order (the canonical summation order of every path), positions relative to
-/// g, those farther than one radius from the cell dropped (they add exactly zero).
+/// The impulses that can reach the box [lo, lo + side]^D of cell g: g's 3^D neighbours in
+/// lexicographic order, each cell's impulses in draw order (the canonical summation order of
+/// every path), positions relative to g, those farther than one radius from the box dropped
+/// (they add exactly zero to every point in it, so the box changes no value).
 template <int D>
-void gather(const CellTable<D>& table, const std::array<int64_t, D>& g, detail::Gathered<D>& out) {
+void gather(const CellTable<D>& table, const std::array<int64_t, D>& g,
+            const std::array<float, D>& lo, float side, detail::Gathered<D>& out) {
     for (auto& v : out.v) v.clear();
     out.a.clear();
-    for (const auto& c : detail::neighbours<D>(g)) {
-        const size_t i = table.find(c);
+    const auto cells = detail::neighbours<D>(g);
+    size_t i = 0;
+    for (size_t n = 0; n < cells.size(); ++n) {
+        const auto& c = cells[n];
+        // Every neighbour is in the table, so the three along the last axis are consecutive
+        // entries: one search per row.
+        i = n % 3 == 0 ? table.find(c) : i + 1;
         for (size_t k = table.offset[i]; k < table.offset[i + 1]; ++k) {
             std::array<float, D> v;
             float dist2 = 0.0f;
             for (int d = 0; d < D; ++d) {
                 v[d] = static_cast<float>(double(c[d] - g[d]) + double(table.u[d][k]));
-                const float out_of = std::max({0.0f, -v[d], v[d] - 1.0f});
+                const float out_of = std::max({0.0f, lo[d] - v[d], v[d] - lo[d] - side});
                 dist2 += out_of * out_of;
             }
             if (dist2 >= 1.001f) continue;  // conservative: a kept impulse may still add 0
@@ -207,15 +215,27 @@ void run_batch(const SolidNoise& noise, const detail::CellBatch<D>& b, int compo
     const numeric::CounterRng rng = numeric::CounterRng(p.seed, kSolidStream).keyed(component);
     const double m = p.density / unit_ball_volume(D);  // impulses per cell of side R
     const detail::LoopKernel lk = detail::loop_kernel(noise.kernel());
+    // Group cells are half cells (kSplit): the impulses within one radius of a half cell are
+    // 2.5 times fewer than those of a whole one (Steiner's formula: 8.2 against 20.6 R^3).
+    auto impulse_cell = [](const std::array<int64_t, D>& s) {
+        std::array<int64_t, D> c;
+        for (int d = 0; d < D; ++d) c[d] = s[d] >= 0 ? s[d] / kSplit : -((-s[d] + kSplit - 1) / kSplit);
+        return c;
+    };
     for (size_t g0 = 0; g0 < b.cells.size(); g0 += kChunkGroups) {
         const size_t g1 = std::min(b.cells.size(), g0 + kChunkGroups);
-        const CellTable<D> table(
-            rng, m, std::vector<std::array<int64_t, D>>(b.cells.begin() + g0, b.cells.begin() + g1));
+        std::vector<std::array<int64_t, D>> cells;
+        for (size_t g = g0; g < g1; ++g) cells.push_back(impulse_cell(b.cells[g]));
+        cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+        const CellTable<D> table(rng, m, cells);
         tbb::parallel_for(tbb::blocked_range<size_t>(g0, g1, 1), [&](const auto& r) {
             detail::Gathered<D> gathered;
             std::vector<float> acc;
             for (size_t g = r.begin(); g != r.end(); ++g) {
-                gather<D>(table, b.cells[g], gathered);
+                const auto c = impulse_cell(b.cells[g]);
+                std::array<float, D> lo;
+                for (int d = 0; d < D; ++d) lo[d] = float(b.cells[g][d] - kSplit * c[d]) / kSplit;
+                gather<D>(table, c, lo, 1.0f / kSplit, gathered);
                 const size_t s0 = b.start[g], n = b.start[g + 1] - s0;
                 acc.assign(n, 0.0f);
                 std::array<const float*, D> t;
@@ -241,13 +261,13 @@ void SolidNoise::evaluate(const std::vector<SolidPoint>& points, std::vector<flo
         for (int r = 0; r < 3; ++r) o[r] = w[3 * r] * q.x + w[3 * r + 1] * q.y + w[3 * r + 2] * q.z;
     };
     if (m_params.dims == 3) {
-        run_batch<3>(*this, detail::group_by_cell<3>(points.size(), warp), component, values.data());
+        run_batch<3>(*this, detail::group_by_cell<3>(points.size(), warp, kSplit), component, values.data());
     } else {
         auto warp4 = [&](size_t i, double* o) {
             warp(i, o);
             o[3] = points[i].t * inv_r;
         };
-        run_batch<4>(*this, detail::group_by_cell<4>(points.size(), warp4), component, values.data());
+        run_batch<4>(*this, detail::group_by_cell<4>(points.size(), warp4, kSplit), component, values.data());
     }
 }
 

@@ -47,6 +47,39 @@ void accumulate_poly(const LoopKernel& k, const Gathered<D>& g, const std::array
     }
 }
 
+/// Few points: per point, the terms vectorised over the impulses into scratch, then added in
+/// impulse order (the same terms and the same order as accumulate_poly: the same bits).
+template <int D, int N>
+void accumulate_few(const LoopKernel& k, const Gathered<D>& g, const std::array<const float*, D>& t,
+                    size_t n, float* acc) {
+    float c[N];
+    for (int j = 0; j < N; ++j) c[j] = k.chebyshev[j];
+    thread_local std::vector<float> terms;
+    const size_t m = g.a.size();
+    terms.resize(m);
+    float* term = terms.data();
+    std::array<const float*, D> v;
+    for (int d = 0; d < D; ++d) v[d] = g.v[d].data();
+    const float* a = g.a.data();
+    for (size_t p = 0; p < n; ++p) {
+        std::array<float, D> x;
+        for (int d = 0; d < D; ++d) x[d] = t[d][p];
+        for (size_t j = 0; j < m; ++j) {
+            float q = 0.0f;
+            for (int d = 0; d < D; ++d) {
+                const float dd = x[d] - v[d][j];
+                q += dd * dd;
+            }
+            const float qc = q < 1.0f ? q : 1.0f;
+            const float e = chebyshev<N>(qc, c);
+            term[j] = q < 1.0f ? a[j] * e : 0.0f;
+        }
+        float s = acc[p];
+        for (size_t j = 0; j < m; ++j) s += term[j];
+        acc[p] = s;
+    }
+}
+
 /// Any kernel: the envelope table (linear in q) or the polynomial, and the Gabor carrier.
 template <int D>
 void accumulate_generic(const LoopKernel& k, const Gathered<D>& g,
@@ -92,8 +125,15 @@ template <int D, class Loop, size_t... I>
 constexpr std::array<Loop, sizeof...(I)> loops(std::index_sequence<I...>) {
     return {&accumulate_poly<D, int(I) + 1>...};
 }
+template <int D, class Loop, size_t... I>
+constexpr std::array<Loop, sizeof...(I)> few_loops(std::index_sequence<I...>) {
+    return {&accumulate_few<D, int(I) + 1>...};
+}
 constexpr auto kLoops3 = loops<3, Loop3>(std::make_index_sequence<kMaxTerms>());
 constexpr auto kLoops4 = loops<4, Loop4>(std::make_index_sequence<kMaxTerms>());
+constexpr auto kFew3 = few_loops<3, Loop3>(std::make_index_sequence<kMaxTerms>());
+constexpr auto kFew4 = few_loops<4, Loop4>(std::make_index_sequence<kMaxTerms>());
+constexpr size_t kFewPoints = 8;  // below this many points per group, vectorise over impulses
 
 }  // namespace
 
@@ -119,8 +159,9 @@ template <int D>
 void accumulate(const LoopKernel& k, const Gathered<D>& g, const std::array<const float*, D>& t,
                 size_t n, float* acc) {
     if (k.terms > 0 && k.terms <= kMaxTerms && !k.carrier) {
-        if constexpr (D == 3) kLoops3[k.terms - 1](k, g, t, n, acc);
-        else kLoops4[k.terms - 1](k, g, t, n, acc);
+        const bool few = n < kFewPoints;
+        if constexpr (D == 3) (few ? kFew3 : kLoops3)[k.terms - 1](k, g, t, n, acc);
+        else (few ? kFew4 : kLoops4)[k.terms - 1](k, g, t, n, acc);
         return;
     }
     accumulate_generic<D>(k, g, t, n, acc);
