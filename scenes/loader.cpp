@@ -125,7 +125,7 @@ void apply_override(toml::table& root, const std::string& text, Source& src) {
     src.overrides[shown] = text;
 }
 
-/// A [[layer]] drawn by another synthesizer (source = "fbm"): its seed, mean, gain, marginal and
+/// A [[layer]] drawn by another synthesizer (source = "fbm", "solid"): its seed, mean, gain, marginal and
 /// composition; the impulse process's keys are refused (scenes/source.h).
 void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path& base,
                        const Limits& limits, detail::CompositionReader& compose, LayerConfig& L) {
@@ -141,7 +141,8 @@ void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path
     L.process.seed = mix_seed(global_seed, static_cast<uint64_t>(r.integer("seed", 1, 0, INT64_MAX)));
     L.mean = r.keyframed("mean", 0.0);
     L.gain = r.keyframed("gain", 1.0);
-    L.source = detail::read_fbm_source(r.table(kind), L.process.seed, limits.max_memory_mib);
+    L.source = kind == "fbm" ? detail::read_fbm_source(r.table(kind), L.process.seed, limits.max_memory_mib)
+                             : detail::read_solid_source(r.table(kind), L.process.seed);
     detail::read_marginal(r, L, base);
     compose.read_layer(r, i, L);
     r.finish();

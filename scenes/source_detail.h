@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// Layer sources read from scene files (internal to impulse::scenes): [[layer]] source = "fbm".
+// Layer sources read from scene files (internal to impulse::scenes): [[layer]] source = "fbm",
+// "solid".
 
 #include <array>
 #include <cstdint>
@@ -14,12 +15,16 @@
 namespace impulse::scenes::detail {
 
 /// The values of a [[layer]]'s `source` key: "impulses" (the default) draws the point process.
-inline constexpr std::array<std::string_view, 2> kLayerSourceNames = {"impulses", "fbm"};
+inline constexpr std::array<std::string_view, 3> kLayerSourceNames = {"impulses", "fbm", "solid"};
 
 /// A fractional Brownian surface layer from its [layer.fbm] table (absent: the defaults) and
 /// the layer's seed: the realised grid is made here, once. Throws SceneError at the key, also
 /// when making it would need more than `max_memory_mib` (limits.max_memory_mib).
 std::shared_ptr<const LayerSource> read_fbm_source(std::optional<Reader> fbm, uint64_t seed,
                                                    double max_memory_mib);
+
+/// A slice of solid noise from its [layer.solid] table (absent: the defaults) and the layer's
+/// seed. Throws SceneError at the key.
+std::shared_ptr<const LayerSource> read_solid_source(std::optional<Reader> solid, uint64_t seed);
 
 }  // namespace impulse::scenes::detail
