@@ -64,9 +64,9 @@ WienerCovariance wiener_covariance(const std::string& name, double l) {
         const double kmax = 24.0 / l, dk = kmax / n;
         std::vector<double> S(n);
         for (int i = 0; i < n; ++i) S[i] = h.radial_power_spectrum((i + 0.5) * dk);
-        auto C = [S, dk, n](double r) {
+        auto C = [S, dk](double r) {
             double s = 0.0;
-            for (int i = 0; i < n; ++i) {
+            for (size_t i = 0; i < S.size(); ++i) {
                 const double k = (i + 0.5) * dk, x = 2.0 * M_PI * k * r;
                 s += S[i] * k * k * (x == 0.0 ? 1.0 : std::sin(x) / x);
             }

@@ -254,8 +254,10 @@ TEST_CASE("solid noise: isotropic within its band (Perlin's ratio reported)", "[
 }
 
 TEST_CASE("solid noise: points equal the grid bit for bit, in any order and thread count", "[synth][solid][determinism]") {
-    for (int dims : {3, 4}) {
-        const synth::SolidNoise noise(cosine(3.0, 16.0, dims));
+    // R = 3: the batches group by whole cells; R = 8: by half cells (many points per cell), while
+    // a lone point still uses a whole cell: the same bits either way.
+    for (const auto& [dims, R] : {std::pair{3, 3.0}, std::pair{4, 3.0}, std::pair{3, 8.0}}) {
+        const synth::SolidNoise noise(cosine(R, 16.0, dims));
         const SolidPoint origin{-5.5, 2.25, -1.0, 0.75};
         const std::vector<float> g = noise.grid(20, 17, 13, origin);
         std::vector<SolidPoint> pts;
