@@ -33,6 +33,21 @@ struct LoopKernel {
 
 LoopKernel loop_kernel(const SolidKernel& kernel);
 
+/// A loop over a group: acc[p] += sum_k a_k h(t(p) - v_k).
+template <int D>
+using LoopFn = void (*)(const LoopKernel&, const Gathered<D>&, const std::array<const float*, D>&,
+                        size_t, float*);
+/// The vectorised polynomial loops of a build (solid_loops.inc): nullptr beyond 24 terms; `few`:
+/// the variant for groups of fewer than 8 points.
+namespace base {
+LoopFn<3> poly3(int terms, bool few);
+LoopFn<4> poly4(int terms, bool few);
+}  // namespace base
+namespace avx2 {
+LoopFn<3> poly3(int terms, bool few);
+LoopFn<4> poly4(int terms, bool few);
+}  // namespace avx2
+
 /// acc[p] += sum_k a_k h(t(p) - v_k) for the n points t[d][p], in k order.
 template <int D>
 void accumulate(const LoopKernel& k, const Gathered<D>& g, const std::array<const float*, D>& t,
