@@ -13,6 +13,7 @@
 #include "app/preview.h"
 #include "app/synth_fbm.h"
 #include "app/synth_gss.h"
+#include "app/synth_solid.h"
 #include "numeric/errors.h"
 
 int main(int argc, char** argv) {
@@ -112,11 +113,13 @@ int main(int argc, char** argv) {
 
     CLI::App* synth = app.add_subcommand(
         "synth", "Synthesize a field with another algorithm than the point process: "
-                 "stochastic subdivision (gss), fractional Brownian surfaces (fbm)");
+                 "stochastic subdivision (gss), fractional Brownian surfaces (fbm), solid noise (solid)");
     synth->require_subcommand(1);
     impulse::app::add_synth_gss(*synth);
     impulse::app::SynthFbmOptions fo;
     CLI::App* synth_fbm = impulse::app::add_synth_fbm(*synth, fo);
+    impulse::app::SynthSolidOptions so;
+    CLI::App* synth_solid = impulse::app::add_synth_solid(*synth, so);
 
     try {
         app.parse(argc, argv);
@@ -138,6 +141,7 @@ int main(int argc, char** argv) {
         if (*encode) return impulse::app::run_encode(eo);
         if (*farm) return impulse::app::run_farm(fm);
         if (*synth_fbm) return impulse::app::run_synth_fbm(fo);
+        if (*synth_solid) return impulse::app::run_synth_solid(so);
         if (*synth) return 0;  // gss ran in its callback
     } catch (const impulse::Error& e) {
         std::cerr << "error: " << e.what() << "\n";

@@ -124,7 +124,8 @@ void apply_override(toml::table& root, const std::string& text, Source& src) {
     src.overrides[shown] = text;
 }
 
-/// A [[layer]] drawn by another synthesizer (source = "fbm", "subdivision"): its seed, mean, gain, marginal and
+/// A [[layer]] drawn by another synthesizer (source = "fbm", "subdivision", "solid"): its seed,
+/// mean, gain, marginal and
 /// composition; the impulse process's keys are refused (scenes/source.h).
 void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path& base,
                        const Limits& limits, detail::CompositionReader& compose, LayerConfig& L) {
@@ -142,6 +143,8 @@ void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path
     L.gain = r.keyframed("gain", 1.0);
     if (kind == "fbm") {
         L.source = detail::read_fbm_source(r.table(kind), L.process.seed, limits.max_memory_mib);
+    } else if (kind == "solid") {
+        L.source = detail::read_solid_source(r.table(kind), L.process.seed);
     } else {
         std::optional<Reader> t = r.table(kind);
         if (!t)

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// Layer sources read from scene files (internal to impulse::scenes): [[layer]] source = "fbm" or
-// "subdivision".
+// Layer sources read from scene files (internal to impulse::scenes): [[layer]] source = "fbm",
+// "subdivision" or "solid".
 
 #include <array>
 #include <cstdint>
@@ -16,8 +16,8 @@
 namespace impulse::scenes::detail {
 
 /// The values of a [[layer]]'s `source` key: "impulses" (the default) draws the point process.
-inline constexpr std::array<std::string_view, 3> kLayerSourceNames = {"impulses", "fbm",
-                                                                        "subdivision"};
+inline constexpr std::array<std::string_view, 4> kLayerSourceNames = {"impulses", "fbm",
+                                                                        "subdivision", "solid"};
 
 /// A fractional Brownian surface layer from its [layer.fbm] table (absent: the defaults) and
 /// the layer's seed: the realised grid is made here, once. Throws SceneError at the key, also
@@ -30,5 +30,9 @@ std::shared_ptr<const LayerSource> read_fbm_source(std::optional<Reader> fbm, ui
 std::shared_ptr<const LayerSource> read_subdivision_source(Reader* subdivision, uint64_t seed,
                                                            const std::filesystem::path& base,
                                                            double max_memory_mib);
+
+/// A slice of solid noise from its [layer.solid] table (absent: the defaults) and the layer's
+/// seed. Throws SceneError at the key.
+std::shared_ptr<const LayerSource> read_solid_source(std::optional<Reader> solid, uint64_t seed);
 
 }  // namespace impulse::scenes::detail

@@ -1,0 +1,277 @@
+// SPDX-License-Identifier: Apache-2.0
+#include "app/synth_solid.h"
+
+#include <CLI/CLI.hpp>
+#include <OpenImageIO/imageio.h>
+#include <openvdb/openvdb.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <sstream>
+
+#include "numeric/errors.h"
+#include "synth/synth.h"
+
+namespace impulse::app {
+namespace {
+
+namespace fs = std::filesystem;
+
+template <class T>
+T parse_number(const std::string& option, const std::string& text, const std::string& expected) {
+    T v{};
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
+    if (ec != std::errc() || end != text.data() + text.size() || text.empty())
+        throw ValueError(option + " " + text + ": expected " + expected);
+    return v;
+}
+
+std::string extension(const std::string& path) {
+    std::string e = fs::path(path).extension().string();
+    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
+    return e;
+}
+
+std::array<int, 3> parse_size(const std::string& s) {
+    std::array<int, 3> n{};
+    std::istringstream in(s);
+    std::string part;
+    int i = 0;
+    while (std::getline(in, part, 'x')) {
+        if (i == 3) break;
+        long long v = 0;
+        const auto [end, ec] = std::from_chars(part.data(), part.data() + part.size(), v);
+        if (ec != std::errc() || end != part.data() + part.size() || part.empty() || v <= 0 || v > 1 << 20)
+            throw ValueError("--size " + s + ": expected WxHxD, three positive integers up to 1048576");
+        n[i++] = static_cast<int>(v);
+    }
+    if (i != 3 || std::count(s.begin(), s.end(), 'x') != 2)
+        throw ValueError("--size " + s + ": expected WxHxD, three positive integers");
+    return n;
+}
+
+/// The points of a CSV of x,y,z lines (blank lines and # comments skipped); names a bad line.
+std::vector<synth::SolidPoint> read_points(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw IoError(path + ": cannot read: " + std::strerror(errno));
+    std::vector<synth::SolidPoint> pts;
+    std::string line;
+    for (int no = 1; std::getline(in, line); ++no) {
+        if (!line.empty() && line.back() == '\r') line.pop_back();
+        if (line.find_first_not_of(" \t") == std::string::npos || line[0] == '#') continue;
+        std::array<double, 3> v{};
+        size_t pos = 0;
+        bool ok = true;
+        for (int c = 0; c < 3 && ok; ++c) {
+            const size_t comma = c < 2 ? line.find(',', pos) : line.size();
+            if (comma == std::string::npos) { ok = false; break; }
+            std::string f = line.substr(pos, comma - pos);
+            f.erase(0, f.find_first_not_of(" \t"));
+            f.erase(f.find_last_not_of(" \t") + 1);
+            const auto [end, ec] = std::from_chars(f.data(), f.data() + f.size(), v[c]);
+            ok = ec == std::errc() && end == f.data() + f.size() && !f.empty() && std::isfinite(v[c]);
+            pos = comma + 1;
+        }
+        if (!ok) throw ValueError(path + ":" + std::to_string(no) + ": \"" + line + "\": expected x,y,z (three finite numbers)");
+        pts.push_back({v[0], v[1], v[2], 0.0});
+    }
+    return pts;
+}
+
+std::string temp_name(const std::string& path) {
+    const fs::path p(path);
+    return (p.parent_path() / ("." + p.stem().string() + ".partial-" + std::to_string(::getpid()) +
+                               p.extension().string())).string();
+}
+
+/// Renames the finished temporary into place (nothing half-written under `path`).
+void commit(const std::string& tmp, const std::string& path) {
+    std::error_code ec;
+    fs::rename(tmp, path, ec);
+    if (ec) {
+        fs::remove(tmp, ec);
+        throw IoError(path + ": cannot rename temporary file into place: " + ec.message());
+    }
+}
+
+void write_exr_stack(const std::string& path, const std::vector<float>& v, const std::array<int, 3>& n,
+                     const std::string& description) {
+    const int W = n[0], H = n[1], D = n[2];
+    OIIO::ImageSpec spec(W, H, D, OIIO::TypeDesc::FLOAT);
+    spec.depth = 1;
+    spec.channelnames.clear();
+    for (int k = 0; k < D; ++k) {
+        char name[32];
+        std::snprintf(name, sizeof name, "z%04d.Y", k);
+        spec.channelnames.push_back(name);
+    }
+    spec.attribute("compression", "zip");
+    spec.attribute("ImageDescription", description);
+    spec.attribute("DateTime", "1970:01:01 00:00:00");  // a pure function of the options
+    // Interleave: pixel (i, j) holds the D layers' values.
+    std::vector<float> px(size_t(W) * H * D);
+    for (int k = 0; k < D; ++k)
+        for (size_t p = 0; p < size_t(W) * H; ++p) px[p * D + k] = v[size_t(k) * W * H + p];
+    const std::string tmp = temp_name(path);
+    auto out = OIIO::ImageOutput::create(tmp);
+    const bool ok = out && out->open(tmp, spec) && out->write_image(OIIO::TypeDesc::FLOAT, px.data());
+    std::string err = out ? out->geterror() : OIIO::geterror();
+    if (out && !out->close() && err.empty()) err = out->geterror();
+    if (!ok || !err.empty()) {
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        throw IoError(path + ": cannot write: " + (err.empty() ? std::string("unknown error") : err));
+    }
+    commit(tmp, path);
+}
+
+void write_vdb(const std::string& path, const std::vector<float>& v, const std::array<int, 3>& n,
+               const std::string& description) {
+    openvdb::initialize();
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setName("density");
+    grid->setGridClass(openvdb::GRID_FOG_VOLUME);
+    grid->insertMeta("description", openvdb::StringMetadata(description));
+    auto acc = grid->getAccessor();
+    for (int k = 0; k < n[2]; ++k)
+        for (int j = 0; j < n[1]; ++j)
+            for (int i = 0; i < n[0]; ++i)
+                acc.setValue({i, j, k}, v[(size_t(k) * n[1] + j) * n[0] + i]);
+    const std::string tmp = temp_name(path);
+    try {
+        openvdb::io::File file(tmp);
+        file.write({grid});
+        file.close();
+    } catch (const std::exception& e) {
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        throw IoError(path + ": cannot write: " + e.what());
+    }
+    commit(tmp, path);
+}
+
+void write_csv(const std::string& path, const std::vector<synth::SolidPoint>& p, const std::vector<float>& v) {
+    const std::string tmp = temp_name(path);
+    {
+        std::ofstream out(tmp);
+        char buf[128];
+        for (size_t i = 0; i < p.size() && out; ++i) {
+            std::snprintf(buf, sizeof buf, "%.9g,%.9g,%.9g,%.9g\n", p[i].x, p[i].y, p[i].z, double(v[i]));
+            out << buf;
+        }
+        out.close();
+        if (!out) {
+            std::error_code ec;
+            fs::remove(tmp, ec);
+            throw IoError(path + ": write failed: " + std::strerror(errno));
+        }
+    }
+    commit(tmp, path);
+}
+
+}  // namespace
+
+CLI::App* add_synth_solid(CLI::App& synth, SynthSolidOptions& o) {
+    CLI::App* s = synth.add_subcommand("solid", "Solid noise (Lewis 1989): sparse convolution or a lattice noise, "
+                                                "on a W x H x D grid or at points");
+    s->add_option("--method", o.method, "sparse, perlin, value or wiener")->required();
+    s->add_option("--kernel", o.kernel, "sparse: cosine (default), gaussian (sigma = R/3) or gabor");
+    s->add_option("--radius", o.radius, "sparse: kernel radius R; lattice methods: lattice spacing (default 8)");
+    s->add_option("--density", o.density, "sparse: impulses per kernel volume 4/3 pi R^3, in (0, 1000] (16)");
+    s->add_option("--covariance", o.covariance, "wiener: gaussian, markov, spherical (default) or cosine");
+    s->add_option("--length", o.length, "wiener: covariance length in lattice spacings (default 1)");
+    s->add_option("--size", o.size, "Grid WxHxD, sample (i, j, k) at (i, j, k) texture units");
+    s->add_option("--seed", o.seed, "Random seed, integer in [0, 2^63 - 1] (default 0)");
+    s->add_option("--points", o.points, "CSV of x,y,z lines: evaluate there, -o values.csv");
+    s->add_option("-o,--output", o.output, ".exr (D layers z0000...), .vdb (float grid \"density\") or .csv")
+        ->required();
+    s->add_option("--memory-budget", o.memory_budget, "Refuse grids needing more GiB (default: half the memory)");
+    return s;
+}
+
+int run_synth_solid(const SynthSolidOptions& o) {
+    const std::string method = o.method;
+    if (method != "sparse" && method != "perlin" && method != "value" && method != "wiener")
+        throw ValueError("--method " + method + ": expected one of sparse, perlin, value, wiener");
+    const double radius = parse_number<double>("--radius", o.radius, "a number > 0");
+    if (!(radius > 0.0) || !(radius <= 1e6)) throw ValueError("--radius " + o.radius + ": expected a number in (0, 1e6]");
+    const auto seed = parse_number<long long>("--seed", o.seed, "an integer in [0, 9223372036854775807]");
+    if (seed < 0) throw ValueError("--seed " + o.seed + ": expected an integer in [0, 2^63 - 1]");
+    const bool points = !o.points.empty();
+    if (points == !o.size.empty())
+        throw ValueError(points ? "--points and --size: give one (points or a grid)"
+                                : "--size WxHxD or --points FILE: one is required");
+    const std::string e = extension(o.output);
+    if (points ? e != ".csv" : (e != ".exr" && e != ".vdb"))
+        throw ValueError("-o " + o.output + (points ? ": expected a .csv for point values" : ": expected .exr or .vdb"));
+    const fs::path dir = fs::path(o.output).parent_path();
+    const std::string d = dir.empty() ? "." : dir.string();
+    if (!fs::is_directory(d) || ::access(d.c_str(), W_OK) != 0)
+        throw IoError(o.output + ": output directory " + d + " does not exist or is not writable");
+
+    std::array<int, 3> n{};
+    if (!points) {
+        n = parse_size(o.size);
+        double budget = synth::default_memory_budget();
+        if (!o.memory_budget.empty()) {
+            budget = parse_number<double>("--memory-budget", o.memory_budget, "GiB, > 0");
+            if (!(budget > 0)) throw ValueError("--memory-budget " + o.memory_budget + ": expected > 0");
+            budget *= double(1ull << 30);
+        }
+        // The volume, its interleaved or VDB copy and one slab of the batch.
+        const double samples = double(n[0]) * n[1] * n[2];
+        const double bytes = samples * 4.0 * (e == ".vdb" ? 3.0 : 2.0) +
+                             synth::SolidNoise::batch_bytes(std::min(samples, double(1 << 22)));
+        if (bytes > budget) {
+            std::ostringstream s;
+            s << "--size " << o.size << ": needs an estimated " << std::llround(bytes / (1 << 20))
+              << " MiB, over the memory budget of " << std::llround(budget / (1 << 20)) << " MiB";
+            throw BudgetError(s.str());
+        }
+    }
+    const std::vector<synth::SolidPoint> pts = points ? read_points(o.points) : std::vector<synth::SolidPoint>{};
+
+    std::vector<float> values;
+    std::ostringstream desc;
+    desc << "impulse synth solid --method " << method << " --radius " << o.radius << " --seed " << seed;
+    if (method == "sparse") {
+        synth::SolidParams p;
+        const auto type = kernels::kernel_type_from_string(o.kernel);
+        if (!type) throw ValueError("--kernel " + o.kernel + ": expected one of cosine, gaussian, gabor");
+        p.kernel.type = *type;
+        p.kernel.radius = radius;
+        p.kernel.sigma = radius / 3.0;
+        p.kernel.frequency = 2.0 / radius;
+        p.density = parse_number<double>("--density", o.density, "impulses per kernel volume in (0, 1000]");
+        p.seed = uint64_t(seed);
+        const synth::SolidNoise noise(p);  // validates density
+        desc << " --kernel " << o.kernel << " --density " << o.density << " (variance "
+             << noise.theory().variance << ")";
+        if (points) noise.evaluate(pts, values);
+        else values = noise.grid(n[0], n[1], n[2], {});
+    } else {
+        synth::LatticeParams p;
+        p.method = synth::parse_lattice_method(method);
+        p.spacing = radius;
+        p.seed = uint64_t(seed);
+        if (p.method == synth::LatticeMethod::Wiener) {
+            const double l = parse_number<double>("--length", o.length, "a number > 0");
+            p.covariance = synth::wiener_covariance(o.covariance, l);
+            desc << " --covariance " << o.covariance << " --length " << o.length;
+        }
+        const synth::LatticeNoise noise(p);  // wiener: refuses a covariance the lattice cannot realize
+        if (points) noise.evaluate(pts, values);
+        else values = noise.grid(n[0], n[1], n[2], {});
+    }
+    if (points) write_csv(o.output, pts, values);
+    else if (e == ".exr") write_exr_stack(o.output, values, n, desc.str());
+    else write_vdb(o.output, values, n, desc.str());
+    return 0;
+}
+
+}  // namespace impulse::app
