@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 packages=(build-essential cmake pkg-config libeigen3-dev libtbb-dev libopenimageio-dev
           libavformat-dev libavcodec-dev libavutil-dev libswscale-dev catch2
           libtomlplusplus-dev libcli11-dev librandom123-dev libfftw3-dev parallel
-          openimageio-tools python3-numpy)
+          openimageio-tools python3-numpy webp)
 missing=()
 for p in "${packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
