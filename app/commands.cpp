@@ -182,7 +182,8 @@ void ensure_directory(const std::string& path) {
 
 /// True when the scene's shading gives colour (a ramp or relief at some time), not plain grey.
 bool colour_shading(const scenes::Scene& s) {
-    return !s.shading.ramp.empty() || s.shading_keys.relief.max() != 0.0;
+    return !s.shading.ramp.empty() || s.shading_keys.relief.max() != 0.0 || s.shading.toe > 0.0 ||
+           s.shading.shoulder > 0.0;
 }
 
 /// Why the file `target` present for --resume is not frame `f` of `sc` as this run would

@@ -33,14 +33,30 @@ void ramp_at(const std::vector<ColorStop>& ramp, double t, float out[4]) {
     out[0] = ramp.back().r, out[1] = ramp.back().g, out[2] = ramp.back().b, out[3] = ramp.back().a;
 }
 
+/// How far past 0 (toe) or 1 (shoulder) the tone curve's roll-off of width w is still more
+/// than 1/8192 from its limit (an eighth of a 10-bit step): the table ends there.
+double roll_off_span(double w) {
+    return w > 0.0 ? std::max(0.0, w * std::log(w * 8192.0) - w) : 0.0;
+}
+
 }  // namespace
 
+double tone_curve(double x, double toe, double shoulder) {
+    if (x < toe) return toe > 0.0 ? toe * std::exp((x - toe) / toe) : 0.0;
+    const double knee = 1.0 - shoulder;
+    if (x > knee) return shoulder > 0.0 ? 1.0 - shoulder * std::exp(-(x - knee) / shoulder) : 1.0;
+    return x;
+}
+
 Shader::Shader(const ValueMapping& mapping, const Shading& sh) {
-    // The ramp as a 4096-entry table of display value -> RGBA (finer than 8- and 10-bit output
-    // can show), so the per-pixel work is a clamp, a lookup and the compositing.
-    m_lut.resize(size_t(kLut) * 4);
-    for (int i = 0; i < kLut; ++i) {
-        const double t = double(i) / (kLut - 1);
+    // The tone curve and the ramp as a table of linear display value -> RGBA, 4096 entries per
+    // unit (finer than 8- and 10-bit output can show), so the per-pixel work is a clamp, a
+    // lookup and the compositing. Without a toe or shoulder the table spans [0, 1] (the clip).
+    const double x0 = -roll_off_span(sh.toe), x1 = 1.0 + roll_off_span(sh.shoulder);
+    const int n = static_cast<int>(std::lround((x1 - x0) * (kLut - 1))) + 1;
+    m_lut.resize(size_t(n) * 4);
+    for (int i = 0; i < n; ++i) {
+        const double t = tone_curve(x0 + (x1 - x0) * i / (n - 1), sh.toe, sh.shoulder);
         float* c = m_lut.data() + size_t(i) * 4;
         if (sh.ramp.empty()) {
             c[0] = c[1] = c[2] = float(t), c[3] = 1.0f;
@@ -48,8 +64,11 @@ Shader::Shader(const ValueMapping& mapping, const Shading& sh) {
             ramp_at(sh.ramp, t, c);
         }
     }
-    m_lo = static_cast<float>(mapping.lo);
-    m_scale = static_cast<float>((kLut - 1) / (mapping.hi - mapping.lo));
+    const double span = mapping.hi - mapping.lo;
+    m_lo = static_cast<float>(mapping.lo + x0 * span);
+    m_scale = static_cast<float>((n - 1) / ((x1 - x0) * span));
+    m_last = float(n - 1);
+    m_shoulder = static_cast<float>(sh.shoulder);
     const double az = sh.light_azimuth_deg * std::numbers::pi / 180.0;
     const double el = sh.light_elevation_deg * std::numbers::pi / 180.0;
     // Light direction in image coordinates (x right, y down, z out of the screen).
@@ -57,7 +76,7 @@ Shader::Shader(const ValueMapping& mapping, const Shading& sh) {
     m_lz = float(std::sin(el));
     m_relief = static_cast<float>(sh.relief), m_ambient = static_cast<float>(sh.ambient);
     for (int k = 0; k < 3; ++k) m_top[k] = sh.top[k], m_bottom[k] = sh.bottom[k];
-    m_plain_grey = sh.ramp.empty() && sh.relief == 0.0;
+    m_plain_grey = sh.ramp.empty() && sh.relief == 0.0 && sh.toe == 0.0 && sh.shoulder == 0.0;
 }
 
 void Shader::rows(const Frame& field, int y0, int y1, float* rgb) const {
@@ -71,9 +90,9 @@ void Shader::rows(const Frame& field, int y0, int y1, float* rgb) const {
         const float* row = field.data.data() + size_t(y) * w;
         float* o = rgb + size_t(y - y0) * w * 3;
         for (int x = 0; x < w; ++x) {
-            const float fi = std::clamp((row[x] - lo) * scale, 0.0f, float(kLut - 1));
+            const float fi = std::clamp((row[x] - lo) * scale, 0.0f, m_last);
             if (m_plain_grey) {  // the exact display value, as the grey image path writes it
-                const float t = fi / float(kLut - 1);
+                const float t = fi / m_last;
                 o[3 * x] = o[3 * x + 1] = o[3 * x + 2] = t;
                 continue;
             }
@@ -89,7 +108,10 @@ void Shader::rows(const Frame& field, int y0, int y1, float* rgb) const {
                 const float lambert = std::max(0.0f, (-dzdx * lx - dzdy * ly + lz) / n);
                 // Normalised so a flat field keeps its ramp colour.
                 const float light = ambient + (1.0f - ambient) * lambert / std::max(1e-6f, lz);
-                for (int k = 0; k < 3; ++k) c[k] = std::min(1.0f, c[k] * light);
+                // Lit colours past white go through the same shoulder (a hard clip without one).
+                for (int k = 0; k < 3; ++k)
+                    c[k] = m_shoulder > 0.0f ? float(tone_curve(c[k] * light, 0.0, m_shoulder))
+                                             : std::min(1.0f, c[k] * light);
             }
             for (int k = 0; k < 3; ++k) o[3 * x + k] = std::clamp(c[3] * c[k] + (1.0f - c[3]) * bg[k], 0.0f, 1.0f);
         }

@@ -29,10 +29,25 @@ struct Shading {
     double light_azimuth_deg = 135.0;   ///< direction the light comes from, in the image plane
     double light_elevation_deg = 35.0;  ///< above the plane
     double ambient = 0.25;
+    /// Filmic tone curve (see `tone_curve`) between the linear value mapping and the ramp:
+    /// `toe` and `shoulder` are the widths, in display units, of the exponential roll-offs
+    /// towards black and white, each in [0, 0.5]; 0 and 0 is the hard clip.
+    double toe = 0.0;
+    double shoulder = 0.0;
     /// Background behind transparent parts (ramp alpha < 1): a vertical gradient.
     float top[3] = {0.25f, 0.45f, 0.85f};
     float bottom[3] = {0.70f, 0.82f, 0.95f};
 };
+
+/// The filmic tone curve from a linear display value x (any real; 0 and 1 where the value
+/// mapping puts its lo and hi) to [0, 1]: the identity on [toe, 1 - shoulder], and exponential
+/// roll-offs outside that meet it with the same value and slope (C1):
+///     y = toe exp((x - toe) / toe)                                 for x < toe,
+///     y = 1 - shoulder exp(-(x - (1 - shoulder)) / shoulder)       for x > 1 - shoulder,
+/// so values past the mapping's ends are compressed instead of clipped: a tail of field values
+/// that would sit on the top code value (a flat plate) keeps its gradation and reaches 1 only
+/// in the limit. toe = 0 or shoulder = 0 is the hard clip at that end. Monotonic.
+double tone_curve(double x, double toe, double shoulder);
 
 /// Display RGB (3 floats per pixel in [0, 1]) of `field` under `mapping` and `shading`.
 /// Deterministic; per-pixel work only (parallel over rows).
@@ -51,9 +66,10 @@ public:
     void rows(const Frame& field, int y0, int y1, float* rgb) const;
 
 private:
-    static constexpr int kLut = 4096;
-    std::vector<float> m_lut;  ///< kLut entries of RGBA
-    float m_lo = 0, m_scale = 1;
+    static constexpr int kLut = 4096;  ///< entries per unit of linear display value
+    std::vector<float> m_lut;  ///< RGBA over the linear display values [x0, x1] the curve needs
+    float m_lo = 0, m_scale = 1, m_last = kLut - 1;
+    float m_shoulder = 0;
     float m_lx = 0, m_ly = 0, m_lz = 1, m_relief = 0, m_ambient = 0;
     float m_top[3] = {}, m_bottom[3] = {};
     bool m_plain_grey = true;

@@ -740,6 +740,7 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base, Out
         top.fail(nullptr, "layer", "a scene needs at least one [[layer]]");
     }
     detail::CompositionReader compose;  // keys naming other layers, resolved after the loop
+    std::vector<LayerConfig> twins;  // quadrature twins of dispersive layers
     for (size_t i = 0; i < layers.size(); ++i) {
         Reader& r = layers[i];
         LayerConfig L;
@@ -791,12 +792,16 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base, Out
         L.flow = read_flows(r, p, base, compose, i);
         detail::read_marginal(r, L, base);
         compose.read_layer(r, i, L);
+        detail::read_dispersion(r, L, twins, [&] { return read_flows(r, p, base, compose, i); });
         if (L.density.min() < 1.0)
             r.warn("density", "below 1 impulse per kernel area the noise is lumpy, see Lewis 1989 §4.1");
         r.finish();
         s.layers.push_back(std::move(L));
     }
     compose.resolve(s);
+    // Quadrature twins of dispersive layers last: added layers commute, and the scene's own
+    // layers keep their indices.
+    for (auto& t : twins) s.layers.push_back(std::move(t));
     top.finish();
     return s;
 }
@@ -856,6 +861,11 @@ kernels::MarginalParams LayerConfig::marginal_at(double t) const {
     kernels::MarginalParams m = marginal->target().params();
     for (const auto& key : marginal_keys) m.*key.field = key.value.value(t);
     return m;
+}
+
+double LayerConfig::carrier_weight(double t) const {
+    if (carrier_rate == 0.0) return 1.0;
+    return carrier_quadrature ? -std::sin(carrier_rate * t) : std::cos(carrier_rate * t);
 }
 
 bool LayerConfig::keyframed() const {

@@ -105,6 +105,8 @@ std::string structural_reason(std::string_view path) {
         {"output.crf", "the video is encoded at one quality"},
         {"output.bits", "the files of an output have one format"},
         {"output.range", "the display mapping is the same in every frame"},
+        {"shading.toe", "the tone curve is the same in every frame"},
+        {"shading.shoulder", "the tone curve is the same in every frame"},
         {"limits.max_impulses", "a limit is checked once, when the scene loads"},
         {"limits.max_memory_mib", "a limit is checked once, when the scene loads"},
         {"limits.max_pixel_evaluations", "a limit holds for the whole render"},

@@ -132,6 +132,11 @@ output::FieldTransform read_transform(std::optional<Reader> r, const CameraConfi
 /// layer.region: the birth region of a layer (scenes/region_config.cpp); `base` resolves a mask
 /// image's path.
 void read_region(Reader& layer, sim::ProcessConfig& process, const std::filesystem::path& base);
+/// [layer.dispersion] of a Gabor layer (scenes/dispersion_config.cpp): adds the group
+/// velocity to its flow (`flows` reads the layer's own flows afresh), sets its carrier rate
+/// and appends its quadrature twin to `twins`.
+void read_dispersion(Reader& layer, LayerConfig& L, std::vector<LayerConfig>& twins,
+                     const std::function<std::shared_ptr<sim::Flow>()>& flows);
 
 /// Text of a node's value as written (for messages).
 std::string value_text(const toml::node& n);

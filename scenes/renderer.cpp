@@ -102,7 +102,7 @@ Theory unshaped_theory(const LayerConfig& layer, double t) {
     const auto& p = layer.process;
     double v = p.intensity * sim::amplitude_second_moment(p.amplitude) * k.integral_sq();
     if (p.lifetime_s > 0) v *= birth_weight(p, t);
-    const double gain = layer.gain.value(t);
+    const double gain = layer.gain.value(t) * layer.carrier_weight(t);
     return {layer.mean.value(t), v * gain * gain};
 }
 
@@ -522,7 +522,7 @@ void Renderer::State::layer_impulses(size_t i, const Pass& pass, const numeric::
     in_layer(scene, i, [&] { sims[i].impulses_at(pass.frame, box, out); });
     const LayerConfig& layer = scene.layers[i];
     const double tl = scene.layer_time(i, pass.frame);  // the layer's keys run on its own time
-    const double gain = layer.gain.value(tl);
+    const double gain = layer.gain.value(tl) * layer.carrier_weight(tl);
     if (gain != 1.0)
         for (auto& w : out.weight) w = static_cast<float>(w * gain);
     if (!layer.kernel_keys.empty()) {

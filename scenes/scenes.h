@@ -149,6 +149,12 @@ struct LayerConfig {
     /// cell_size still refer to the original kernel.
     std::shared_ptr<const kernels::PrecorrectionReport> precorrection;
     Composition compose;  ///< blend, opacity, visibility, warp, orientation source
+    /// [layer.dispersion] (scenes/dispersion_config.cpp): Omega, the rate in rad/s at which the
+    /// Gabor carrier advances on its envelope; the layer's weights are multiplied by
+    /// cos(Omega t), its quadrature twin's (carrier_quadrature, kernel phase + pi/2) by
+    /// -sin(Omega t). 0: no dispersion.
+    double carrier_rate = 0.0;
+    bool carrier_quadrature = false;
 
     /// The kernel at layer time t_s: `kernel` with the keyframed fields evaluated.
     kernels::KernelParams kernel_at(double t_s) const;
@@ -156,6 +162,9 @@ struct LayerConfig {
     double max_radius() const;
     /// The marginal's target parameters at layer time t_s (marginal must be set).
     kernels::MarginalParams marginal_at(double t_s) const;
+    /// The weight of the carrier's quadrature component at layer time t_s (1 without
+    /// dispersion): cos(carrier_rate t), or -sin(carrier_rate t) for the twin.
+    double carrier_weight(double t_s) const;
     /// Whether density, mean, gain, the kernel or the marginal vary in time.
     bool keyframed() const;
     /// The time at which the layer's keys are evaluated for frame time t_s: t_s, wrapped into
@@ -233,6 +242,14 @@ Theory scene_theory(const Scene& scene, double t_s = 0.0);
 /// True when the frame is the plain sum of impulse layers (every layer visible, added at opacity
 /// 1, unwarped, no source layer): what the spectral theory of `impulse analyze` covers.
 bool is_sum_of_layers(const Scene& scene);
+
+/// Linear water waves of wavenumber k (radians per unit) under `gravity` over `depth` (<= 0:
+/// deep water): omega^2 = g k tanh(k h), group speed d omega / dk.
+struct WaveDispersion {
+    double omega = 0.0;        ///< radians per second
+    double group_speed = 0.0;  ///< texture units per second
+};
+WaveDispersion dispersion_relation(double k, double gravity, double depth);
 
 /// Renders frames of a scene. Frame f is a pure function of (scene, f): rendering frames in
 /// order reuses particle state, rendering any frame alone integrates from birth, with the

@@ -21,9 +21,12 @@ using Ramp = std::vector<output::ColorStop>;
 const std::map<std::string, Ramp>& named_ramps() {
     static const std::map<std::string, Ramp> ramps = {
         {"grey", {{0.0, 0, 0, 0, 1}, {1.0, 1, 1, 1, 1}}},
-        // Clouds over the sky gradient: transparent below the mean, white and opaque above.
-        {"clouds", {{0.0, 1, 1, 1, 0}, {0.45, 1, 1, 1, 0}, {0.62, 0.96f, 0.97f, 1, 0.85f}, {0.8, 1, 1, 1, 1}, {1.0, 1, 1, 1, 1}}},
-        {"fire", {{0.0, 0, 0, 0, 1}, {0.35, 0.5f, 0.02f, 0, 1}, {0.55, 0.95f, 0.3f, 0.02f, 1}, {0.75, 1, 0.75f, 0.15f, 1}, {1.0, 1, 1, 0.85f, 1}}},
+        // Clouds over the sky gradient: transparent below the mean, opaque above; thin cloud a
+        // cool grey-white, pure white reached only at t = 1 (with a tone shoulder, never quite:
+        // thick cloud keeps its gradation instead of a flat white plate).
+        {"clouds", {{0.0, 1, 1, 1, 0}, {0.45, 1, 1, 1, 0}, {0.62, 0.88f, 0.90f, 0.95f, 0.85f}, {0.8, 0.95f, 0.96f, 0.98f, 1}, {1.0, 1, 1, 1, 1}}},
+        // Fire: black, deep red, orange, yellow, a pale yellow-white core only at t = 1.
+        {"fire", {{0.0, 0, 0, 0, 1}, {0.35, 0.5f, 0.02f, 0, 1}, {0.55, 0.92f, 0.3f, 0.02f, 1}, {0.75, 0.98f, 0.7f, 0.15f, 1}, {1.0, 1, 0.97f, 0.8f, 1}}},
         {"ocean", {{0.0, 0.0f, 0.08f, 0.2f, 1}, {0.5, 0.05f, 0.3f, 0.5f, 1}, {0.85, 0.5f, 0.75f, 0.85f, 1}, {1.0, 0.95f, 0.98f, 1, 1}}},
         {"terrain", {{0.0, 0.1f, 0.25f, 0.55f, 1}, {0.4, 0.25f, 0.5f, 0.2f, 1}, {0.65, 0.55f, 0.45f, 0.3f, 1}, {0.85, 0.6f, 0.6f, 0.6f, 1}, {1.0, 1, 1, 1, 1}}},
         {"marble", {{0.0, 0.15f, 0.15f, 0.18f, 1}, {0.3, 0.85f, 0.84f, 0.8f, 1}, {1.0, 0.97f, 0.96f, 0.94f, 1}}},
@@ -154,6 +157,10 @@ output::Shading read_shading(std::optional<Reader> r, const std::filesystem::pat
     if (r->has("light_elevation"))
         keys.light_elevation = r->keyframed("light_elevation", 35.0, elevation_ok, "an elevation in (0, 90] degrees");
     keys.ambient = r->keyframed("ambient", s.ambient, [](double v) { return v >= 0.0 && v <= 1.0; }, "a fraction in [0, 1]");
+    // The filmic tone curve's roll-off widths (output::tone_curve): structural, one curve.
+    const auto width_ok = [](double v) { return v >= 0.0 && v <= 0.5; };
+    s.toe = r->number("toe", 0.0, width_ok, "a width in [0, 0.5] (0: clip at black)");
+    s.shoulder = r->number("shoulder", 0.0, width_ok, "a width in [0, 0.5] (0: clip at white)");
     s.relief = keys.relief.value(0.0);
     s.light_azimuth_deg = keys.light_azimuth.value(0.0);
     s.light_elevation_deg = keys.light_elevation.value(0.0);
