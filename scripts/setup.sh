@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 
 packages=(build-essential cmake pkg-config libeigen3-dev libtbb-dev libopenimageio-dev
           libavformat-dev libavcodec-dev libavutil-dev libswscale-dev catch2
-          libtomlplusplus-dev libcli11-dev librandom123-dev libfftw3-dev parallel
+          libtomlplusplus-dev libcli11-dev librandom123-dev libfftw3-dev nlohmann-json3-dev parallel
           openimageio-tools)
 missing=()
 for p in "${packages[@]}"; do
