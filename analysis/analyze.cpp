@@ -275,6 +275,74 @@ CommonLevel common_level(const std::vector<std::vector<double>>& profiles,
 }
 
 
+/// Power at which the verdict states the drift it could see.
+constexpr double kPower = 0.8;
+
+/// The covariance of the per-frame variance when the frames are stationary: C(l) = variance
+/// rho(l), with the degrees of freedom of `variance` (infinity when it is the scene's).
+struct LevelModel {
+    double variance = 0.0;
+    std::vector<double> rho;
+    double dof = INFINITY;
+    std::string source;
+};
+
+/// sum_l>=1 rho(l)^2 over the lags: n / (1 + 2 that) is the effective number of frames behind an
+/// estimate of the series' variance.
+double variance_dof(size_t n, const std::vector<double>& rho) {
+    double s = 1.0;
+    for (size_t l = 1; l < rho.size() && l < n; ++l) s += 2.0 * rho[l] * rho[l];
+    return std::max(2.0, double(n) / s);
+}
+
+/// The series' variance from differences at the lag L where rho first drops to 1/2:
+/// E[(v_{j+L} - v_j)^2] = 2 variance (1 - rho(L)). A slow drift of the level adds little at that
+/// lag, so it does not hide itself by inflating the variance as the scatter about a line does.
+double variance_from_differences(const std::vector<double>& v, const std::vector<double>& rho) {
+    const size_t n = v.size();
+    size_t L = 1;
+    while (L + 1 < n / 4 && L < rho.size() && rho[L] > 0.5) ++L;
+    const double r = L < rho.size() ? rho[L] : 0.0;
+    double s = 0.0;
+    for (size_t j = 0; j + L < n; ++j) s += (v[j + L] - v[j]) * (v[j + L] - v[j]);
+    return s / (double(n - L) * 2.0 * std::max(1.0 - r, 1e-3));
+}
+
+/// The scene's when its theory holds (the Gaussian and population parts of a frame's variance,
+/// decorrelating as the field squared and as the impulse population); its envelopes with the
+/// variance from the frames when the scene is keyframed (the slower of the two correlations);
+/// otherwise an AR(1) correlation with the frames' integrated time and the variance about a line.
+LevelModel level_model(const std::vector<double>& v, const TimeCorrelation& tc,
+                       const TheoryComparison* theory) {
+    const size_t n = v.size();
+    LevelModel m;
+    if (theory && !tc.r2.empty() &&
+        theory->frame_variance_gaussian + theory->frame_variance_population > 0) {
+        const double g = theory->frame_variance_gaussian, p = theory->frame_variance_population;
+        m.variance = g + p;
+        m.rho.resize(n);
+        for (size_t l = 0; l < n; ++l) m.rho[l] = (g * tc.r2[l] + p * tc.r4[l]) / (g + p);
+        m.source = "scene theory";
+        return m;
+    }
+    if (!tc.r2.empty()) {
+        m.rho.resize(n);
+        for (size_t l = 0; l < n; ++l) m.rho[l] = std::max(tc.r2[l], tc.r4[l]);
+        m.variance = variance_from_differences(v, m.rho);
+        m.dof = variance_dof(n, m.rho);
+        m.source = "scene correlation, variance from the frames";
+        return m;
+    }
+    const double tau = integrated_time({v}).tau;
+    const double phi = (tau - 1.0) / (tau + 1.0);  // tau = (1 + phi) / (1 - phi)
+    m.rho.assign(1, 1.0);
+    while (m.rho.size() < n && m.rho.back() * phi > 1e-6) m.rho.push_back(m.rho.back() * phi);
+    m.variance = variance_from_differences(v, m.rho);
+    m.dof = variance_dof(n, m.rho);
+    m.source = "estimated from the frames (AR(1) with their integrated time)";
+    return m;
+}
+
 // Structure function at dyadic lags up to a quarter of the smaller side, H(s) pooled over the
 // frames (Kaplan & Kuo eq. 21).
 StructureSummary structure_of(std::span<const Image> frames) {
@@ -488,7 +556,7 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
         st.trend = trend(vars, kTrendBlocks);
         st.quarter = static_cast<int>(quarter);
         const std::span<const Image> all(frames);
-        st.drift = spectral_drift(all.first(quarter), all.last(quarter));
+        st.drift = spectral_drift(all.first(quarter), all.last(quarter), window);
         // spectral_drift's variance, 2 P^2 / (pairs q), assumes independent frames and bins. A
         // quarter of q correlated frames is worth q_eff, and the impulse population adds a level
         // common to all annuli (relative variance c per frame, c / q_eff_population per quarter):
@@ -521,16 +589,26 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
                                                           (1.0 / (pr * tc.q_eff) + cq));
             st.max_abs_z_corrected = std::max(st.max_abs_z_corrected, std::abs(st.z_corrected[i]));
         }
-        st.z_threshold = bonferroni_threshold(static_cast<int>(st.drift.z.size()), kFamilyAlpha);
-        st.stationary =
-            std::abs(st.trend.t) < st.t_limit && st.max_abs_z_corrected < st.z_threshold;
-        const size_t block = n / kTrendBlocks;
-        if (double(block) < 2.0 * R.tau_variance)
-            R.notes.push_back("trend blocks of " + std::to_string(block) +
-                              " frames are shorter than twice the correlation time of the frame "
-                              "variance (" +
-                              format_number(R.tau_variance, 3) +
-                              " frames): the trend's standard error may be low and t inflated");
+        // Three tests share the family's false-alarm rate: the level's trend, its block means and
+        // the spectral drift (Bonferroni, so the verdict's rate is at most kFamilyAlpha).
+        const double alpha = kFamilyAlpha / 3.0;
+        st.family_alpha = kFamilyAlpha;
+        st.z_threshold = bonferroni_threshold(static_cast<int>(st.drift.z.size()), alpha);
+        const LevelModel lm = level_model(vars, tc, R.theory ? &*R.theory : nullptr);
+        st.level_model = lm.source;
+        st.power = kPower;
+        st.level = level_drift(vars, lm.variance, lm.rho, kTrendBlocks, lm.dof, alpha, kPower);
+        st.level_z_limit = bonferroni_threshold(1, alpha);
+        st.blocks_z_limit = -numeric::normal_quantile_lower(alpha);
+        st.drift_of_interest = opt.drift;
+        st.detectable_drift = st.level.detectable_change / std::abs(st.level.mean);
+        const bool rejects = std::abs(st.level.z_trend) >= st.level_z_limit ||
+                             st.level.z_blocks >= st.blocks_z_limit ||
+                             st.max_abs_z_corrected >= st.z_threshold;
+        st.verdict = rejects                                         ? "not stationary"
+                     : st.detectable_drift <= st.drift_of_interest ? "stationary"
+                                                                   : "inconclusive";
+        st.stationary = st.verdict == "stationary";
     }
     if (!raw && !mapped)
         R.notes.push_back(

@@ -26,6 +26,9 @@ struct AnalyzeOptions {
     bool json = false;              ///< CLI only: print JSON instead of text
     std::string json_file;          ///< CLI only: --json FILE writes the JSON there (text printed)
     std::string report;             ///< CLI only: write an HTML report here
+    /// Relative change of the frame variance over the frames that a "stationary" verdict must
+    /// have been able to see (80 % power); a weaker test says "inconclusive".
+    double drift = 0.5;
 };
 
 /// Per-annulus comparison of the radial spectrum with theory.
@@ -68,6 +71,10 @@ struct TheoryComparison {
     std::string no_spectrum;                 ///< why `spectrum` is absent
     std::vector<double> autocovariance;      ///< expected ring values at lags 0..max_lag (or empty)
     std::optional<double> diff_variance;     ///< expected frame-difference variance (no flow)
+    /// Variance of one frame's sample variance: the Gaussian part (2 sum S^2 / N^2, decorrelates
+    /// in time as the field's correlation squared) and the impulse population's (fourth
+    /// cumulant, as the envelope's fourth power).
+    double frame_variance_gaussian = 0.0, frame_variance_population = 0.0;
 };
 
 /// Stationarity over time (sequences and videos with enough frames).
@@ -85,7 +92,20 @@ struct Stationarity {
         z_corrected;  ///< drift z with frame correlation and common level allowed for
     double max_abs_z_corrected = 0.0;  ///< max |z_corrected|
     double z_threshold = 0.0;          ///< Bonferroni threshold, family alpha 0.01
-    bool stationary = false;
+    /// The verdict: "stationary" (no test rejects at the family level, and a drift of
+    /// `drift_of_interest` would have been seen with `power`), "not stationary" (a test
+    /// rejects) or "inconclusive" (none rejects, but the frames could not have seen that drift).
+    std::string verdict;
+    double family_alpha = 0.01;  ///< false-alarm rate of the verdict, split over its three tests
+    /// Level of the frame variance against its covariance when stationary (analysis.h): the
+    /// trend's z (two-sided) and the block means' z (one-sided) at family_alpha / 3 each.
+    LevelDrift level;
+    std::string level_model;  ///< where that covariance comes from
+    double level_z_limit = 0.0, blocks_z_limit = 0.0;
+    double power = 0.8;
+    double detectable_drift = 0.0;   ///< relative change of the variance seen with `power`
+    double drift_of_interest = 0.5;  ///< AnalyzeOptions::drift
+    bool stationary = false;  ///< verdict == "stationary"
 };
 
 /// Power-spectrum summary of the frame-averaged 2-D periodogram.

@@ -71,11 +71,23 @@ std::string spectrum_threshold_text(const SpectrumTheory& s) {
            std::to_string(s.compared) + " annuli at family alpha 0.01";
 }
 
+/// "yes", "no" or "inconclusive" for a verdict.
+std::string verdict_word(const Stationarity& st) {
+    return st.verdict == "stationary" ? "yes" : st.verdict == "not stationary" ? "no" : "inconclusive";
+}
+
 std::string stationarity_verdict(const Stationarity& st) {
-    return "trend " + against("|t|", std::abs(st.trend.t), st.t_limit, 0) + "; drift " +
-           against("max|z|", st.max_abs_z_corrected, st.z_threshold, 2) +
-           ", Bonferroni limit for " + std::to_string(st.drift.z.size()) +
-           " annuli at family alpha 0.01; both must hold";
+    const auto& L = st.level;
+    return "level of the frame variance: trend " +
+           against("|z|", std::abs(L.z_trend), st.level_z_limit, 2) + ", " +
+           std::to_string(L.blocks) + " blocks " + against("z", L.z_blocks, st.blocks_z_limit, 2) +
+           "; spectral drift " + against("max|z|", st.max_abs_z_corrected, st.z_threshold, 2) +
+           " for " + std::to_string(st.drift.z.size()) +
+           " annuli; each test at alpha " + fmt(st.family_alpha / 3.0, 2) + ", family " +
+           fmt(st.family_alpha, 2) + "; a drift of the variance by " +
+           fixed(100.0 * st.detectable_drift, 0) + " % over the frames is seen with power " +
+           fixed(st.power, 1) + " (" + (st.detectable_drift <= st.drift_of_interest ? "<=" : ">") +
+           " the " + fixed(100.0 * st.drift_of_interest, 0) + " % asked for)";
 }
 
 using Json = nlohmann::ordered_json;
@@ -602,6 +614,22 @@ Json stationarity_json(const Stationarity& st) {
                            {"z_corrected", nums(st.z_corrected)},
                            {"frequency", nums(st.drift.frequency)},
                            {"z", nums(st.drift.z)}};
+    j["level"] = {{"model", st.level_model},
+                  {"mean", num(st.level.mean)},
+                  {"slope", num(st.level.slope)},
+                  {"sd_slope", num(st.level.sd_slope)},
+                  {"z_trend", num(st.level.z_trend)},
+                  {"z_trend_limit", num(st.level_z_limit)},
+                  {"blocks", st.level.blocks},
+                  {"chi2", num(st.level.chi2)},
+                  {"dof", st.level.dof},
+                  {"z_blocks", num(st.level.z_blocks)},
+                  {"z_blocks_limit", num(st.blocks_z_limit)}};
+    j["family_alpha"] = num(st.family_alpha);
+    j["power"] = num(st.power);
+    j["detectable_drift"] = num(st.detectable_drift);
+    j["drift_of_interest"] = num(st.drift_of_interest);
+    j["verdict"] = st.verdict;
     j["stationary"] = st.stationary;
     return j;
 }
@@ -698,6 +726,11 @@ std::string to_text(const AnalysisResult& r) {
                           fixed(st.max_abs_z_corrected, 2) + " for " + fmt(st.q_eff, 3) +
                           " independent frames per quarter and a common level varying by " +
                           fmt(100 * std::sqrt(st.common_variance), 2) + " %");
+        line("level", "frame variance " + fmt(st.level.mean, 4) + ": trend z " +
+                          fixed(st.level.z_trend, 2) + ", " + std::to_string(st.level.blocks) +
+                          " block means chi2 " + fixed(st.level.chi2, 1) + " on " +
+                          std::to_string(st.level.dof) + " dof (z " + fixed(st.level.z_blocks, 2) +
+                          "); covariance: " + st.level_model);
     }
 
     if (r.theory) {
@@ -741,7 +774,7 @@ std::string to_text(const AnalysisResult& r) {
               << (T.spectrum ? T.spectrum->not_judged : T.no_spectrum) << ")\n";
     }
     if (st.available)
-        o << "stationary: " << yes_no(st.stationary) << " (" << stationarity_verdict(st) << ")\n";
+        o << "stationary: " << verdict_word(st) << " (" << stationarity_verdict(st) << ")\n";
     else
         o << "stationary: n/a (" << st.reason << ")\n";
     if (r.structure) {
@@ -928,7 +961,9 @@ std::string to_html(const AnalysisResult& r) {
         row("spectral drift", "max|z| " + fixed(st.drift.max_abs_z, 2) + " (independent frames), " +
                                   fixed(st.max_abs_z_corrected, 2) + " for " + fmt(st.q_eff, 3) +
                                   " independent frames per quarter");
-        row("stationary", verdict(st.stationary) + " &mdash; " + esc(stationarity_verdict(st)));
+        row("stationary", (st.verdict == "inconclusive" ? "<span class=\"na\">inconclusive</span>"
+                                                        : verdict(st.stationary)) +
+                              " &mdash; " + esc(stationarity_verdict(st)));
     } else {
         row("stationary", "<span class=\"na\">n/a</span> (" + esc(st.reason) + ")");
     }

@@ -309,6 +309,8 @@ TimeCorrelation scene_time_correlation(const scenes::Scene& scene, size_t n, siz
     for (size_t l = 0; l < n; ++l) r2[l] = r[l] * r[l];
     TimeCorrelation tc;
     tc.source = "scene";
+    tc.r2 = r2;
+    tc.r4 = r4;
     tc.n_eff_mean = effective_frames(n, r);
     tc.n_eff_variance = tc.n_eff_spectrum = effective_frames(n, r2);
     tc.n_eff_population = effective_frames(n, r4);
@@ -423,6 +425,8 @@ TheoryComparison compare_with_theory(const scenes::Scene& scene, const std::stri
     // Gaussian field, plus the fourth cumulant lambda E[a^4] E[w^4] (int h^2)^2 / N of shot noise.
     double s2 = 0;
     for (size_t i = 1; i < grid.size(); ++i) s2 += grid[i] * grid[i];
+    T.frame_variance_gaussian = 2.0 * s2 / (N * N);
+    T.frame_variance_population = K4 / N;
     T.sd_frame_variance = std::sqrt(2.0 * s2 / (N * N) + K4 / N);
     T.sd_variance =
         std::sqrt(2.0 * s2 / (N * N) / tc.n_eff_variance + K4 / N / tc.n_eff_population);

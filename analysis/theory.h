@@ -17,11 +17,6 @@ namespace impulse::analysis {
 
 inline constexpr double kFamilyAlpha = 0.01;  ///< family-wise false-alarm rate of the max|z| tests
 inline constexpr double kZLimit = 4.0;        ///< |z| limit for mean, variance and the trend t
-/// Variance inflation of an average of Hann-windowed periodogram bins: the DFT-even Hann window
-/// makes neighbouring bins correlate with coefficients (1, -2/3, 1/6) per axis, so a sum of bins
-/// has sum rho^2 = 35/18 times the variance per axis (Percival & Walden 1993 ch. 6). Using the
-/// 2-D product is conservative for one-bin-wide annuli (radial neighbours fall outside).
-inline constexpr double kHannInflation = (35.0 / 18.0) * (35.0 / 18.0);
 
 /// printf("%.*g", digits, v).
 std::string format_number(double v, int digits);
@@ -40,6 +35,10 @@ struct TimeCorrelation {
     double n_eff_population = 1;  ///< for the impulse-count (fourth-cumulant) fluctuations
     double q_eff = 1, q_eff_population = 1;  ///< the same for each quarter of the drift test
     bool converged = true;
+    /// From the scene: the correlation at lags 0..n-1 of the field squared (periodogram bins,
+    /// the Gaussian part of the frame variance) and of the impulse population (fourth power of
+    /// the envelope); empty otherwise.
+    std::vector<double> r2, r4;
 };
 
 /// From the scene: without flow a layer's field at lags of l frames correlates as its envelope,
