@@ -200,12 +200,19 @@ struct Tau {
     double tau = 1.0;
     bool converged = true;  ///< false: still correlated at half the series length
 };
-Tau integrated_time(const std::vector<std::vector<double>>& series) {
+Tau integrated_time(const std::vector<std::vector<double>>& series, bool detrend = true) {
     Tau t;
     if (series.empty() || series.front().size() < 4) return t;
     const size_t n = series.front().size();
     std::vector<std::vector<double>> dev;
-    for (const auto& s : series) dev.push_back(detrended(s));
+    for (const auto& s : series) {
+        dev.push_back(detrend ? detrended(s) : s);
+        if (!detrend) {
+            double mean = 0;
+            for (double v : s) mean += v / double(s.size());
+            for (double& v : dev.back()) v -= mean;
+        }
+    }
     double g0 = 0;
     for (const auto& d : dev)
         for (double v : d) g0 += v * v;
@@ -333,7 +340,9 @@ LevelModel level_model(const std::vector<double>& v, const TimeCorrelation& tc,
         m.source = "scene correlation, variance from the frames";
         return m;
     }
-    const double tau = integrated_time({v}).tau;
+    // Not detrended: removing a line takes the slow part of the correlation with it, and the
+    // AR(1) then underestimates the slope's error (2 of 24 still seeds were called drifting).
+    const double tau = integrated_time({v}, false).tau;
     const double phi = (tau - 1.0) / (tau + 1.0);  // tau = (1 + phi) / (1 - phi)
     m.rho.assign(1, 1.0);
     while (m.rho.size() < n && m.rho.back() * phi > 1e-6) m.rho.push_back(m.rho.back() * phi);

@@ -51,18 +51,6 @@ Censored censored_normal(double a, double b) {
     return c;
 }
 
-/// (1/T) int_0^T w(a)^4 da of an envelope, by the midpoint rule (exact for the Hann envelope,
-/// a trigonometric polynomial of degree 8, with more than 8 points).
-double envelope_fourth_mean(sim::Envelope e, double T) {
-    const int n = 4096;
-    double s = 0;
-    for (int i = 0; i < n; ++i) {
-        const double w = sim::envelope_weight(e, (i + 0.5) * T / n, T);
-        s += w * w * w * w;
-    }
-    return s / n;
-}
-
 /// Temporal correlation of a layer without flow at lag dt: int w(a)^p w(a + dt)^p da /
 /// int w^2p. p = 1: the field (the time half of the space-time covariance, design.md §1);
 /// p = 2: the impulse population's fourth-cumulant term, E[a^4 w^4].
@@ -388,7 +376,7 @@ TheoryComparison compare_with_theory(const scenes::Scene& scene, const std::stri
         any_animated = any_animated || animated;
         const double W2 =
             animated ? sim::envelope_sq_integral(p.envelope, p.lifetime_s) / p.lifetime_s : 1.0;
-        const double W4 = animated ? envelope_fourth_mean(p.envelope, p.lifetime_s) : 1.0;
+        const double W4 = animated ? sim::envelope_fourth_integral(p.envelope, p.lifetime_s) / p.lifetime_s : 1.0;
         const double lambda_px = p.intensity / (T.zoom * T.zoom);
         const double lv = scenes::layer_theory(layer).variance;
         // Cov(P(k), P(k')) gains lambda_px N E[a^4 w^4] |H|^2 |H'|^2 / N^2 = c S(k) S(k') for a

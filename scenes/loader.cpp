@@ -25,6 +25,24 @@
 namespace impulse::scenes {
 namespace {
 
+/// Below this many impulses overlapping where the kernel has its energy (scenes::layer_moments,
+/// docs/scenes.md "Density, overlap and kurtosis") the field is lumpy: excess kurtosis above 6
+/// with normal amplitudes.
+constexpr double kMinEffectiveImpulses = 0.5;
+
+void warn_overlap(detail::Reader& r, const LayerConfig& L) {
+    const LayerMoments m = layer_moments(L);
+    if (!(m.effective_impulses < kMinEffectiveImpulses)) return;
+    std::ostringstream s;
+    s << std::setprecision(3) << "only " << m.effective_impulses
+      << " impulses overlap where the kernel has its energy (excess kurtosis "
+      << m.excess_kurtosis << "): lumpy noise; density >= "
+      << std::ceil(L.density.min() * kMinEffectiveImpulses / m.effective_impulses)
+      << " brings it to " << kMinEffectiveImpulses
+      << " (docs/scenes.md \"Density, overlap and kurtosis\")";
+    r.warn("density", s.str());
+}
+
 namespace fs = std::filesystem;
 using detail::Reader;
 using detail::Source;
@@ -781,6 +799,8 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base, Out
         compose.read_layer(r, i, L);
         if (L.density.min() < 1.0)
             r.warn("density", "below 1 impulse per kernel area the noise is lumpy, see Lewis 1989 §4.1");
+        else if (!L.source)
+            warn_overlap(r, L);
         r.finish();
         s.layers.push_back(std::move(L));
     }
