@@ -799,8 +799,8 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base, Out
         compose.read_layer(r, i, L);
         if (L.density.min() < 1.0)
             r.warn("density", "below 1 impulse per kernel area the noise is lumpy, see Lewis 1989 §4.1");
-        else if (!L.source)
-            warn_overlap(r, L);
+        else if (!L.source && L.kernel.type != kernels::KernelType::Sampled)
+            warn_overlap(r, L);  // sampled (designed) kernels have their own peakedness warning
         r.finish();
         s.layers.push_back(std::move(L));
     }
