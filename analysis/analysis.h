@@ -108,7 +108,44 @@ struct SpectralDrift {
     std::vector<double> z;
     std::vector<double> frequency;
 };
-SpectralDrift spectral_drift(std::span<const Image> early, std::span<const Image> late);
+/// With Window::Hann, each periodogram is windowed and the variance multiplied by
+/// kHannInflation.
+SpectralDrift spectral_drift(std::span<const Image> early, std::span<const Image> late,
+                             Window window = Window::None);
+
+/// Variance inflation of an average of Hann-windowed periodogram bins: the DFT-even Hann window
+/// makes neighbouring bins correlate with coefficients (1, -2/3, 1/6) per axis, so a sum of bins
+/// has sum rho^2 = 35/18 times the variance per axis (Percival & Walden 1993 ch. 6). Using the
+/// 2-D product is conservative for one-bin-wide annuli (radial neighbours fall outside).
+inline constexpr double kHannInflation = (35.0 / 18.0) * (35.0 / 18.0);
+
+/// Drift of the level of a correlated series x_0..x_{n-1} (analysis/level_drift.cpp), tested
+/// against the covariance it has when stationary, C(l) = variance rho(l) (rho(0) = 1, rho = 0
+/// beyond its size): the least-squares slope with its exact standard error under that C, and
+/// the means of `blocks` equal consecutive blocks (a remainder at the end dropped) against the
+/// last, chi^2 = y^T Cov(y)^-1 y with blocks - 1 degrees of freedom. A linear drift shows in the
+/// slope, a swing that comes and goes (a pulsing source) in the blocks. `variance_dof`: degrees
+/// of freedom of `variance` when it is estimated (infinity when known), so z_trend follows
+/// Student's t and chi2 an F distribution before both are mapped to standard normal deviates.
+/// Throws ValueError for fewer than 4 values, blocks outside [2, n] or variance <= 0.
+struct LevelDrift {
+    double mean = 0.0;
+    double slope = 0.0, sd_slope = 0.0;
+    double z_trend = 0.0;  ///< slope / sd_slope as a standard normal deviate (two-sided test)
+    int blocks = 0, dof = 0;
+    double chi2 = 0.0;
+    double z_blocks = 0.0;  ///< chi2 / dof as an upper standard normal deviate (one-sided test)
+    /// The linear change over the series (slope (n - 1)) the trend test detects with the given
+    /// power at two-sided level alpha.
+    double detectable_change = 0.0;
+};
+LevelDrift level_drift(std::span<const double> x, double variance, std::span<const double> rho,
+                       int blocks, double variance_dof, double alpha, double power);
+/// Student's t with `dof` degrees of freedom as a standard normal deviate of the same tail
+/// probability (Wallace 1959); dof = infinity: t itself.
+double student_to_normal(double t, double dof);
+/// F(d1, d2) as an upper standard normal deviate (Paulson 1942); d2 = infinity: chi^2_d1 / d1.
+double variance_ratio_to_normal(double F, double d1, double d2);
 
 /// Kolmogorov–Smirnov distance between the empirical CDF of `values` and a CDF given as a
 /// callable through a function pointer + context (keeps this header free of <functional>).

@@ -532,6 +532,10 @@ int run_info(const InfoOptions& opt) {
                     l.density.value(0.0), l.process.intensity, lt.variance,
                     l.process.lifetime_s > 0 ? " (animated)" : " (still)",
                     l.keyframed() ? " (keyframed)" : "", composition_text(l).c_str());
+        const auto lm = scenes::layer_moments(l);
+        std::printf("           overlap %.3g effective impulses, excess kurtosis %.3g%s\n",
+                    lm.effective_impulses, lm.excess_kurtosis,
+                    l.marginal ? " before shaping" : "");
     }
     std::printf("impulses   ~%.3g per frame, ~%.0f MiB\n", r.estimated_impulses(), r.estimated_memory_mib());
     return 0;

@@ -10,10 +10,11 @@
 //  * Gaussian with the layer's closed-form mean and variance (the default). Shot noise is a
 //    sum of many kernels, so it is close to Gaussian when each point is covered by many
 //    impulses: its excess kurtosis is E[a^4] int h^4 / (lambda E[a^2]^2 (int h^2)^2)
-//    (about 3 / density for a cosine kernel with normal amplitudes, 1 / density with +-1
-//    amplitudes), and the Kolmogorov distance between F_x and the Gaussian is about
-//    0.023 x that kurtosis (Edgeworth). Right at densities >= ~8 (normal amplitudes: KS error
-//    <~ 0.01), and always for the spectrum pre-correction, which models the field as Gaussian.
+//    (3 pi / density for a still cosine kernel with normal amplitudes, pi / density with +-1
+//    amplitudes; scenes::layer_moments), and the Kolmogorov distance between F_x and the
+//    Gaussian is about 0.023 x that kurtosis (Edgeworth): KS <~ 0.01 needs a kurtosis <~ 0.4
+//    (a cosine kernel with normal amplitudes at density >~ 24). Always used for the spectrum
+//    pre-correction, which models the field as Gaussian.
 //  * Empirical: F_x measured on a calibration sample of the layer's own values. Right at low
 //    density (< ~8), where the field is lumpy and skewed-tailed. It cannot undo atoms: a
 //    fraction exp(-density) of the plane has no impulse within reach and sits exactly at the

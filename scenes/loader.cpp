@@ -24,6 +24,24 @@
 namespace impulse::scenes {
 namespace {
 
+/// Below this many impulses overlapping where the kernel has its energy (scenes::layer_moments,
+/// docs/scenes.md "Density, overlap and kurtosis") the field is lumpy: excess kurtosis above 6
+/// with normal amplitudes.
+constexpr double kMinEffectiveImpulses = 0.5;
+
+void warn_overlap(detail::Reader& r, const LayerConfig& L) {
+    const LayerMoments m = layer_moments(L);
+    if (!(m.effective_impulses < kMinEffectiveImpulses)) return;
+    std::ostringstream s;
+    s << std::setprecision(3) << "only " << m.effective_impulses
+      << " impulses overlap where the kernel has its energy (excess kurtosis "
+      << m.excess_kurtosis << "): lumpy noise; density >= "
+      << std::ceil(L.density.min() * kMinEffectiveImpulses / m.effective_impulses)
+      << " brings it to " << kMinEffectiveImpulses
+      << " (docs/scenes.md \"Density, overlap and kurtosis\")";
+    r.warn("density", s.str());
+}
+
 namespace fs = std::filesystem;
 using detail::Reader;
 using detail::Source;
@@ -795,6 +813,8 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base, Out
         detail::read_dispersion(r, L, twins, [&] { return read_flows(r, p, base, compose, i); });
         if (L.density.min() < 1.0)
             r.warn("density", "below 1 impulse per kernel area the noise is lumpy, see Lewis 1989 §4.1");
+        else if (!L.source && L.kernel.type != kernels::KernelType::Sampled)
+            warn_overlap(r, L);  // sampled (designed) kernels have their own peakedness warning
         r.finish();
         s.layers.push_back(std::move(L));
     }

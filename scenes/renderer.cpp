@@ -130,6 +130,28 @@ Theory layer_theory(const LayerConfig& layer, double t_s) {
     return unshaped_theory(layer, t);
 }
 
+LayerMoments layer_moments(const LayerConfig& layer, double t_s) {
+    LayerMoments m;
+    if (layer.source) return m;
+    const double t = layer.layer_time(t_s);
+    const kernels::Kernel k(layer.kernel_keys.empty() ? layer.kernel : layer.kernel_at(t));
+    const auto& p = layer.process;
+    // Campbell: kappa_n = lambda E[a^n] E[w^n] int h^n, so kappa_4 / kappa_2^2 =
+    // (E[a^4] / E[a^2]^2) (E[w^4] / E[w^2]^2) / (lambda (int h^2)^2 / int h^4). The last is the
+    // number of live impulses within the kernel's effective area (int h^2)^2 / int h^4.
+    double lambda = p.intensity;
+    if (p.lifetime_s > 0) lambda *= birth_weight(p, t) / (sim::envelope_sq_integral(p.envelope, p.lifetime_s) / p.lifetime_s);
+    const double area = k.integral_sq() * k.integral_sq() / k.integral_4();
+    const double ea2 = sim::amplitude_second_moment(p.amplitude);
+    const double wfac = p.lifetime_s > 0
+                            ? sim::envelope_fourth_integral(p.envelope, p.lifetime_s) * p.lifetime_s /
+                                  std::pow(sim::envelope_sq_integral(p.envelope, p.lifetime_s), 2)
+                            : 1.0;
+    m.effective_impulses = lambda * area / wfac;
+    m.excess_kurtosis = sim::amplitude_fourth_moment(p.amplitude) / (ea2 * ea2) / m.effective_impulses;
+    return m;
+}
+
 Theory scene_theory(const Scene& scene, double t_s) {
     // The visible layers blended in order onto the empty (zero) picture, each independent of
     // the result before it, at frame time t_s; the weights at their largest over the animation

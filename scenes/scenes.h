@@ -234,6 +234,17 @@ Scene load_scene_string(std::string_view text, const std::string& name,
 /// a keyframed density acts through the births of the last lifetime. A shaped layer has its
 /// target's moments at t.
 Theory layer_theory(const LayerConfig& layer, double t_s = 0.0);
+/// Higher moments of an impulse layer before shaping (Campbell's cumulants, design.md §1):
+/// `effective_impulses` = lambda (int h^2)^2 / int h^4 x E[w^2]^2 / E[w^4], the live impulses
+/// that overlap at a point (the "10 or more" of Lewis 1989 §4.1: a peaked kernel's effective
+/// area is much smaller than its truncation disc), and the field's excess kurtosis
+/// (E[a^4] / E[a^2]^2) / effective_impulses: 3 pi / density for a still cosine layer with normal
+/// amplitudes. Zero for source layers.
+struct LayerMoments {
+    double effective_impulses = 0.0;
+    double excess_kurtosis = 0.0;
+};
+LayerMoments layer_moments(const LayerConfig& layer, double t_s = 0.0);
 /// The composed result's mean and variance at frame time t_s: the visible layers blended in
 /// order, each independent of the others (exact for add and multiply; max, min and over with an
 /// alpha range in the Gaussian approximation, see docs/scenes.md "Composition"). Sums add means

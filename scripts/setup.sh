@@ -7,7 +7,7 @@ cd "$(dirname "$0")/.."
 
 packages=(build-essential cmake pkg-config libeigen3-dev libtbb-dev libopenimageio-dev
           libavformat-dev libavcodec-dev libavutil-dev libswscale-dev catch2
-          libtomlplusplus-dev libcli11-dev librandom123-dev libfftw3-dev parallel
+          libtomlplusplus-dev libcli11-dev librandom123-dev libfftw3-dev nlohmann-json3-dev parallel
           openimageio-tools slurm-wlm munge libopenvdb-dev libboost-dev webp
           # the Python module (build/python/) and its tests; the preview server and its
           # browser test

@@ -62,6 +62,9 @@ double envelope_weight(Envelope e, double age, double T) {
 
 double envelope_sq_integral(Envelope e, double T) { return e == Envelope::Box ? T : 0.375 * T; }
 double envelope_integral(Envelope e, double T) { return e == Envelope::Box ? T : 0.5 * T; }
+double envelope_fourth_integral(Envelope e, double T) {
+    return e == Envelope::Box ? T : 35.0 / 128.0 * T;  // int sin^8 over a period: 35/128
+}
 
 void Impulses::clear() {
     x.clear();

@@ -46,6 +46,8 @@ double envelope_weight(Envelope e, double age_s, double lifetime_s);
 double envelope_sq_integral(Envelope e, double lifetime_s);
 /// int_0^T w dt: hann T/2, box T.
 double envelope_integral(Envelope e, double lifetime_s);
+/// int_0^T w^4 dt: hann 35T/128, box T (the impulse population's fourth cumulant).
+double envelope_fourth_integral(Envelope e, double lifetime_s);
 
 // ---------------------------------------------------------------------------------------------
 // Flows

@@ -1,28 +1,20 @@
 // SPDX-License-Identifier: Apache-2.0
 // `impulse analyze` output: the text report, JSON, and a self-contained HTML page whose plots
-// are SVG drawn here (no scripts, no network), written atomically.
+// are SVG drawn here (no scripts, no network). JSON through nlohmann-json.
 
-#include <unistd.h>
+#include "analysis/report.h"
+
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
-#include <cstring>
-#include <filesystem>
-#include <fstream>
-#include <iostream>
 #include <numbers>
 #include <sstream>
+#include <type_traits>
 
-#include "app/analyze.h"
-#include "numeric/errors.h"
-#include "output/output.h"
-
-namespace impulse::app {
+namespace impulse::analysis {
 namespace {
-
-namespace fs = std::filesystem;
 
 std::string fmt(double v, int digits = 6) {
     if (std::isnan(v)) return "n/a";
@@ -79,98 +71,26 @@ std::string spectrum_threshold_text(const SpectrumTheory& s) {
            std::to_string(s.compared) + " annuli at family alpha 0.01";
 }
 
-std::string stationarity_verdict(const Stationarity& st) {
-    return "trend " + against("|t|", std::abs(st.trend.t), st.t_limit, 0) + "; drift " +
-           against("max|z|", st.max_abs_z_corrected, st.z_threshold, 2) +
-           ", Bonferroni limit for " + std::to_string(st.drift.z.size()) +
-           " annuli at family alpha 0.01; both must hold";
+/// "yes", "no" or "inconclusive" for a verdict.
+std::string verdict_word(const Stationarity& st) {
+    return st.verdict == "stationary" ? "yes" : st.verdict == "not stationary" ? "no" : "inconclusive";
 }
 
-// ---------------------------------------------------------------------------------------------
-// JSON
+std::string stationarity_verdict(const Stationarity& st) {
+    const auto& L = st.level;
+    return "level of the frame variance: trend " +
+           against("|z|", std::abs(L.z_trend), st.level_z_limit, 2) + ", " +
+           std::to_string(L.blocks) + " blocks " + against("z", L.z_blocks, st.blocks_z_limit, 2) +
+           "; spectral drift " + against("max|z|", st.max_abs_z_corrected, st.z_threshold, 2) +
+           " for " + std::to_string(st.drift.z.size()) +
+           " annuli; each test at alpha " + fmt(st.family_alpha / 3.0, 2) + ", family " +
+           fmt(st.family_alpha, 2) + "; a drift of the variance by " +
+           fixed(100.0 * st.detectable_drift, 0) + " % over the frames is seen with power " +
+           fixed(st.power, 1) + " (" + (st.detectable_drift <= st.drift_of_interest ? "<=" : ">") +
+           " the " + fixed(100.0 * st.drift_of_interest, 0) + " % asked for)";
+}
 
-class Json {
-public:
-    Json& key(const std::string& k) {
-        comma();
-        m_s << quote(k) << ':';
-        m_fresh = true;
-        return *this;
-    }
-    Json& open(char c) {
-        comma();
-        m_s << c;
-        m_fresh = true;
-        return *this;
-    }
-    Json& close(char c) {
-        m_s << c;
-        m_fresh = false;
-        return *this;
-    }
-    Json& num(double v) {
-        comma();
-        if (std::isfinite(v)) {
-            char buf[64];
-            std::snprintf(buf, sizeof buf, "%.17g", v);
-            m_s << buf;
-        } else {
-            m_s << "null";
-        }
-        return *this;
-    }
-    Json& integer(long long v) {
-        comma();
-        m_s << v;
-        return *this;
-    }
-    Json& boolean(bool b) {
-        comma();
-        m_s << (b ? "true" : "false");
-        return *this;
-    }
-    Json& null() {
-        comma();
-        m_s << "null";
-        return *this;
-    }
-    Json& str(const std::string& v) {
-        comma();
-        m_s << quote(v);
-        return *this;
-    }
-    template <class V>
-    Json& nums(const V& values) {
-        open('[');
-        for (const auto& v : values) num(static_cast<double>(v));
-        return close(']');
-    }
-    std::string text() const { return m_s.str(); }
-
-private:
-    void comma() {
-        if (!m_fresh) m_s << ',';
-        m_fresh = false;
-    }
-    static std::string quote(const std::string& s) {
-        std::string o = "\"";
-        for (unsigned char c : s) {
-            if (c == '"' || c == '\\') {
-                o += '\\';
-                o += static_cast<char>(c);
-            } else if (c < 0x20) {
-                char buf[8];
-                std::snprintf(buf, sizeof buf, "\\u%04x", c);
-                o += buf;
-            } else {
-                o += static_cast<char>(c);
-            }
-        }
-        return o + "\"";
-    }
-    std::ostringstream m_s;
-    bool m_fresh = true;
-};
+using Json = nlohmann::ordered_json;
 
 // ---------------------------------------------------------------------------------------------
 // SVG plots
@@ -624,16 +544,16 @@ std::vector<std::string> plots(const AnalysisResult& r) {
             out.push_back(svg_plot(p));
         };
         per_frame(
-            "Per-frame mean", "mean", [](const analysis::FrameStats& f) { return f.mean; },
+            "Per-frame mean", "mean", [](const FrameStats& f) { return f.mean; },
             T ? T->mean : NAN, T ? T->sd_frame_mean : 0.0, 0);
         per_frame(
             "Per-frame variance", "variance",
-            [](const analysis::FrameStats& f) { return f.variance; },
+            [](const FrameStats& f) { return f.variance; },
             T ? T->variance + T->sd_mean * T->sd_mean - T->sd_frame_mean * T->sd_frame_mean : NAN,
             T ? T->sd_frame_variance : 0.0, 0);
         per_frame(
             "Per-frame difference variance (frame - previous)", "variance of the difference",
-            [](const analysis::FrameStats& f) { return f.diff_variance; },
+            [](const FrameStats& f) { return f.diff_variance; },
             T && T->diff_variance ? *T->diff_variance : NAN, 0.0, 1);
     }
     if (r.stationarity.available) {
@@ -656,32 +576,112 @@ std::vector<std::string> plots(const AnalysisResult& r) {
     return out;
 }
 
-void write_atomically(const std::string& path, const std::string& text) {
-    const fs::path p(path);
-    const fs::path dir = p.parent_path();
-    std::error_code ec;
-    if (!dir.empty() && !fs::is_directory(dir, ec))
-        throw IoError(path + ": cannot write: directory " + dir.string() + " does not exist");
-    const fs::path tmp =
-        dir / ("." + p.filename().string() + ".partial-" + std::to_string(::getpid()));
-    {
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        if (!out) throw IoError(path + ": cannot write " + tmp.string());
-        errno = 0;
-        out << text;
-        out.close();  // close reports what a buffered write deferred
-        if (!out) {
-            const std::string why = errno ? std::strerror(errno) : "unknown error";
-            fs::remove(tmp, ec);
-            throw IoError(path + ": write failed: " + why);
+// ---------------------------------------------------------------------------------------------
+// JSON
+
+/// A finite number, or null (JSON has no NaN or infinity).
+Json num(double v) { return std::isfinite(v) ? Json(v) : Json(nullptr); }
+
+/// An array of numbers; integers stay integers, non-finite values become null.
+template <class V>
+Json nums(const V& values) {
+    Json a = Json::array();
+    for (const auto& v : values) {
+        if constexpr (std::is_integral_v<std::decay_t<decltype(v)>>)
+            a.push_back(v);
+        else
+            a.push_back(num(static_cast<double>(v)));
+    }
+    return a;
+}
+
+Json stationarity_json(const Stationarity& st) {
+    Json j{{"available", st.available}};
+    if (!st.available) {
+        j["reason"] = st.reason;
+        j["stationary"] = nullptr;
+        return j;
+    }
+    j["trend"] = {{"slope", num(st.trend.slope)},   {"stderr", num(st.trend.stderr_slope)},
+                  {"t", num(st.trend.t)},           {"blocks", st.trend_blocks},
+                  {"limit", num(st.t_limit)}};
+    j["spectral_drift"] = {{"quarter_frames", st.quarter},
+                           {"max_abs_z", num(st.drift.max_abs_z)},
+                           {"q_eff", num(st.q_eff)},
+                           {"common_level_relative_variance", num(st.common_variance)},
+                           {"max_abs_z_corrected", num(st.max_abs_z_corrected)},
+                           {"threshold", num(st.z_threshold)},
+                           {"z_corrected", nums(st.z_corrected)},
+                           {"frequency", nums(st.drift.frequency)},
+                           {"z", nums(st.drift.z)}};
+    j["level"] = {{"model", st.level_model},
+                  {"mean", num(st.level.mean)},
+                  {"slope", num(st.level.slope)},
+                  {"sd_slope", num(st.level.sd_slope)},
+                  {"z_trend", num(st.level.z_trend)},
+                  {"z_trend_limit", num(st.level_z_limit)},
+                  {"blocks", st.level.blocks},
+                  {"chi2", num(st.level.chi2)},
+                  {"dof", st.level.dof},
+                  {"z_blocks", num(st.level.z_blocks)},
+                  {"z_blocks_limit", num(st.blocks_z_limit)}};
+    j["family_alpha"] = num(st.family_alpha);
+    j["power"] = num(st.power);
+    j["detectable_drift"] = num(st.detectable_drift);
+    j["drift_of_interest"] = num(st.drift_of_interest);
+    j["verdict"] = st.verdict;
+    j["stationary"] = st.stationary;
+    return j;
+}
+
+Json theory_json(const TheoryComparison& T, const Moments& m) {
+    Json j{{"scene", T.scene}, {"hash", T.hash}, {"zoom", num(T.zoom)}, {"mapped", T.mapped}};
+    if (T.mapped) {
+        j["range"] = {num(T.map_lo), num(T.map_hi)};
+        j["clipped_fraction"] = num(T.clipped_fraction);
+    }
+    j["field_mean"] = num(T.field_mean);
+    j["field_variance"] = num(T.field_variance);
+    j["mean"] = {{"measured", num(m.mean)},  {"expected", num(T.mean)},
+                 {"sd", num(T.sd_mean)},     {"sd_frame", num(T.sd_frame_mean)},
+                 {"z", num(T.z_mean)},       {"limit", num(T.z_limit)},
+                 {"agrees", T.mean_agrees}};
+    j["variance"] = {{"measured", num(m.variance)}, {"expected", num(T.variance)},
+                     {"sd", num(T.sd_variance)},    {"sd_frame", num(T.sd_frame_variance)},
+                     {"z", num(T.z_variance)},      {"limit", num(T.z_limit)},
+                     {"agrees", T.variance_agrees}};
+    if (T.spectrum) {
+        const SpectrumTheory& S = *T.spectrum;
+        Json s{{"compared", S.compared}, {"max_abs_z", num(S.max_abs_z)},
+               {"threshold", num(S.threshold)}};
+        if (S.not_judged.empty()) {
+            s["agrees"] = S.agrees;
+        } else {
+            s["agrees"] = nullptr;
+            s["not_judged"] = S.not_judged;
         }
+        j["spectrum"] = s;
+    } else {
+        j["spectrum"] = nullptr;
+        j["no_spectrum"] = T.no_spectrum;
     }
-    fs::rename(tmp, p, ec);
-    if (ec) {
-        std::error_code ec2;
-        fs::remove(tmp, ec2);
-        throw IoError(path + ": cannot rename temporary file into place: " + ec.message());
-    }
+    j["diff_variance"] = T.diff_variance ? num(*T.diff_variance) : Json(nullptr);
+    return j;
+}
+
+Json structure_json(const StructureSummary& S) {
+    Json hurst = Json::array();
+    for (size_t s = 0; s < S.hurst.size(); ++s)
+        hurst.push_back({{"s", s},
+                         {"H", num(S.hurst[s])},
+                         {"stderr", num(S.hurst_stderr[s])},
+                         {"H_x", num(S.hurst_x[s])},
+                         {"H_y", num(S.hurst_y[s])},
+                         {"H_diagonal", num(S.hurst_diagonal[s])}});
+    return {{"lags", nums(S.lags)},     {"f", nums(S.f)},
+            {"fx", nums(S.fx)},         {"fy", nums(S.fy)},
+            {"diagonal", nums(S.diagonal)}, {"realizations", S.realizations},
+            {"hurst", hurst}};
 }
 
 }  // namespace
@@ -726,6 +726,11 @@ std::string to_text(const AnalysisResult& r) {
                           fixed(st.max_abs_z_corrected, 2) + " for " + fmt(st.q_eff, 3) +
                           " independent frames per quarter and a common level varying by " +
                           fmt(100 * std::sqrt(st.common_variance), 2) + " %");
+        line("level", "frame variance " + fmt(st.level.mean, 4) + ": trend z " +
+                          fixed(st.level.z_trend, 2) + ", " + std::to_string(st.level.blocks) +
+                          " block means chi2 " + fixed(st.level.chi2, 1) + " on " +
+                          std::to_string(st.level.dof) + " dof (z " + fixed(st.level.z_blocks, 2) +
+                          "); covariance: " + st.level_model);
     }
 
     if (r.theory) {
@@ -769,7 +774,7 @@ std::string to_text(const AnalysisResult& r) {
               << (T.spectrum ? T.spectrum->not_judged : T.no_spectrum) << ")\n";
     }
     if (st.available)
-        o << "stationary: " << yes_no(st.stationary) << " (" << stationarity_verdict(st) << ")\n";
+        o << "stationary: " << verdict_word(st) << " (" << stationarity_verdict(st) << ")\n";
     else
         o << "stationary: n/a (" << st.reason << ")\n";
     if (r.structure) {
@@ -840,158 +845,60 @@ std::string to_text(const AnalysisResult& r) {
 }
 
 std::string to_json(const AnalysisResult& r) {
-    Json j;
-    j.open('{');
-    j.key("input").str(r.input).key("kind").str(r.kind).key("values").str(r.raw ? "raw"
-                                                                                : "display");
-    j.key("bits").integer(r.bits).key("width").integer(r.width).key("height").integer(r.height);
-    j.key("frames").integer(r.frames).key("first_frame").integer(r.first_frame);
     const auto& m = r.moments;
-    j.key("moments").open('{').key("mean").num(m.mean).key("variance").num(m.variance);
-    j.key("skewness").num(m.skewness).key("excess_kurtosis").num(m.excess_kurtosis);
-    j.key("min").num(m.min).key("max").num(m.max).close('}');
-    j.key("histogram").open('{').key("lo").num(r.histogram.lo).key("hi").num(r.histogram.hi);
-    j.key("bins").integer(static_cast<long long>(r.histogram.counts.size()));
-    j.key("counts").nums(r.histogram.counts);
-    j.key("below").integer(static_cast<long long>(r.histogram.below));
-    j.key("above").integer(static_cast<long long>(r.histogram.above)).close('}');
     const auto& p = r.periodogram;
-    j.key("periodogram").open('{').key("window").str(p.window).key("periodic").boolean(p.periodic);
-    j.key("wrap_step_ratio").open('[').num(p.wrap_ratio_x).num(p.wrap_ratio_y).close(']');
-    j.key("total_power").num(p.total_power);
-    j.key("peak")
-        .open('{')
-        .key("fx")
-        .num(p.peak_fx)
-        .key("fy")
-        .num(p.peak_fy)
-        .key("power")
-        .num(p.peak_power)
-        .close('}');
-    j.key("centroid_cpp").num(p.centroid).key("anisotropy").num(p.anisotropy);
-    j.key("orientation_deg").num(p.orientation_deg).close('}');
-    j.key("radial_spectrum").open('{');
-    j.key("frequency").nums(r.spectrum.frequency).key("power").nums(r.spectrum.power);
-    j.key("count").nums(r.spectrum.count);
+    Json j{{"input", r.input},   {"kind", r.kind},     {"values", r.raw ? "raw" : "display"},
+           {"bits", r.bits},     {"width", r.width},   {"height", r.height},
+           {"frames", r.frames}, {"first_frame", r.first_frame}};
+    j["moments"] = {{"mean", num(m.mean)},
+                    {"variance", num(m.variance)},
+                    {"skewness", num(m.skewness)},
+                    {"excess_kurtosis", num(m.excess_kurtosis)},
+                    {"min", num(m.min)},
+                    {"max", num(m.max)}};
+    j["histogram"] = {{"lo", num(r.histogram.lo)},
+                      {"hi", num(r.histogram.hi)},
+                      {"bins", r.histogram.counts.size()},
+                      {"counts", nums(r.histogram.counts)},
+                      {"below", r.histogram.below},
+                      {"above", r.histogram.above}};
+    j["periodogram"] = {
+        {"window", p.window},
+        {"periodic", p.periodic},
+        {"wrap_step_ratio", {num(p.wrap_ratio_x), num(p.wrap_ratio_y)}},
+        {"total_power", num(p.total_power)},
+        {"peak", {{"fx", num(p.peak_fx)}, {"fy", num(p.peak_fy)}, {"power", num(p.peak_power)}}},
+        {"centroid_cpp", num(p.centroid)},
+        {"anisotropy", num(p.anisotropy)},
+        {"orientation_deg", num(p.orientation_deg)}};
+    Json radial{{"frequency", nums(r.spectrum.frequency)},
+                {"power", nums(r.spectrum.power)},
+                {"count", nums(r.spectrum.count)}};
     if (r.theory && r.theory->spectrum) {
         const auto& S = *r.theory->spectrum;
-        j.key("theory").nums(S.power).key("ratio").nums(S.ratio).key("z").nums(S.z);
+        radial["theory"] = nums(S.power);
+        radial["ratio"] = nums(S.ratio);
+        radial["z"] = nums(S.z);
     }
-    j.close('}');
-    j.key("autocovariance").open('{').key("max_lag").integer(r.max_lag);
-    j.key("value").nums(r.autocovariance);
+    j["radial_spectrum"] = radial;
+    Json acov{{"max_lag", r.max_lag}, {"value", nums(r.autocovariance)}};
     if (r.theory && !r.theory->autocovariance.empty())
-        j.key("theory").nums(r.theory->autocovariance);
-    j.close('}');
-    j.key("per_frame").open('{');
+        acov["theory"] = nums(r.theory->autocovariance);
+    j["autocovariance"] = acov;
     std::vector<double> a, b, c;
     for (const auto& f : r.frame_stats)
         a.push_back(f.mean), b.push_back(f.variance), c.push_back(f.diff_variance);
-    j.key("mean").nums(a).key("variance").nums(b).key("diff_variance").nums(c).close('}');
-    j.key("frame_correlation")
-        .open('{')
-        .key("source")
-        .str(r.tau_source)
-        .key("mean")
-        .num(r.tau_mean);
-    j.key("variance").num(r.tau_variance).key("spectrum").num(r.tau_spectrum).close('}');
-    const auto& st = r.stationarity;
-    j.key("stationarity").open('{').key("available").boolean(st.available);
-    if (st.available) {
-        j.key("trend")
-            .open('{')
-            .key("slope")
-            .num(st.trend.slope)
-            .key("stderr")
-            .num(st.trend.stderr_slope);
-        j.key("t")
-            .num(st.trend.t)
-            .key("blocks")
-            .integer(st.trend_blocks)
-            .key("limit")
-            .num(st.t_limit)
-            .close('}');
-        j.key("spectral_drift").open('{').key("quarter_frames").integer(st.quarter);
-        j.key("max_abs_z").num(st.drift.max_abs_z).key("q_eff").num(st.q_eff);
-        j.key("common_level_relative_variance").num(st.common_variance);
-        j.key("max_abs_z_corrected")
-            .num(st.max_abs_z_corrected)
-            .key("threshold")
-            .num(st.z_threshold);
-        j.key("z_corrected").nums(st.z_corrected);
-        j.key("frequency").nums(st.drift.frequency).key("z").nums(st.drift.z).close('}');
-        j.key("stationary").boolean(st.stationary);
-    } else {
-        j.key("reason").str(st.reason).key("stationary").null();
-    }
-    j.close('}');
-    j.key("theory");
-    if (r.theory) {
-        const auto& T = *r.theory;
-        j.open('{').key("scene").str(T.scene).key("hash").str(T.hash).key("zoom").num(T.zoom);
-        j.key("mapped").boolean(T.mapped);
-        if (T.mapped)
-            j.key("range")
-                .open('[')
-                .num(T.map_lo)
-                .num(T.map_hi)
-                .close(']')
-                .key("clipped_fraction")
-                .num(T.clipped_fraction);
-        j.key("field_mean").num(T.field_mean).key("field_variance").num(T.field_variance);
-        j.key("mean").open('{').key("measured").num(m.mean).key("expected").num(T.mean);
-        j.key("sd").num(T.sd_mean).key("sd_frame").num(T.sd_frame_mean).key("z").num(T.z_mean);
-        j.key("limit").num(T.z_limit).key("agrees").boolean(T.mean_agrees).close('}');
-        j.key("variance").open('{').key("measured").num(m.variance).key("expected").num(T.variance);
-        j.key("sd")
-            .num(T.sd_variance)
-            .key("sd_frame")
-            .num(T.sd_frame_variance)
-            .key("z")
-            .num(T.z_variance);
-        j.key("limit").num(T.z_limit).key("agrees").boolean(T.variance_agrees).close('}');
-        j.key("spectrum");
-        if (T.spectrum) {
-            j.open('{')
-                .key("compared")
-                .integer(T.spectrum->compared)
-                .key("max_abs_z")
-                .num(T.spectrum->max_abs_z);
-            j.key("threshold").num(T.spectrum->threshold).key("agrees");
-            if (T.spectrum->not_judged.empty())
-                j.boolean(T.spectrum->agrees);
-            else
-                j.null().key("not_judged").str(T.spectrum->not_judged);
-            j.close('}');
-        } else {
-            j.null().key("no_spectrum").str(T.no_spectrum);
-        }
-        j.key("diff_variance");
-        if (T.diff_variance)
-            j.num(*T.diff_variance);
-        else
-            j.null();
-        j.close('}');
-    } else {
-        j.null();
-    }
-    if (r.structure) {
-        const auto& S = *r.structure;
-        j.key("structure").open('{').key("lags").nums(S.lags).key("f").nums(S.f);
-        j.key("fx").nums(S.fx).key("fy").nums(S.fy).key("diagonal").nums(S.diagonal);
-        j.key("realizations").integer(S.realizations).key("hurst").open('[');
-        for (size_t s = 0; s < S.hurst.size(); ++s)
-            j.open('{').key("s").integer(long(s)).key("H").num(S.hurst[s])
-                .key("stderr").num(S.hurst_stderr[s]).key("H_x").num(S.hurst_x[s])
-                .key("H_y").num(S.hurst_y[s]).key("H_diagonal").num(S.hurst_diagonal[s])
-                .close('}');
-        j.close(']').close('}');
-    }
-    j.key("notes").open('[');
-    for (const auto& n : r.notes) j.str(n);
-    j.close(']');
-    j.close('}');
-    return j.text() + "\n";
+    j["per_frame"] = {{"mean", nums(a)}, {"variance", nums(b)}, {"diff_variance", nums(c)}};
+    j["frame_correlation"] = {{"source", r.tau_source},
+                              {"mean", num(r.tau_mean)},
+                              {"variance", num(r.tau_variance)},
+                              {"spectrum", num(r.tau_spectrum)}};
+    j["stationarity"] = stationarity_json(r.stationarity);
+    j["theory"] = r.theory ? theory_json(*r.theory, m) : Json(nullptr);
+    if (r.structure) j["structure"] = structure_json(*r.structure);
+    j["notes"] = r.notes;
+    // Invalid UTF-8 in a path or a note is replaced rather than thrown on.
+    return j.dump(-1, ' ', false, Json::error_handler_t::replace) + "\n";
 }
 
 int html_plot_count(const AnalysisResult& r) {
@@ -1054,7 +961,9 @@ std::string to_html(const AnalysisResult& r) {
         row("spectral drift", "max|z| " + fixed(st.drift.max_abs_z, 2) + " (independent frames), " +
                                   fixed(st.max_abs_z_corrected, 2) + " for " + fmt(st.q_eff, 3) +
                                   " independent frames per quarter");
-        row("stationary", verdict(st.stationary) + " &mdash; " + esc(stationarity_verdict(st)));
+        row("stationary", (st.verdict == "inconclusive" ? "<span class=\"na\">inconclusive</span>"
+                                                        : verdict(st.stationary)) +
+                              " &mdash; " + esc(stationarity_verdict(st)));
     } else {
         row("stationary", "<span class=\"na\">n/a</span> (" + esc(st.reason) + ")");
     }
@@ -1088,24 +997,5 @@ std::string to_html(const AnalysisResult& r) {
     return o.str();
 }
 
-int run_analyze(const AnalyzeOptions& options) {
-    if (!options.variance_map.empty() && !output::is_image_path(options.variance_map))
-        throw ValueError("--variance-map " + options.variance_map + ": expected an image path "
-                         "(.exr for the raw variances)");
-    const AnalysisResult r = analyze_input(options);
-    if (!options.report.empty()) write_atomically(options.report, to_html(r));
-    if (r.variance_map) {
-        const auto& v = *r.variance_map;
-        const auto [lo, hi] = std::minmax_element(v.data.begin(), v.data.end());
-        output::write_image(options.variance_map, numeric::Frame{v.width, v.height, v.data},
-                            {*lo, *hi > *lo ? *hi : *lo + 1.0}, {{"analysis", "pixel variance"}},
-                            true);
-    }
-    if (!options.json_file.empty()) write_atomically(options.json_file, to_json(r));
-    std::cout << (options.json && options.json_file.empty() ? to_json(r) : to_text(r));
-    if (!options.report.empty() && !options.json) std::cout << "wrote " << options.report << "\n";
-    if (!options.json_file.empty()) std::cout << "wrote " << options.json_file << "\n";
-    return 0;
-}
 
-}  // namespace impulse::app
+}  // namespace impulse::analysis
