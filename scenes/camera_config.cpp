@@ -10,6 +10,7 @@
 
 #include "output/image_input.h"
 #include "scenes/camera_detail.h"
+#include "scenes/loader_detail.h"
 #include "numeric/errors.h"
 
 namespace impulse::scenes {
@@ -56,13 +57,6 @@ namespace detail {
 namespace {
 
 namespace fs = std::filesystem;
-const auto kPositive = [](double v) { return v > 0.0; };
-
-std::string num(double v) {
-    std::ostringstream s;
-    s << v;
-    return s.str();
-}
 
 }  // namespace
 
@@ -284,4 +278,33 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
 }
 
 }  // namespace detail
+namespace detail {
+
+CameraConfig read_camera(std::optional<Reader> r, int width, int height) {
+    CameraConfig c;
+    c.center_x = numeric::Keyframed(width / 2.0);
+    c.center_y = numeric::Keyframed(height / 2.0);
+    if (!r) return c;
+    r->refuse_keyframes("center");
+    if (auto ct = r->node("center")) {
+        if (ct->is_array()) {
+            auto p = r->pair("center", "[x, y] in texture units, each within +-1e12", detail::on_plane);
+            c.center_x = numeric::Keyframed((*p)[0]);
+            c.center_y = numeric::Keyframed((*p)[1]);
+        } else {
+            r->fail(ct, "center", "expected [x, y] in texture units");
+        }
+    }
+    if (r->has("center_x"))
+        c.center_x = r->keyframed("center_x", width / 2.0, detail::on_plane, detail::kOnPlane);
+    if (r->has("center_y"))
+        c.center_y = r->keyframed("center_y", height / 2.0, detail::on_plane, detail::kOnPlane);
+    c.zoom = r->keyframed("zoom", 1.0, kPositive, "a number > 0 (pixels per texture unit)");
+    detail::read_camera_view(*r, c, width, height);  // type, perspective, anti-aliasing
+    r->finish();
+    return c;
+}
+
+}  // namespace detail
+
 }  // namespace impulse::scenes

@@ -56,7 +56,7 @@ double correlation(const impulse::render::Frame& a, const impulse::render::Frame
 
 }  // namespace
 
-TEST_CASE("render --size renders the same view at another resolution; --crop crops", "[cli][size]") {
+TEST_CASE("render --size renders the same view at another resolution and --crop crops", "[cli][size]") {
     TempDir dir("size");
     write_file(dir / "flat.toml", kFlat);
     const std::string scene = quote(dir / "flat.toml");

@@ -127,7 +127,7 @@ TEST_CASE("the lognormal translation map matches its closed form to 1e-6", "[ker
         }
 }
 
-TEST_CASE("target distributions: quantiles invert the CDFs in both tails; g is monotone",
+TEST_CASE("target distributions: quantiles invert the CDFs in both tails and g is monotone",
           "[kernels][shaping]") {
     for (const auto& p : all_targets()) {
         const K::Distribution d(p);

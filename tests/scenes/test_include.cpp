@@ -133,7 +133,7 @@ TEST_CASE("paths in an included file resolve from that file's directory", "[scen
                StartsWith(dir / "direct.toml:3:") && Contains("image = \"values.exr\": cannot read"));
 }
 
-TEST_CASE("errors in included files name them; cycles and missing files are refused",
+TEST_CASE("errors in included files name them, and cycles and missing files are refused",
           "[scenes][include]") {
     test::TempDir dir("include");
     fs::create_directories(dir.path() / "sub");

@@ -87,5 +87,5 @@ TEST_CASE("solid layer: bad input is refused at the key", "[scenes][solid][error
     fails_with(base + "[layer.solid]\nrate = 1\n", "set dims = 4");
     fails_with(base + "[layer.solid]\nkernel = \"gabor\"\n", "cosine, gaussian");
     fails_with(base + "density = 4.0\n", "a solid layer has no density");
-    fails_with("[[layer]]\nsource = \"solidish\"\n", "impulses, fbm, solid");
+    fails_with("[[layer]]\nsource = \"solidish\"\n", "impulses, fbm, subdivision, solid");
 }

@@ -1,0 +1,47 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// The readers of a scene file's sections (internal to impulse::scenes), one file each, called by
+// read_scene (loader.cpp): a layer's kernel (kernel_config.cpp), its flows (flow_config.cpp), a
+// layer drawn by another synthesizer (source_config.cpp), the camera (camera_config.cpp); the
+// shading, marginal, region, composition, orientation and transform readers have their own
+// headers.
+
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "scenes/compose_detail.h"
+#include "scenes/reader.h"
+#include "scenes/scenes.h"
+
+namespace impulse::scenes::detail {
+
+inline const auto kPositive = [](double v) { return v > 0.0; };
+inline const auto kNonNegative = [](double v) { return v >= 0.0; };
+
+/// A number as a person writes it (30, 2.5), for messages.
+std::string num(double v);
+/// Mix the scene-wide seed into a layer's seed (splitmix64 finaliser).
+uint64_t mix_seed(uint64_t global, uint64_t layer);
+
+/// The [layer.kernel] table; keyframed fields go to `keys` (their values at t = 0 into the
+/// result). `pyramid`: the camera anti-aliases through a kernel pyramid, built once per layer,
+/// so only the orientation (a rotation of every impulse) may vary in time.
+kernels::KernelParams read_kernel(std::optional<Reader> r, Reader& layer,
+                                  const std::filesystem::path& base, std::vector<KernelKey>& keys,
+                                  bool pyramid);
+/// The layer's [[layer.flow]] tables summed into one flow (null without any); type "layer"
+/// flows are handed to `compose` (another layer's field, set by the renderer).
+std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& process,
+                                      const std::filesystem::path& base,
+                                      CompositionReader& compose, size_t index);
+/// A [[layer]] drawn by another synthesizer (source = "fbm", "subdivision", "solid").
+void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const std::filesystem::path& base,
+                       const Limits& limits, CompositionReader& compose, LayerConfig& L);
+/// The [camera] table (absent: the orthographic default framing a width x height output).
+CameraConfig read_camera(std::optional<Reader> r, int width, int height);
+
+}  // namespace impulse::scenes::detail
