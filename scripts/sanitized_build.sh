@@ -20,6 +20,8 @@ fi
 build=build-asan
 launcher=()
 command -v ccache > /dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+# paths inside the checkout hashed relative to it, so clones at other paths share the cache
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"
 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCMAKE_CXX_COMPILER=clang++ \
     -DIMPULSE_FUZZ=ON -DIMPULSE_BUILD_BENCH=OFF "${launcher[@]}" > "$build.log" 2>&1 \
     || { cat "$build.log"; exit 1; }

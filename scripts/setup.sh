@@ -26,5 +26,11 @@ fi
 
 [ "${1:-}" = "--deps-only" ] && exit 0
 
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release > build.log 2>&1 || { cat build.log; exit 1; }
+# ccache, when the machine has it, makes a rebuild of an unchanged tree (a fresh clone in CI) fast.
+launcher=()
+command -v ccache > /dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
+# paths inside the checkout hashed relative to it, so clones at other paths share the cache
+export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$PWD}"
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release "${launcher[@]}" > build.log 2>&1 \
+    || { cat build.log; exit 1; }
 cmake --build build -j"$(nproc)" >> build.log 2>&1 || { tail -50 build.log; exit 1; }
