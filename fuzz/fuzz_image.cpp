@@ -21,7 +21,7 @@
 
 #include <OpenImageIO/imageio.h>
 
-#include "render/render.h"
+#include "output/output.h"
 #include "output/video.h"
 #include "scenes/scenes.h"
 #include "numeric/errors.h"
@@ -29,7 +29,7 @@
 namespace {
 
 namespace fs = std::filesystem;
-namespace R = impulse::render;
+namespace R = impulse::output;
 
 constexpr std::array<const char*, 8> kExtensions = {".exr", ".png", ".tif", ".jpg",
                                                      ".mp4", ".mkv", ".mov", ".webm"};
