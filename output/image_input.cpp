@@ -3,12 +3,14 @@
 
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <fstream>
 
 namespace impulse::output {
 namespace {
 
 constexpr std::array<unsigned char, 4> kExrMagic = {0x76, 0x2f, 0x31, 0x01};
+constexpr std::array<unsigned char, 8> kPngMagic = {0x89, 'P', 'N', 'G', 0x0d, 0x0a, 0x1a, 0x0a};
 constexpr uint32_t kLongNames = 0x400, kMultiPart = 0x1000;
 
 /// A null-terminated header string of at most `max` characters; false when the file ends or
@@ -72,8 +74,36 @@ std::string exr_header_problem(const std::string& path) {
     }
 }
 
+std::string png_chunk_problem(const std::string& path) {
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    if (!in) return "";
+    const uint64_t file_size = uint64_t(in.tellg());
+    in.seekg(0);
+    std::array<unsigned char, 8> magic{};
+    in.read(reinterpret_cast<char*>(magic.data()), 8);
+    if (!in || magic != kPngMagic) return "";
+    // Chunks: big-endian uint32 length, 4-byte type, data, 4-byte CRC; up to IEND.
+    for (;;) {
+        std::array<unsigned char, 8> head{};
+        in.read(reinterpret_cast<char*>(head.data()), 8);
+        if (!in) return "";  // the end of the file: libpng says what is missing
+        const uint32_t length = uint32_t(head[0]) << 24 | uint32_t(head[1]) << 16 |
+                                uint32_t(head[2]) << 8 | uint32_t(head[3]);
+        std::string type(reinterpret_cast<const char*>(head.data()) + 4, 4);
+        for (char& c : type)
+            if (!std::isalpha(static_cast<unsigned char>(c))) c = '?';
+        const uint64_t left = file_size - uint64_t(in.tellg());
+        if (uint64_t(length) + 4 > left)
+            return "PNG chunk '" + type + "' declares " + std::to_string(length) +
+                   " bytes, more than the " + std::to_string(left) + " left in the file";
+        if (type == "IEND") return "";
+        in.seekg(std::streamoff(length) + 4, std::ios::cur);
+    }
+}
+
 std::unique_ptr<OIIO::ImageInput> open_image_input(const std::string& path, std::string& error) {
     error = exr_header_problem(path);
+    if (error.empty()) error = png_chunk_problem(path);
     if (!error.empty()) return nullptr;
     auto in = OIIO::ImageInput::open(path);
     if (!in) {

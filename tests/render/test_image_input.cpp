@@ -50,6 +50,18 @@ std::string exr_header(uint32_t version, int32_t declared, size_t actual) {
     return e;
 }
 
+/// A PNG: the signature, an IHDR chunk of a 6 x 5 grey image, then a text chunk whose length
+/// field says `declared` while 16 bytes follow (CRCs not checked: the file is refused first).
+std::string png_with_text_chunk(uint32_t declared) {
+    std::string p = "\x89PNG\r\n\x1a\n";
+    auto be32 = [&](uint32_t v) {
+        for (int i = 3; i >= 0; --i) p += char(v >> (8 * i) & 0xff);
+    };
+    be32(13), p += "IHDR", be32(6), be32(5), p += std::string("\x08\x00\x00\x00\x00", 5), be32(0);
+    be32(declared), p += "tEXt", p += std::string(16, 'x');
+    return p;
+}
+
 }  // namespace
 
 TEST_CASE("an image whose header claims more than the size limit is refused before reading",
@@ -98,4 +110,22 @@ TEST_CASE("an EXR header declaring an attribute larger than the file is refused 
     CHECK(exr_header_problem(good).empty());
     CHECK(exr_header_problem(text).empty());
     CHECK(impulse::output::read_image(good).width == 4);
+}
+
+// A fuzzing finding (fuzz_image, probe_image of a .png): libpng allocates a chunk's declared
+// length before reading it; a 322-byte file asked for 1.97 GB. The chunks are walked first.
+TEST_CASE("a PNG chunk declaring more bytes than the file holds is refused before reading",
+          "[render][errors]") {
+    impulse::test::TempDir dir;
+    const std::string hostile = dir / "hostile.png", good = dir / "good.png";
+    impulse::test::write_file(hostile, png_with_text_chunk(1970012254u));
+    CHECK_THAT(impulse::output::png_chunk_problem(hostile),
+               Contains("PNG chunk 'tEXt' declares 1970012254 bytes, more than the 16 left"));
+    CHECK_THROWS_WITH(impulse::output::probe_image(hostile),
+                      Contains("hostile.png: PNG chunk 'tEXt' declares"));
+    impulse::numeric::Frame f;
+    f.resize(6, 5);
+    impulse::output::write_image(good, f, {}, {{"scene", "metadata in a text chunk"}});
+    CHECK(impulse::output::png_chunk_problem(good).empty());
+    CHECK(impulse::output::read_image(good).width == 6);
 }
