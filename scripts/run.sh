@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Sets everything up, then renders the default scene (flowing clouds) to out/clouds.mp4.
+# Sets everything up, then renders the default scene (drift: flowing clouds) to out/drift.mp4.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
