@@ -94,7 +94,8 @@ std::string png_chunk_problem(const std::string& path) {
             if (!std::isalpha(static_cast<unsigned char>(c))) c = '?';
         const uint64_t left = file_size - uint64_t(in.tellg());
         if (uint64_t(length) + 4 > left)
-            return "PNG chunk '" + type + "' declares " + std::to_string(length) +
+            return "truncated or hostile PNG: chunk '" + type + "' declares " +
+                   std::to_string(length) +
                    " bytes, more than the " + std::to_string(left) + " left in the file";
         if (type == "IEND") return "";
         in.seekg(std::streamoff(length) + 4, std::ios::cur);

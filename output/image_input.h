@@ -20,7 +20,7 @@ namespace impulse::output {
 /// each declared size is held against the bytes that remain.
 std::string exr_header_problem(const std::string& path);
 
-/// The same for PNG: "" when the bytes at `path` are not a PNG file or every chunk's declared
+/// The same for PNG ("truncated or hostile PNG: chunk ..."): "" when the bytes at `path` are not a PNG file or every chunk's declared
 /// length fits in what follows it; else what is wrong. libpng allocates a chunk's declared
 /// length (up to 2^31 - 1) before reading it: fuzzing found a 322-byte file whose text chunk
 /// asked for 1.97 GB.

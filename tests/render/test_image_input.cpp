@@ -120,9 +120,10 @@ TEST_CASE("a PNG chunk declaring more bytes than the file holds is refused befor
     const std::string hostile = dir / "hostile.png", good = dir / "good.png";
     impulse::test::write_file(hostile, png_with_text_chunk(1970012254u));
     CHECK_THAT(impulse::output::png_chunk_problem(hostile),
-               Contains("PNG chunk 'tEXt' declares 1970012254 bytes, more than the 16 left"));
+               Contains("truncated or hostile PNG: chunk 'tEXt' declares 1970012254 bytes, "
+                        "more than the 16 left"));
     CHECK_THROWS_WITH(impulse::output::probe_image(hostile),
-                      Contains("hostile.png: PNG chunk 'tEXt' declares"));
+                      Contains("hostile.png: truncated or hostile PNG: chunk 'tEXt' declares"));
     impulse::numeric::Frame f;
     f.resize(6, 5);
     impulse::output::write_image(good, f, {}, {{"scene", "metadata in a text chunk"}});
