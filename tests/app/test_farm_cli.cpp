@@ -3,7 +3,7 @@
 // sequence is the video render makes directly (the display mapping travels in the frames'
 // metadata); the sbatch array script's tasks, run one by one by hand, write the frames one run
 // writes; gaps, mixed scenes and bad farm options are refused with one line and nothing written.
-// The same on a real Slurm: tests/farm/test_slurm.sh.
+// The same on a real Slurm: tests/cluster/test_slurm.sh.
 
 #include <catch2/catch.hpp>
 #include <filesystem>
