@@ -185,18 +185,24 @@ def test_orientation_from_an_array_is_the_constant_field():
 
 
 def test_the_gil_is_released_while_rendering():
-    # The main thread wakes every millisecond while another thread renders. With the GIL held
-    # through the render it could not run until the render returned (one gap as long as the
-    # render: measured 1.0 of it); released, its gaps stay short (the scheduler's, on a busy
-    # machine: measured 0.05 to 0.3 of the render at load 12).
+    # The main thread wakes every millisecond while another thread renders frame after frame.
+    # With the GIL held through a render it could not run until the render returned (each
+    # render one gap as long as itself: measured 1.0 of it); released, its gaps stay short (the
+    # scheduler's, on a busy machine: measured 0.05 to 0.3 of a render at load 12). A quiet
+    # machine renders a frame in ~80 ms, so the worker renders until 0.5 s have passed and the
+    # verdict is the median over renders: one late wake-up cannot decide it.
     scene = impulse.load_scene("drift", size=(2560, 1440))
     scene.render(0)  # warm up (kernel tables)
-    span = []
+    spans = []
 
     def work():
-        t0 = time.perf_counter()
-        scene.render(150)
-        span.extend([t0, time.perf_counter()])
+        start = time.perf_counter()
+        frame = 150
+        while time.perf_counter() - start < 0.5 or len(spans) < 3:
+            t0 = time.perf_counter()
+            scene.render(frame)
+            spans.append((t0, time.perf_counter()))
+            frame += 1
 
     rendering = threading.Thread(target=work)
     wakeups = []
@@ -205,9 +211,10 @@ def test_the_gil_is_released_while_rendering():
         wakeups.append(time.perf_counter())
         time.sleep(0.001)
     rendering.join()
-    t0, t1 = span
-    inside = [t for t in wakeups if t0 < t < t1]
-    longest = float(np.max(np.diff([t0] + inside + [t1])))
-    print(f"longest gap {longest * 1e3:.1f} ms of {(t1 - t0) * 1e3:.0f} ms rendering")
-    assert t1 - t0 > 0.1, "the render is too short to tell"
-    assert longest < 0.6 * (t1 - t0)
+    ratios = []
+    for t0, t1 in spans:
+        inside = [t for t in wakeups if t0 < t < t1]
+        ratios.append(float(np.max(np.diff([t0] + inside + [t1]))) / (t1 - t0))
+    median = float(np.median(ratios))
+    print(f"{len(spans)} renders, longest gap a median {median:.2f} of a render")
+    assert median < 0.6
