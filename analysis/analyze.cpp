@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // The analysis of frames behind `impulse analyze`: measure them with the estimators and compare
-// the measurements with the closed-form theory of a scene (Campbell's theorem, design.md §1,
-// analysis/theory.cpp) with tolerances derived from each estimator's sampling error
-// (design.md §5).
+// the measurements with the closed-form theory of a scene (Campbell's theorem, design.md §1;
+// stated by scenes/closed_form.cpp, passed in as an analysis::ClosedForm) with tolerances
+// derived from each estimator's sampling error (design.md §5).
 
 #include "analysis/analyze.h"
 
@@ -16,13 +16,10 @@
 #include <numbers>
 #include <span>
 #include <sstream>
+#include <stdexcept>
+#include <tuple>
 
 #include "analysis/theory.h"
-#include "kernels/kernels.h"
-#include "output/output.h"
-#include "render/render.h"
-#include "scenes/scenes.h"
-#include "sim/sim.h"
 #include "numeric/errors.h"
 #include "numeric/gaussian.h"
 
@@ -367,8 +364,10 @@ StructureSummary structure_of(std::span<const Image> frames) {
 
 // ---------------------------------------------------------------------------------------------
 
-AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& opt,
-                              const std::string& kind, bool raw, int bits, long long first_frame) {
+namespace {
+
+void check_frames(const std::vector<Image>& frames, const AnalyzeOptions& opt,
+                  long long first_frame) {
     if (frames.empty()) throw ValueError(opt.input + ": no frames to analyse");
     const int w = frames.front().width, h = frames.front().height;
     if (w < kMinSize || h < kMinSize)
@@ -388,73 +387,52 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
                              " has " + std::to_string(bad) +
                              " non-finite values (NaN or infinity)");
     }
+}
 
-    AnalysisResult R;
-    R.input = opt.input;
-    R.kind = kind;
-    R.raw = raw;
-    R.bits = bits;
-    R.width = w;
-    R.height = h;
-    R.frames = static_cast<int>(frames.size());
-    R.first_frame = first_frame;
-    const size_t n = frames.size();
-
-    // Scene first: a display input is mapped back to field values before anything is measured.
-    std::optional<scenes::Scene> scene;
-    std::string scene_path;
+/// Display values in [0, 1] mapped back to the field values [lo, hi] they stand for.
+struct DisplayMapping {
     bool mapped = false;
-    double lo = 0, hi = 1, clipped = 0;
-    if (!opt.scene.empty()) {
-        scene_path = scenes::resolve_scene(opt.scene);
-        scene = scenes::load_scene(scene_path, opt.sets);
-        for (const auto& wmsg : scene->warnings) R.notes.push_back(wmsg);
-        if (!raw) {
-            const output::ValueMapping m = scenes::Renderer(*scene).mapping();
-            lo = m.lo, hi = m.hi;
-            mapped = true;
-            size_t at_edge = 0;
-            for (Image& f : frames)
-                for (float& v : f.data) {
-                    at_edge += (v <= 0.0f || v >= 1.0f);
-                    v = static_cast<float>(lo + double(v) * (hi - lo));
-                }
-            clipped = double(at_edge) / (double(n) * w * h);
+    double lo = 0, hi = 1;
+    double clipped = 0;  ///< share of the values at 0 or 1
+};
+DisplayMapping map_display_values(std::vector<Image>& frames, const ClosedForm& theory) {
+    DisplayMapping m;
+    std::tie(m.lo, m.hi) = theory.display_range();
+    m.mapped = true;
+    size_t at_edge = 0, count = 0;
+    for (Image& f : frames) {
+        count += f.data.size();
+        for (float& v : f.data) {
+            at_edge += (v <= 0.0f || v >= 1.0f);
+            v = static_cast<float>(m.lo + double(v) * (m.hi - m.lo));
         }
-    } else if (!opt.sets.empty()) {
-        throw ValueError("--set " + opt.sets.front() + ": needs --scene");
     }
-    // The closed forms below (spectra, correlation in time, fourth cumulants) are those of a sum
-    // of layers; a scene that composes them otherwise is measured without them.
-    const bool theory = scene && scenes::is_sum_of_layers(*scene);
-    if (scene && !theory)
-        R.notes.push_back(
-            "the scene composes its layers (blend, opacity, visible or warp, docs/scenes.md "
-            "\"Composition\"): the theory here covers sums of layers, so no comparison with it; "
-            "the display range still maps the values back");
+    m.clipped = double(at_edge) / double(count);
+    return m;
+}
 
-    // One-point statistics of all pixels of all frames.
-    {
-        std::vector<float> pooled;
-        std::span<const float> all(frames.front().data);
-        if (n > 1) {
-            pooled.reserve(n * w * h);
-            for (const Image& f : frames) pooled.insert(pooled.end(), f.data.begin(), f.data.end());
-            all = pooled;
-        }
-        R.moments = moments(all);
-        const double sd = std::sqrt(R.moments.variance);
-        const double half = sd > 0 ? kHistogramHalfWidthSd * sd : 0.5;
-        R.histogram =
-            histogram(all, R.moments.mean - half, R.moments.mean + half, kHistogramBins);
+/// One-point statistics of all pixels of all frames.
+void measure_one_point(const std::vector<Image>& frames, AnalysisResult& R) {
+    std::vector<float> pooled;
+    std::span<const float> all(frames.front().data);
+    if (frames.size() > 1) {
+        pooled.reserve(frames.size() * frames.front().data.size());
+        for (const Image& f : frames) pooled.insert(pooled.end(), f.data.begin(), f.data.end());
+        all = pooled;
     }
+    R.moments = moments(all);
+    const double sd = std::sqrt(R.moments.variance);
+    const double half = sd > 0 ? kHistogramHalfWidthSd * sd : 0.5;
+    R.histogram = histogram(all, R.moments.mean - half, R.moments.mean + half, kHistogramBins);
+}
 
-    // Periodicity decides the window: none for torus frames, Hann otherwise.
-    const WrapTest wt = wrap_test(frames, R.moments.variance);
+/// The frame-averaged periodogram (summed in frame order, then scaled: the bits of average) and
+/// the radial autocovariance out to min(w, h) / 4; returns each frame's radial profile, kept for
+/// the correlation time. Periodicity decides the window: none for torus frames, Hann otherwise.
+std::vector<std::vector<double>> measure_spectra(const std::vector<Image>& frames,
+                                                 const WrapTest& wt, AnalysisResult& R) {
+    const size_t n = frames.size();
     const Window window = wt.periodic ? Window::None : Window::Hann;
-
-    // Frame-averaged periodogram (summed in frame order, then scaled: the bits of
-    // average), with each frame's radial profile kept for the correlation time.
     Periodogram avg;
     std::vector<std::vector<double>> frame_profiles;
     for (size_t j = 0; j < n; ++j) {
@@ -476,56 +454,58 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
     R.periodogram.wrap_ratio_x = wt.ratio_x;
     R.periodogram.wrap_ratio_y = wt.ratio_y;
 
-    // Radial autocovariance out to min(w, h) / 4, averaged over frames.
-    R.max_lag = std::min(w, h) / 4;
+    R.max_lag = std::min(R.width, R.height) / 4;
     R.autocovariance.assign(size_t(R.max_lag) + 1, 0.0);
     for (const Image& f : frames) {
         const auto a = frame_autocovariance(f, wt.periodic, R.max_lag);
         for (size_t r = 0; r < a.size(); ++r) R.autocovariance[r] += a[r];
     }
     for (double& v : R.autocovariance) v *= inv;
+    return frame_profiles;
+}
 
-    R.frame_stats = frame_stats(frames);
-
-    // Correlation between frames: how many independent frames the averages are worth. From the
-    // scene's envelopes when there is one; else estimated from the frames (10 or more); else
-    // none are assumed independent.
-    const size_t quarter = n / 4;
-    TimeCorrelation tc;
-    if (theory && n > 1) {
-        tc = scene_time_correlation(*scene, n, quarter);
-    } else if (n >= size_t(kMinFramesForTime)) {
-        std::vector<double> means(n), vars(n);
-        for (size_t j = 0; j < n; ++j)
-            means[j] = R.frame_stats[j].mean, vars[j] = R.frame_stats[j].variance;
-        std::vector<std::vector<double>> rel;
-        for (size_t b = 0; b < R.spectrum.power.size(); ++b) {
-            if (R.spectrum.count[b] == 0 ||
-                !(R.spectrum.frequency[b] > 0 && R.spectrum.frequency[b] < 0.5) ||
-                !(R.spectrum.power[b] > 0))
-                continue;
-            std::vector<double> s(n);
-            for (size_t j = 0; j < n; ++j) s[j] = frame_profiles[j][b] / R.spectrum.power[b];
-            rel.push_back(std::move(s));
-        }
-        const Tau tm = integrated_time({means}), tv = integrated_time({vars});
-        const Tau ts = integrated_time(rel);
-        tc.source = "frames";
-        tc.n_eff_mean = std::max(1.0, double(n) / tm.tau);
-        tc.n_eff_variance = std::max(1.0, double(n) / tv.tau);
-        tc.n_eff_spectrum = std::max(1.0, double(n) / ts.tau);
-        tc.q_eff = std::max(1.0, double(quarter) / ts.tau);
-        tc.n_eff_population = tc.n_eff_spectrum;
-        tc.q_eff_population = tc.q_eff;
-        tc.converged = tm.converged && tv.converged && ts.converged;
+/// Correlation between frames estimated from the frames themselves (10 or more): the integrated
+/// times of the frame means, variances and relative annulus powers.
+TimeCorrelation time_correlation_from_frames(
+    const AnalysisResult& R, const std::vector<std::vector<double>>& frame_profiles) {
+    const size_t n = R.frame_stats.size(), quarter = n / 4;
+    std::vector<double> means(n), vars(n);
+    for (size_t j = 0; j < n; ++j)
+        means[j] = R.frame_stats[j].mean, vars[j] = R.frame_stats[j].variance;
+    std::vector<std::vector<double>> rel;
+    for (size_t b = 0; b < R.spectrum.power.size(); ++b) {
+        if (R.spectrum.count[b] == 0 ||
+            !(R.spectrum.frequency[b] > 0 && R.spectrum.frequency[b] < 0.5) ||
+            !(R.spectrum.power[b] > 0))
+            continue;
+        std::vector<double> s(n);
+        for (size_t j = 0; j < n; ++j) s[j] = frame_profiles[j][b] / R.spectrum.power[b];
+        rel.push_back(std::move(s));
     }
+    const Tau tm = integrated_time({means}), tv = integrated_time({vars});
+    const Tau ts = integrated_time(rel);
+    TimeCorrelation tc;
+    tc.source = "frames";
+    tc.n_eff_mean = std::max(1.0, double(n) / tm.tau);
+    tc.n_eff_variance = std::max(1.0, double(n) / tv.tau);
+    tc.n_eff_spectrum = std::max(1.0, double(n) / ts.tau);
+    tc.q_eff = std::max(1.0, double(quarter) / ts.tau);
+    tc.n_eff_population = tc.n_eff_spectrum;
+    tc.q_eff_population = tc.q_eff;
+    tc.converged = tm.converged && tv.converged && ts.converged;
+    return tc;
+}
+
+/// Records tc in R (as frames per independent one) with notes on how far to trust it.
+void record_time_correlation(const TimeCorrelation& tc, AnalysisResult& R) {
+    const double n = double(R.frames);
     R.tau_source = tc.source;
-    R.tau_mean = double(n) / tc.n_eff_mean;
-    R.tau_variance = double(n) / tc.n_eff_variance;
-    R.tau_spectrum = double(n) / tc.n_eff_spectrum;
+    R.tau_mean = n / tc.n_eff_mean;
+    R.tau_variance = n / tc.n_eff_variance;
+    R.tau_spectrum = n / tc.n_eff_spectrum;
     if (tc.source == "frames" && n / std::max(1.0, R.tau_spectrum) < 20)
         R.notes.push_back("the frames hold only about " +
-                          format_number(double(n) / std::max(1.0, R.tau_spectrum), 2) +
+                          format_number(n / std::max(1.0, R.tau_spectrum), 2) +
                           " independent ones: the correlation time and the common level of the "
                           "spectrum are rough estimates and the drift z may be off by tens of "
                           "percent; give --scene for the exact correlation of an animated scene");
@@ -533,24 +513,60 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
         R.notes.push_back(
             "frames are correlated over more than half of the sequence: the "
             "correlation time is a lower bound and the z values are approximate");
+}
 
-    bool keyframed = false;
-    if (scene)
-        for (const auto& l : scene->layers) keyframed = keyframed || l.keyframed();
-    if (keyframed)
-        R.notes.push_back(
-            "layer parameters of the scene are keyframed: the statistics vary in time, so there "
-            "is no comparison with the (stationary) theory");
-    if (theory && !keyframed) {
-        R.theory = compare_with_theory(*scene, scene_path, R, tc, mapped, lo, hi, clipped);
-        if (mapped && clipped > 0.001)
-            R.notes.push_back("display input: " + format_number(clipped * 100.0, 3) +
-                              " % of pixels at the ends of the range; theory assumes a Gaussian "
-                              "marginal censored there");
+/// The spectral drift between the first and last quarter of the frames, its z corrected for
+/// correlated frames and for the level common to all annuli. spectral_drift's variance,
+/// 2 P^2 / (pairs q), assumes independent frames and bins. A quarter of q correlated frames is
+/// worth q_eff, and the impulse population adds a level common to all annuli (relative variance
+/// c per frame, c / q_eff_population per quarter):
+///     z_corrected = z sqrt((1 / (pairs q)) / (1 / (pairs q_eff) + c_q)).
+/// The common level's drift is what the trend test on the frame variance measures.
+void spectral_drift_test(const std::vector<Image>& frames, const WrapTest& wt,
+                         const std::vector<std::vector<double>>& frame_profiles,
+                         const TimeCorrelation& tc, const AnalysisResult& R, Stationarity& st) {
+    const size_t quarter = frames.size() / 4;
+    const std::span<const Image> all(frames);
+    st.drift = spectral_drift(all.first(quarter), all.last(quarter),
+                              wt.periodic ? Window::None : Window::Hann);
+    st.q_eff = tc.q_eff;
+    std::vector<double> pairs, common;
+    for (size_t b = 0; b < R.spectrum.power.size(); ++b) {
+        if (R.spectrum.count[b] == 0 ||
+            !(R.spectrum.frequency[b] > 0 && R.spectrum.frequency[b] < 0.5))
+            continue;
+        pairs.push_back(0.5 * double(R.spectrum.count[b]));
+        common.push_back(R.theory && R.theory->spectrum ? R.theory->spectrum->common[b] : NAN);
     }
+    double c_data = NAN, q_eff_level = tc.q_eff_population;
+    if (!(R.theory && R.theory->spectrum)) {
+        const CommonLevel cl =
+            common_level(frame_profiles, R.spectrum, wt.periodic ? 1.0 : kHannInflation);
+        c_data = cl.variance;
+        q_eff_level = std::clamp(double(quarter) / cl.tau, 1.0, double(quarter));
+    }
+    st.common_variance = 0;
+    st.z_corrected.resize(st.drift.z.size());
+    for (size_t i = 0; i < st.drift.z.size(); ++i) {
+        const double pr = i < pairs.size() ? pairs[i] : 1.0;
+        const double c = std::isfinite(c_data) ? c_data : (i < common.size() ? common[i] : 0.0);
+        const double cq = c / q_eff_level;
+        st.common_variance = std::max(st.common_variance, cq);
+        st.z_corrected[i] = st.drift.z[i] * std::sqrt((1.0 / (pr * double(quarter))) /
+                                                      (1.0 / (pr * tc.q_eff) + cq));
+        st.max_abs_z_corrected = std::max(st.max_abs_z_corrected, std::abs(st.z_corrected[i]));
+    }
+}
 
-    // Stationarity over time.
-    Stationarity& st = R.stationarity;
+/// Stationarity over time: three tests share the family's false-alarm rate (Bonferroni, so the
+/// verdict's rate is at most kFamilyAlpha): the level's trend, its block means and the spectral
+/// drift.
+Stationarity stationarity_verdict(const std::vector<Image>& frames, const WrapTest& wt,
+                                  const std::vector<std::vector<double>>& frame_profiles,
+                                  const TimeCorrelation& tc, const AnalysisResult& R,
+                                  double drift_of_interest) {
+    const size_t n = frames.size();
+    Stationarity st;
     st.trend_blocks = kTrendBlocks;
     st.t_limit = kZLimit;
     if (n < size_t(kMinFramesForTime)) {
@@ -558,85 +574,126 @@ AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& o
         st.reason = n == 1 ? "one frame"
                            : "needs >= " + std::to_string(kMinFramesForTime) + " frames (" +
                                  std::to_string(n) + " given)";
-    } else {
-        st.available = true;
-        std::vector<double> vars(n);
-        for (size_t j = 0; j < n; ++j) vars[j] = R.frame_stats[j].variance;
-        st.trend = trend(vars, kTrendBlocks);
-        st.quarter = static_cast<int>(quarter);
-        const std::span<const Image> all(frames);
-        st.drift = spectral_drift(all.first(quarter), all.last(quarter), window);
-        // spectral_drift's variance, 2 P^2 / (pairs q), assumes independent frames and bins. A
-        // quarter of q correlated frames is worth q_eff, and the impulse population adds a level
-        // common to all annuli (relative variance c per frame, c / q_eff_population per quarter):
-        //     z_corrected = z sqrt((1 / (pairs q)) / (1 / (pairs q_eff) + c_q)).
-        // The common level's drift is what the trend test on the frame variance measures.
-        st.q_eff = tc.q_eff;
-        std::vector<double> pairs, common;
-        for (size_t b = 0; b < R.spectrum.power.size(); ++b) {
-            if (R.spectrum.count[b] == 0 ||
-                !(R.spectrum.frequency[b] > 0 && R.spectrum.frequency[b] < 0.5))
-                continue;
-            pairs.push_back(0.5 * double(R.spectrum.count[b]));
-            common.push_back(R.theory && R.theory->spectrum ? R.theory->spectrum->common[b] : NAN);
-        }
-        double c_data = NAN, q_eff_level = tc.q_eff_population;
-        if (!(R.theory && R.theory->spectrum)) {
-            const CommonLevel cl =
-                common_level(frame_profiles, R.spectrum, wt.periodic ? 1.0 : kHannInflation);
-            c_data = cl.variance;
-            q_eff_level = std::clamp(double(quarter) / cl.tau, 1.0, double(quarter));
-        }
-        st.common_variance = 0;
-        st.z_corrected.resize(st.drift.z.size());
-        for (size_t i = 0; i < st.drift.z.size(); ++i) {
-            const double pr = i < pairs.size() ? pairs[i] : 1.0;
-            const double c = std::isfinite(c_data) ? c_data : (i < common.size() ? common[i] : 0.0);
-            const double cq = c / q_eff_level;
-            st.common_variance = std::max(st.common_variance, cq);
-            st.z_corrected[i] = st.drift.z[i] * std::sqrt((1.0 / (pr * double(quarter))) /
-                                                          (1.0 / (pr * tc.q_eff) + cq));
-            st.max_abs_z_corrected = std::max(st.max_abs_z_corrected, std::abs(st.z_corrected[i]));
-        }
-        // Three tests share the family's false-alarm rate: the level's trend, its block means and
-        // the spectral drift (Bonferroni, so the verdict's rate is at most kFamilyAlpha).
-        const double alpha = kFamilyAlpha / 3.0;
-        st.family_alpha = kFamilyAlpha;
-        st.z_threshold = bonferroni_threshold(static_cast<int>(st.drift.z.size()), alpha);
-        const LevelModel lm = level_model(vars, tc, R.theory ? &*R.theory : nullptr);
-        st.level_model = lm.source;
-        st.power = kPower;
-        st.level = level_drift(vars, lm.variance, lm.rho, kTrendBlocks, lm.dof, alpha, kPower);
-        st.level_z_limit = bonferroni_threshold(1, alpha);
-        st.blocks_z_limit = -numeric::normal_quantile_lower(alpha);
-        st.drift_of_interest = opt.drift;
-        st.detectable_drift = st.level.detectable_change / std::abs(st.level.mean);
-        const bool rejects = std::abs(st.level.z_trend) >= st.level_z_limit ||
-                             st.level.z_blocks >= st.blocks_z_limit ||
-                             st.max_abs_z_corrected >= st.z_threshold;
-        st.verdict = rejects                                         ? "not stationary"
-                     : st.detectable_drift <= st.drift_of_interest ? "stationary"
-                                                                   : "inconclusive";
-        st.stationary = st.verdict == "stationary";
+        return st;
     }
-    if (!raw && !mapped)
+    st.available = true;
+    std::vector<double> vars(n);
+    for (size_t j = 0; j < n; ++j) vars[j] = R.frame_stats[j].variance;
+    st.trend = trend(vars, kTrendBlocks);
+    st.quarter = static_cast<int>(n / 4);
+    spectral_drift_test(frames, wt, frame_profiles, tc, R, st);
+    const double alpha = kFamilyAlpha / 3.0;
+    st.family_alpha = kFamilyAlpha;
+    st.z_threshold = bonferroni_threshold(static_cast<int>(st.drift.z.size()), alpha);
+    const LevelModel lm = level_model(vars, tc, R.theory ? &*R.theory : nullptr);
+    st.level_model = lm.source;
+    st.power = kPower;
+    st.level = level_drift(vars, lm.variance, lm.rho, kTrendBlocks, lm.dof, alpha, kPower);
+    st.level_z_limit = bonferroni_threshold(1, alpha);
+    st.blocks_z_limit = -numeric::normal_quantile_lower(alpha);
+    st.drift_of_interest = drift_of_interest;
+    st.detectable_drift = st.level.detectable_change / std::abs(st.level.mean);
+    const bool rejects = std::abs(st.level.z_trend) >= st.level_z_limit ||
+                         st.level.z_blocks >= st.blocks_z_limit ||
+                         st.max_abs_z_corrected >= st.z_threshold;
+    st.verdict = rejects                                      ? "not stationary"
+                 : st.detectable_drift <= drift_of_interest ? "stationary"
+                                                              : "inconclusive";
+    st.stationary = st.verdict == "stationary";
+    return st;
+}
+
+/// The closed-form comparison, when the theory covers these frames (a sum of layers, nothing
+/// keyframed); notes where it does not.
+void compare_with(const ClosedForm* theory, bool sum_of_layers, const TimeCorrelation& tc,
+                  const DisplayMapping& dm, AnalysisResult& R) {
+    if (theory && !sum_of_layers)
         R.notes.push_back(
-            "display values in [0, 1] (8/16-bit source); give --scene to map them "
-            "back to field values and compare with theory");
-    if (kind == "video")
-        R.notes.push_back("video: lossy compression alters the fine-scale spectrum and adds noise");
+            "the scene composes its layers (blend, opacity, visible or warp, docs/scenes.md "
+            "\"Composition\"): the theory here covers sums of layers, so no comparison with it; "
+            "the display range still maps the values back");
+    const bool keyframed = theory && theory->keyframed();
+    if (keyframed)
+        R.notes.push_back(
+            "layer parameters of the scene are keyframed: the statistics vary in time, so there "
+            "is no comparison with the (stationary) theory");
+    if (!sum_of_layers || keyframed) return;
+    R.theory = theory->compare(R, tc, dm.mapped, dm.lo, dm.hi, dm.clipped);
+    if (dm.mapped && dm.clipped > 0.001)
+        R.notes.push_back("display input: " + format_number(dm.clipped * 100.0, 3) +
+                          " % of pixels at the ends of the range; theory assumes a Gaussian "
+                          "marginal censored there");
+}
+
+/// The results only asked for: the structure function and the per-pixel variance map.
+void optional_results(const std::vector<Image>& frames, const AnalyzeOptions& opt,
+                      AnalysisResult& R) {
     if (opt.structure) R.structure = structure_of(frames);
     if (!opt.variance_map.empty()) {
-        if (n < 2)
+        if (frames.size() < 2)
             throw ValueError("--variance-map " + opt.variance_map +
                              ": needs a sequence of at least 2 frames (realizations)");
         PixelVariance pv;
         for (const Image& f : frames) pv.add(f);
         R.variance_map = pv.variance();
     }
-
-    return R;
 }
 
+}  // namespace
+
+AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& opt,
+                              const std::string& kind, bool raw, int bits, long long first_frame,
+                              const ClosedForm* theory) {
+    check_frames(frames, opt, first_frame);
+    if (!opt.scene.empty() && !theory)
+        throw std::logic_error("analyze_frames: --scene " + opt.scene + " without its closed form");
+    if (opt.scene.empty() && !opt.sets.empty())
+        throw ValueError("--set " + opt.sets.front() + ": needs --scene");
+    AnalysisResult R;
+    R.input = opt.input;
+    R.kind = kind;
+    R.raw = raw;
+    R.bits = bits;
+    R.width = frames.front().width;
+    R.height = frames.front().height;
+    R.frames = static_cast<int>(frames.size());
+    R.first_frame = first_frame;
+    const size_t n = frames.size();
+
+    // Scene first: a display input is mapped back to field values before anything is measured.
+    DisplayMapping dm;
+    if (theory) {
+        for (const auto& wmsg : theory->warnings()) R.notes.push_back(wmsg);
+        if (!raw) dm = map_display_values(frames, *theory);
+    }
+    // The closed forms (spectra, correlation in time, fourth cumulants) are those of a sum of
+    // layers; a scene that composes them otherwise is measured without them.
+    const bool sum_of_layers = theory && theory->sum_of_layers();
+
+    measure_one_point(frames, R);
+    const WrapTest wt = wrap_test(frames, R.moments.variance);
+    const auto frame_profiles = measure_spectra(frames, wt, R);
+    R.frame_stats = frame_stats(frames);
+
+    // Correlation between frames: how many independent frames the averages are worth. From the
+    // scene's envelopes when there is one; else estimated from the frames (10 or more); else
+    // none are assumed independent.
+    TimeCorrelation tc;
+    if (sum_of_layers && n > 1)
+        tc = theory->time_correlation(n, n / 4);
+    else if (n >= size_t(kMinFramesForTime))
+        tc = time_correlation_from_frames(R, frame_profiles);
+    record_time_correlation(tc, R);
+    compare_with(theory, sum_of_layers, tc, dm, R);
+    R.stationarity = stationarity_verdict(frames, wt, frame_profiles, tc, R, opt.drift);
+    if (!raw && !dm.mapped)
+        R.notes.push_back(
+            "display values in [0, 1] (8/16-bit source); give --scene to map them "
+            "back to field values and compare with theory");
+    if (kind == "video")
+        R.notes.push_back("video: lossy compression alters the fine-scale spectrum and adds noise");
+    optional_results(frames, opt, R);
+    return R;
+}
 
 }  // namespace impulse::analysis

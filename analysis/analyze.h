@@ -56,7 +56,7 @@ struct TheoryComparison {
     bool mapped = false;  ///< display input mapped back through [lo, hi]
     double map_lo = 0.0, map_hi = 1.0;
     double clipped_fraction = 0.0;  ///< display input: share of pixels at 0 or 1
-    double field_mean = 0.0;        ///< Campbell's theorem (scenes::scene_theory)
+    double field_mean = 0.0;        ///< Campbell's theorem (the scene's layer theory)
     double field_variance = 0.0;
     double mean = 0.0;               ///< expected sample mean (display censoring applied)
     double variance = 0.0;           ///< expected sample variance (less Var(mean), + quantisation)
@@ -153,9 +153,14 @@ struct AnalysisResult {
     std::vector<std::string> notes;
 };
 
+class ClosedForm;  // analysis/theory.h
+
 /// The analysis of frames already in memory (values as they are; `raw` = false marks display
 /// values for the theory comparison's mapping). `options.input` names them in the result.
+/// `theory` is the closed form of options.scene (scenes::closed_form), required when a scene is
+/// named.
 AnalysisResult analyze_frames(std::vector<Image> frames, const AnalyzeOptions& options,
-                              const std::string& kind, bool raw, int bits, long long first_frame);
+                              const std::string& kind, bool raw, int bits, long long first_frame,
+                              const ClosedForm* theory = nullptr);
 
 }  // namespace impulse::analysis

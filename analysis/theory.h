@@ -1,17 +1,16 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// The closed-form theory of a scene as seen through frames of it (Campbell's theorem,
-// design.md §1): expected mean, variance, periodogram and autocovariance of a sum of layers, the
-// correlation of frames in time, and the sampling errors the comparison judges them with
-// (design.md §5). Builds on scenes/ (layer_theory, scene_theory); scenes/ does not use analysis/,
-// so the dependency runs one way.
+// What the analysis needs from a closed-form theory (Campbell's theorem, design.md §1) and the
+// sampling-error helpers it judges measurements with (design.md §5). The theory of a scene is
+// stated by scenes/ (scenes/closed_form.h), which sits above analysis/ in design.md's levels:
+// it is passed in as a ClosedForm, so the dependency runs one way.
 
 #include <cstddef>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "analysis/analyze.h"
-#include "scenes/scenes.h"
 
 namespace impulse::analysis {
 
@@ -23,6 +22,11 @@ std::string format_number(double v, int digits);
 
 /// Two-sided Bonferroni threshold for the maximum of m |z| values at family-wise level alpha.
 double bonferroni_threshold(int m, double alpha);
+
+/// Wilson–Hilferty normal deviate of r = X / E[X] for X ~ Gamma(shape): nearly exact for the
+/// mean of `shape` independent exponentials, which is what an annulus mean of periodogram bins is
+/// (Wilson & Hilferty 1931; for large shape it is (r - 1) sqrt(shape)).
+double wilson_hilferty_z(double ratio, double shape);
 
 /// Effective number of independent frames among n consecutive ones whose statistic has
 /// correlation r(l) at a lag of l frames: Var(mean) = (s^2 / n) (1 + 2 sum (1 - l/n) r(l)).
@@ -41,18 +45,26 @@ struct TimeCorrelation {
     std::vector<double> r2, r4;
 };
 
-/// From the scene: without flow a layer's field at lags of l frames correlates as its envelope,
-/// r(l) = (w * w~)(l / fps) / int w^2 (design.md §1; 1 for a still layer), layers weighted by
-/// their variance. The frame mean follows r, periodogram bins and the frame variance follow r^2
-/// (Gaussian approximation). Advection by a flow moves the pattern without changing the power of
-/// a periodic frame and decorrelates the rest sooner, so this is exact or conservative with flows.
-TimeCorrelation scene_time_correlation(const scenes::Scene& scene, size_t n, size_t quarter);
-
-/// Closed-form statistics of the scene for the frames measured in R (its size, window, lags),
-/// with the sampling errors for the correlation tc; display inputs mapped back through [lo, hi]
-/// with `clipped` of their values at the ends. Adds notes to R.
-TheoryComparison compare_with_theory(const scenes::Scene& scene, const std::string& path,
-                                     AnalysisResult& R, const TimeCorrelation& tc, bool mapped,
-                                     double lo, double hi, double clipped);
+/// The closed-form statistics of what made the frames (a scene: scenes::closed_form), as the
+/// analysis asks for them.
+class ClosedForm {
+public:
+    virtual ~ClosedForm() = default;
+    /// Notes for the result (the scene's own warnings).
+    virtual std::vector<std::string> warnings() const = 0;
+    /// The field values that display values 0 and 1 stand for (8/16-bit inputs are mapped back).
+    virtual std::pair<double, double> display_range() const = 0;
+    /// The closed forms are those of a sum of layers: false for a scene composed otherwise.
+    virtual bool sum_of_layers() const = 0;
+    /// Some parameter varies in time: the statistics are not stationary by design.
+    virtual bool keyframed() const = 0;
+    /// The correlation of n frames in time (and of each quarter of them).
+    virtual TimeCorrelation time_correlation(size_t n, size_t quarter) const = 0;
+    /// The theory for the frames measured in R (size, window, lags) with the sampling errors for
+    /// the correlation tc; display inputs mapped back through [lo, hi] with `clipped` of their
+    /// values at the ends. Adds notes to R.
+    virtual TheoryComparison compare(AnalysisResult& R, const TimeCorrelation& tc, bool mapped,
+                                     double lo, double hi, double clipped) const = 0;
+};
 
 }  // namespace impulse::analysis

@@ -19,6 +19,7 @@
 #include "numeric/errors.h"
 #include "output/output.h"
 #include "render/render.h"
+#include "scenes/closed_form.h"
 
 namespace impulse::app {
 namespace {
@@ -191,7 +192,9 @@ void write_atomically(const std::string& path, const std::string& text) {
 
 AnalysisResult analyze_input(const AnalyzeOptions& options) {
     Loaded L = load_input(options);
-    return analyze_frames(std::move(L.frames), options, L.kind, L.raw, L.bits, L.first);
+    const auto theory = scenes::closed_form(options.scene, options.sets);
+    return analyze_frames(std::move(L.frames), options, L.kind, L.raw, L.bits, L.first,
+                          theory.get());
 }
 
 int run_analyze(const AnalyzeOptions& options) {

@@ -12,6 +12,7 @@
 #include "app/analyze.h"
 #include "numeric/errors.h"
 #include "python/scene_object.h"
+#include "scenes/closed_form.h"
 
 namespace py = pybind11;
 
@@ -222,10 +223,12 @@ py::object analyze(const py::handle& frames, const py::object& scene, const py::
         o.scene = scene.cast<std::string>();
     }
     std::vector<analysis::Image> images = frames_of(frames);
+    const auto theory = scenes::closed_form(o.scene, o.sets);
     std::string json;
     {
         py::gil_scoped_release release;
-        json = app::to_json(app::analyze_frames(std::move(images), o, "array", true, 32, 0));
+        json = app::to_json(
+            app::analyze_frames(std::move(images), o, "array", true, 32, 0, theory.get()));
     }
     return py::module_::import("json").attr("loads")(json);
 }

@@ -9,6 +9,8 @@ packages=(build-essential cmake pkg-config libeigen3-dev libtbb-dev libopenimage
           libavformat-dev libavcodec-dev libavutil-dev libswscale-dev catch2
           libtomlplusplus-dev libcli11-dev librandom123-dev libfftw3-dev nlohmann-json3-dev parallel
           openimageio-tools slurm-wlm munge libopenvdb-dev libboost-dev webp
+          # rebuilds of an unchanged tree (a fresh clone, the sanitized build) from the cache
+          ccache
           # the Python module (build/python/) and its tests; the preview server and its
           # browser test
           python3-dev pybind11-dev python3-numpy python3-pytest libcpp-httplib-dev chromium)

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "analysis/analyze.h"
+#include "scenes/closed_form.h"
 #include "scenes/scenes.h"
 #include "tests/support.h"
 
@@ -45,7 +46,9 @@ std::string verdict(const impulse::test::TempDir& dir, bool pulse, int seed) {
     impulse::analysis::AnalyzeOptions opt;
     opt.input = path;
     opt.scene = path;
-    const auto r = impulse::analysis::analyze_frames(std::move(frames), opt, "sequence", true, 32, 0);
+    const auto theory = impulse::scenes::closed_form(path, {});
+    const auto r = impulse::analysis::analyze_frames(std::move(frames), opt, "sequence", true, 32, 0,
+                                                     theory.get());
     REQUIRE(r.stationarity.available);
     REQUIRE(r.stationarity.level_model == "scene theory");
     return r.stationarity.verdict;

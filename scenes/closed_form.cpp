@@ -1,0 +1,542 @@
+// SPDX-License-Identifier: Apache-2.0
+// The closed-form theory of a scene as seen through frames of it (scenes/closed_form.h):
+// Campbell's theorem per layer (design.md §1) on the frames' DFT grid, with the sampling errors
+// the analysis judges the measurements with (design.md §5).
+
+#include "scenes/closed_form.h"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+
+#include "kernels/kernels.h"
+#include "numeric/gaussian.h"
+#include "output/output.h"
+#include "scenes/scenes.h"
+#include "sim/sim.h"
+
+namespace impulse::scenes {
+namespace {
+
+using analysis::AnalysisResult;
+using analysis::format_number;
+using analysis::TheoryComparison;
+using analysis::TimeCorrelation;
+
+constexpr double kMaxClippedForSpectrum = 1e-4;  ///< display inputs: judge the spectrum below it
+
+// ---------------------------------------------------------------------------------------------
+// Theory
+
+/// Moments of Y = clamp(Z, a, b) for a standard normal Z: how a display range censors a
+/// Gaussian field (8-bit inputs are clipped to [0, 1] at mean +- 3 sd by default).
+struct Censored {
+    double mean = 0.0, variance = 1.0;
+    double gain = 1.0;  ///< P(a < Z < b): the linear gain of the clip (Price's theorem)
+};
+Censored censored_normal(double a, double b) {
+    const double Pa = numeric::normal_cdf(a), Pb = numeric::normal_cdf(b);
+    const double pa = numeric::normal_pdf(a), pb = numeric::normal_pdf(b);
+    Censored c;
+    c.mean = a * Pa + (pa - pb) + b * (1 - Pb);
+    const double m2 = a * a * Pa + (Pb - Pa + a * pa - b * pb) + b * b * (1 - Pb);
+    c.variance = m2 - c.mean * c.mean;
+    c.gain = Pb - Pa;
+    return c;
+}
+
+/// Temporal correlation of a layer without flow at lag dt: int w(a)^p w(a + dt)^p da /
+/// int w^2p. p = 1: the field (the time half of the space-time covariance, design.md §1);
+/// p = 2: the impulse population's fourth-cumulant term, E[a^4 w^4].
+double envelope_correlation(sim::Envelope e, double T, double dt, int p = 1) {
+    const int n = 4096;
+    double s = 0, s2 = 0;
+    for (int i = 0; i < n; ++i) {
+        const double a = (i + 0.5) * T / n;
+        const double w = std::pow(sim::envelope_weight(e, a, T), p);
+        s += w * std::pow(sim::envelope_weight(e, a + dt, T), p);
+        s2 += w * w;
+    }
+    return s2 > 0 ? s / s2 : 0.0;
+}
+
+bool isotropic(const kernels::Kernel& k) {
+    return !k.has_carrier() && k.params().aspect == 1.0 && !k.is_grid();
+}
+
+/// A layer's spectrum in pixel units tabulated in |k| (cycles per pixel), interpolated with the
+/// 4-point Lagrange cubic: exact for cubics, so the quadratic nulls of |H|^2 between side lobes are
+/// followed (linear interpolation fills them in and overstates the power there several-fold).
+struct RadialTable {
+    double step = 0.0;
+    std::vector<double> value;  ///< value[i] = S(i * step); one extra node before 0 by symmetry
+    double operator()(double rho) const {
+        const double x = rho / step;
+        const size_t i = static_cast<size_t>(x);
+        if (i + 2 >= value.size()) return 0.0;
+        const double t = x - double(i);
+        const double p0 = i == 0 ? value[1] : value[i - 1];  // S is even in |k|
+        const double p1 = value[i], p2 = value[i + 1], p3 = value[i + 2];
+        const double v = -t * (t - 1) * (t - 2) / 6 * p0 + (t + 1) * (t - 1) * (t - 2) / 2 * p1 -
+                         (t + 1) * t * (t - 2) / 2 * p2 + (t + 1) * t * (t - 1) / 6 * p3;
+        return std::max(v, 0.0);
+    }
+};
+
+struct LayerSpectrum {
+    kernels::Kernel kernel;
+    double zoom = 1.0;
+    double scale = 0.0;  ///< gain^2 lambda E[a^2] (1/T int w^2): S_tex = scale |H|^2
+    bool aliasing = false;
+    bool fixed_anisotropic = false;  ///< every impulse has the kernel's own, anisotropic shape
+    RadialTable table;               ///< angular mean of S in value^2 px^2 at |k| cycles/px
+    double far_alias = 0.0;          ///< images m with max(|mx|, |my|) in [2, 8], summed at k = 0
+    /// S at (fx, fy) cycles per pixel, exact (orientation and aspect included), no aliasing.
+    double exact(double fx, double fy) const {
+        return zoom * zoom * scale * kernel.power_spectrum(fx * zoom, fy * zoom);
+    }
+};
+
+/// Annuli below this index hold too few DFT bins (about 2 pi b) for their mean to stand for the
+/// angular average of an anisotropic spectrum: there the bins are evaluated exactly.
+constexpr double kExactAnnuli = 16.0;
+
+LayerSpectrum layer_spectrum(const LayerConfig& layer, double zoom, int n_max) {
+    LayerSpectrum L{kernels::Kernel(layer.kernel), zoom, 0.0, false, false, {}, 0.0};
+    const kernels::Kernel& k = L.kernel;
+    L.scale = layer_theory(layer).variance / k.integral_sq();
+    const double R_px = k.radius() * zoom;
+    const bool iso = isotropic(k);
+    // A random orientation per impulse averages the spectrum over angle: then the angular mean is
+    // the spectrum. Flow- or vorticity-driven orientations are approximated by it too.
+    L.fixed_anisotropic = !iso && layer.process.orientation == sim::OrientationMode::Fixed;
+    // S_px(rho) = zoom^2 S_tex(rho zoom): a pixel is 1/zoom texture units (docs/scenes.md).
+    // Anisotropic kernels: the angular mean over 36 directions of Kernel::power_spectrum (the
+    // average Kernel::radial_power_spectrum takes over 180, which costs five times as much for
+    // a table whose points are 1/8 of an oscillation apart anyway).
+    const auto S = [&](double rho) {
+        const int n = 36;
+        if (iso) return zoom * zoom * L.scale * k.radial_power_spectrum(rho * zoom);
+        double sum = 0;
+        for (int i = 0; i < n; ++i) {
+            const double a = std::numbers::pi * (i + 0.5) / n;
+            sum += L.exact(rho * std::cos(a), rho * std::sin(a));
+        }
+        return sum / n;
+    };
+    // Pixel sampling aliases frequencies beyond Nyquist onto the grid; the nearest images
+    // (|m| <= 1 per axis) are added where the spectrum at Nyquist is not negligible.
+    L.aliasing = iso || S(0.5) > 1e-7 * L.scale * k.integral_sq();
+    const double rho_max = (L.aliasing ? 1.0 : 0.0) + 0.5 * std::numbers::sqrt2 + 0.01;
+    // The spectrum of a kernel of radius R oscillates on a scale of about 1/(2R). Isotropic
+    // kernels (one quadrature per point) get 64 points per oscillation, enough for the cubic to
+    // follow the nulls to well under the sampling error of a 1024^2 frame (checked against
+    // rendered frames), but no finer than 1/8 of the DFT bin spacing; the others (36 directions
+    // per point) get 4, an approximation near the nulls of the angular mean.
+    L.table.step = iso ? std::max(1.0 / (128.0 * std::max(R_px, 0.5)), 1.0 / (8.0 * n_max))
+                       : 1.0 / (8.0 * std::max(R_px, 0.5));
+    const size_t n = static_cast<size_t>(std::ceil(rho_max / L.table.step)) + 3;
+    L.table.value.assign(n, 0.0);
+    tbb::parallel_for(size_t(0), n,
+                      [&](size_t i) { L.table.value[i] = S(double(i) * L.table.step); });
+    if (L.aliasing) {
+        // Kernels cut off with a jump (a Gabor or Gaussian truncated at R) have spectra with
+        // slow power-law tails whose far images still add up: sum the images with
+        // max(|mx|, |my|) in [2, M] once, at k = 0, as a white floor (they vary little across
+        // the band). Isotropic: S depends on |m| only, M = 8; otherwise the exact 2-D spectrum
+        // at the lattice points, M = 4 (the quadratures get slower as |k| grows). One half-plane
+        // is evaluated: S(m) = S(-m).
+        const int M = iso ? 8 : 4;
+        std::vector<std::pair<int, int>> points;
+        for (int my = 0; my <= M; ++my)
+            for (int mx = -M; mx <= M; ++mx)
+                if (std::max(std::abs(mx), my) >= 2 && (my > 0 || mx > 0) && (!iso || (mx >= my)))
+                    points.push_back({mx, my});
+        std::vector<double> value(points.size());
+        tbb::parallel_for(size_t(0), points.size(), [&](size_t i) {
+            const auto [mx, my] = points[i];
+            const double v = iso ? S(std::hypot(mx, my)) : L.exact(mx, my);
+            // multiplicity: the point and its mirror -m; for isotropic kernels also the other
+            // members of the 8-fold symmetry class (mx >= my >= 0 listed once)
+            int mult = 2;
+            if (iso) mult = (my == 0 || mx == my) ? 4 : 8;
+            value[i] = mult * v;
+        });
+        for (double v : value) L.far_alias += v;
+    }
+    return L;
+}
+
+/// The layer's expected periodogram on the DFT grid of a w x h frame (aliasing included).
+std::vector<double> layer_grid(const LayerSpectrum& L, int w, int h) {
+    std::vector<double> g(size_t(w) * h);
+    const int m = L.aliasing ? 1 : 0;
+    const int side = std::min(w, h);
+    tbb::parallel_for(0, h, [&](int ky) {
+        const double fy = analysis::Periodogram::frequency(ky, h);
+        for (int kx = 0; kx < w; ++kx) {
+            const double fx = analysis::Periodogram::frequency(kx, w);
+            double s = 0;
+            const bool exact = L.fixed_anisotropic && std::hypot(fx, fy) * side < kExactAnnuli;
+            for (int my = -m; my <= m; ++my)
+                for (int mx = -m; mx <= m; ++mx)
+                    s += (exact && mx == 0 && my == 0) ? L.exact(fx, fy)
+                                                       : L.table(std::hypot(fx + mx, fy + my));
+            g[size_t(ky) * w + kx] = s + L.far_alias;
+        }
+    });
+    return g;
+}
+
+/// Expected value of the Hann-windowed periodogram from the unwindowed one: the DFT-even Hann
+/// window's transform has taps (1/2, -1/4, -1/4), so E[P_w(k)] = sum_m c_m^2 S(k - m) / sum c^2,
+/// i.e. a circular (1/6, 2/3, 1/6) smoothing along each axis. The DC bin is zero first: the
+/// estimator removes the mean, whose bin then leaks nothing.
+std::vector<double> hann_smooth(std::vector<double> g, int w, int h) {
+    g[0] = 0.0;
+    std::vector<double> t(g.size());
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            t[size_t(y) * w + x] =
+                (2.0 / 3.0) * g[size_t(y) * w + x] +
+                (1.0 / 6.0) * (g[size_t(y) * w + (x + 1) % w] + g[size_t(y) * w + (x + w - 1) % w]);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            g[size_t(y) * w + x] =
+                (2.0 / 3.0) * t[size_t(y) * w + x] +
+                (1.0 / 6.0) * (t[size_t((y + 1) % h) * w + x] + t[size_t((y + h - 1) % h) * w + x]);
+    return g;
+}
+
+std::vector<double> annulus_means(std::vector<double> grid, int w, int h) {
+    analysis::Periodogram p;
+    p.width = w;
+    p.height = h;
+    p.power = std::move(grid);
+    return analysis::radial_average(p).power;
+}
+
+/// Radial ring values of the theoretical autocovariance at integer lags 0..max_lag (pixels).
+std::vector<double> layer_autocovariance(const LayerSpectrum& L, double zoom, int max_lag) {
+    std::vector<double> c(size_t(max_lag) + 1, 0.0);
+    const kernels::Kernel& k = L.kernel;
+    const bool iso = isotropic(k);
+    const double reach = 2.0 * k.radius();  // h * h~ vanishes beyond twice the support radius
+    tbb::parallel_for(0, max_lag + 1, [&](int r) {
+        const double tau = r / zoom;  // texture units
+        if (tau >= reach) return;
+        double a = 0;
+        if (iso) {
+            a = k.autocorrelation(tau, 0.0);
+        } else {
+            // ring average: mean over 8 directions in [0, pi) (C(tau) = C(-tau))
+            const int n = 8;
+            for (int j = 0; j < n; ++j) {
+                const double t = std::numbers::pi * (j + 0.5) / n;
+                a += k.autocorrelation(tau * std::cos(t), tau * std::sin(t)) / n;
+            }
+        }
+        c[size_t(r)] = L.scale * a;
+    });
+    return c;
+}
+
+
+/// From the scene: without flow a layer's field at lags of l frames correlates as its envelope,
+/// r(l) = (w * w~)(l / fps) / int w^2 (design.md §1; 1 for a still layer), layers weighted by
+/// their variance. The frame mean follows r, periodogram bins and the frame variance follow r^2
+/// (Gaussian approximation). Advection by a flow moves the pattern without changing the power of
+/// a periodic frame and decorrelates the rest sooner, so this is exact or conservative with flows.
+TimeCorrelation scene_time_correlation(const Scene& scene, size_t n, size_t quarter) {
+    std::vector<double> r(n, 0.0), r4(n, 0.0);
+    double total = 0, total4 = 0;
+    for (const auto& layer : scene.layers) {
+        const double v = layer_theory(layer).variance;
+        total += v;
+        total4 += v * v;
+        const auto& p = layer.process;
+        for (size_t l = 0; l < n; ++l) {
+            const double dt = double(l) / scene.output.fps;
+            const bool moving = p.lifetime_s > 0;
+            r[l] += v * (moving ? envelope_correlation(p.envelope, p.lifetime_s, dt) : 1.0);
+            r4[l] += v * v * (moving ? envelope_correlation(p.envelope, p.lifetime_s, dt, 2) : 1.0);
+        }
+    }
+    for (size_t l = 0; l < n; ++l) {
+        if (total > 0) r[l] /= total;
+        if (total4 > 0) r4[l] /= total4;
+    }
+    std::vector<double> r2(n);
+    for (size_t l = 0; l < n; ++l) r2[l] = r[l] * r[l];
+    TimeCorrelation tc;
+    tc.source = "scene";
+    tc.r2 = r2;
+    tc.r4 = r4;
+    tc.n_eff_mean = analysis::effective_frames(n, r);
+    tc.n_eff_variance = tc.n_eff_spectrum = analysis::effective_frames(n, r2);
+    tc.n_eff_population = analysis::effective_frames(n, r4);
+    tc.q_eff = quarter > 0 ? analysis::effective_frames(quarter, r2) : 1.0;
+    tc.q_eff_population = quarter > 0 ? analysis::effective_frames(quarter, r4) : 1.0;
+    return tc;
+}
+
+/// What the closed forms do not cover in this scene, said in R's notes: an animated zoom, a
+/// transform or a birth region makes the texture something else, and the comparison says so by
+/// disagreeing.
+void note_what_theory_misses(const Scene& scene, AnalysisResult& R) {
+    if (!scene.camera.zoom.is_constant())
+        R.notes.push_back(
+            "camera zoom is animated: no theoretical spectrum or autocovariance; the "
+            "sampling errors of mean and variance use the zoom at t = 0");
+    if (scene.transform.type != output::FieldTransform::Type::None)
+        R.notes.push_back(
+            "the scene has a [shading.transform] (marble or wood): the theory describes the "
+            "field before the transform, not this texture");
+    for (size_t i = 0; i < scene.layers.size(); ++i)
+        if (scene.layers[i].process.region)
+            R.notes.push_back("layer[" + std::to_string(i) +
+                              "] has a birth region: the theory holds only where the region "
+                              "accepts every birth within a kernel radius");
+    if (scene.output.width != R.width || scene.output.height != R.height)
+        R.notes.push_back("scene output.size " + std::to_string(scene.output.width) + "x" +
+                          std::to_string(scene.output.height) + " differs from the input " +
+                          std::to_string(R.width) + "x" + std::to_string(R.height) +
+                          " (the theory per pixel does not depend on it)");
+}
+
+/// Display inputs: clipping to [lo, hi] (Gaussian approximation of the marginal) and the
+/// quantisation to 2^bits - 1 levels (uniform rounding error, white, variance step^2 / 12).
+struct DisplayEffects {
+    Censored cens;
+    double quant = 0.0;
+};
+DisplayEffects display_effects(const Theory& th, int bits, bool mapped, double lo, double hi) {
+    DisplayEffects d;
+    if (!mapped) return d;
+    const double sd_field = std::sqrt(th.variance);
+    if (sd_field > 0)
+        d.cens = censored_normal((lo - th.mean) / sd_field, (hi - th.mean) / sd_field);
+    const double step = (hi - lo) / (std::ldexp(1.0, std::min(bits, 24)) - 1.0);
+    d.quant = step * step / 12.0;
+    return d;
+}
+
+/// The layers' spectra summed on the DFT grid, with what the sampling errors need from each.
+struct LayerSums {
+    std::vector<double> grid;                       ///< aliased S on the w x h DFT grid
+    std::vector<std::vector<double>> layer_annuli;  ///< each layer's annulus means
+    std::vector<double> c4;  ///< relative covariance of all bins from impulse-count fluctuations
+    std::vector<double> acov;  ///< autocovariance rings (constant zoom)
+    double K4 = 0.0;           ///< fourth-cumulant term of Var(sample variance) times N
+    double diff_var = 0.0;     ///< Var of a pixel's change between frames (no flow)
+    bool diff_known = true, any_animated = false;
+};
+
+LayerSums sum_layers(const Scene& scene, const AnalysisResult& R, double zoom, double g2,
+                     double quant) {
+    const int w = R.width, h = R.height;
+    const double N = double(w) * h;
+    const bool hann = R.periodogram.window == "hann";
+    LayerSums S;
+    S.grid.assign(size_t(w) * h, quant);
+    S.acov.assign(size_t(R.max_lag) + 1, 0.0);
+    for (const auto& layer : scene.layers) {
+        const auto& p = layer.process;
+        const double ea2 = sim::amplitude_second_moment(p.amplitude);
+        const double ea4 = sim::amplitude_fourth_moment(p.amplitude);
+        const bool animated = p.lifetime_s > 0;
+        S.any_animated = S.any_animated || animated;
+        const double W2 =
+            animated ? sim::envelope_sq_integral(p.envelope, p.lifetime_s) / p.lifetime_s : 1.0;
+        const double W4 =
+            animated ? sim::envelope_fourth_integral(p.envelope, p.lifetime_s) / p.lifetime_s : 1.0;
+        const double lambda_px = p.intensity / (zoom * zoom);
+        const double lv = layer_theory(layer).variance;
+        // Cov(P(k), P(k')) gains lambda_px N E[a^4 w^4] |H|^2 |H'|^2 / N^2 = c S(k) S(k') for a
+        // compound Poisson field: the relative covariance c below is shared by every bin.
+        S.c4.push_back(ea4 * W4 / (ea2 * ea2 * W2 * W2 * lambda_px * N));
+        const kernels::Kernel k(layer.kernel);
+        S.K4 += g2 * g2 * lambda_px * ea4 * W4 * std::pow(layer.gain.value(0.0), 4) *
+                std::pow(k.integral_sq() * zoom * zoom, 2);
+        if (layer.flow)
+            S.diff_known = false;
+        else if (animated)
+            S.diff_var +=
+                2.0 * g2 * lv *
+                (1.0 - envelope_correlation(p.envelope, p.lifetime_s, 1.0 / scene.output.fps));
+
+        const LayerSpectrum ls = layer_spectrum(layer, zoom, std::max(w, h));
+        std::vector<double> lg = layer_grid(ls, w, h);
+        for (size_t i = 0; i < lg.size(); ++i) {
+            lg[i] *= g2;
+            S.grid[i] += lg[i];
+        }
+        S.layer_annuli.push_back(annulus_means(hann ? hann_smooth(lg, w, h) : lg, w, h));
+        if (scene.camera.zoom.is_constant()) {
+            const auto ac = layer_autocovariance(ls, zoom, R.max_lag);
+            for (size_t r = 0; r < ac.size(); ++r) S.acov[r] += g2 * ac[r];
+        }
+    }
+    return S;
+}
+
+/// Mean and variance against their sampling errors. Var(frame mean) = S(0) / N (the DC bin of
+/// the aliased spectrum); the sample variance over N pixels has Var = 2 sum S^2 / N^2 for a
+/// Gaussian field, plus the fourth cumulant lambda E[a^4] E[w^4] (int h^2)^2 / N of shot noise.
+void compare_one_point(TheoryComparison& T, const AnalysisResult& R, const Theory& th,
+                       const LayerSums& S, const TimeCorrelation& tc, const DisplayEffects& d) {
+    const double N = double(R.width) * R.height;
+    T.sd_frame_mean = std::sqrt(S.grid[0] / N);
+    T.sd_mean = T.sd_frame_mean / std::sqrt(tc.n_eff_mean);
+    T.mean = th.mean + (T.mapped ? std::sqrt(th.variance) * d.cens.mean : 0.0);
+    double s2 = 0;
+    for (size_t i = 1; i < S.grid.size(); ++i) s2 += S.grid[i] * S.grid[i];
+    T.frame_variance_gaussian = 2.0 * s2 / (N * N);
+    T.frame_variance_population = S.K4 / N;
+    T.sd_frame_variance = std::sqrt(2.0 * s2 / (N * N) + S.K4 / N);
+    T.sd_variance =
+        std::sqrt(2.0 * s2 / (N * N) / tc.n_eff_variance + S.K4 / N / tc.n_eff_population);
+    const double field_var = T.mapped ? th.variance * d.cens.variance : th.variance;
+    // E[pooled sample variance] = sigma^2 - Var(pooled mean).
+    T.variance = field_var + d.quant - T.sd_mean * T.sd_mean;
+    T.z_mean = T.sd_mean > 0 ? (R.moments.mean - T.mean) / T.sd_mean
+                             : (R.moments.mean == T.mean ? 0.0 : INFINITY);
+    T.z_variance = T.sd_variance > 0 ? (R.moments.variance - T.variance) / T.sd_variance : INFINITY;
+    T.mean_agrees = std::abs(T.z_mean) < analysis::kZLimit;
+    T.variance_agrees = std::abs(T.z_variance) < analysis::kZLimit;
+}
+
+/// The radial spectrum against its annulus means, each judged with the Wilson–Hilferty z of a
+/// mean of exponentials (independent pairs in the annulus, frames worth n_eff_spectrum) plus the
+/// impulse population's common level c (shared by all bins).
+analysis::SpectrumTheory compare_spectrum(LayerSums S, const AnalysisResult& R,
+                                          const TimeCorrelation& tc) {
+    const int w = R.width, h = R.height;
+    const bool hann = R.periodogram.window == "hann";
+    analysis::SpectrumTheory T;
+    std::vector<double> grid = hann ? hann_smooth(std::move(S.grid), w, h) : std::move(S.grid);
+    grid[0] = 0.0;
+    std::vector<double> squares(grid.size());
+    for (size_t i = 0; i < grid.size(); ++i) squares[i] = grid[i] * grid[i];
+    T.power = annulus_means(std::move(grid), w, h);
+    const std::vector<double> mean_square = annulus_means(std::move(squares), w, h);
+    const auto& M = R.spectrum;
+    const size_t na = M.power.size();
+    T.ratio.assign(na, NAN);
+    T.z.assign(na, NAN);
+    T.common.assign(na, 0.0);
+    const double infl = hann ? analysis::kHannInflation : 1.0;
+    for (size_t b = 0; b < na; ++b) {
+        if (M.count[b] == 0 || !(M.frequency[b] > 0 && M.frequency[b] < 0.5) || !(T.power[b] > 0))
+            continue;
+        double c = 0;
+        for (size_t l = 0; l < S.layer_annuli.size(); ++l)
+            c += S.c4[l] * S.layer_annuli[l][b] * S.layer_annuli[l][b];
+        c /= T.power[b] * T.power[b];
+        T.common[b] = c;
+        // Independent pairs in the annulus, reduced where the expected power varies across it
+        // (near the nulls between side lobes): a sum of exponentials with means S_i has the
+        // variance of (sum S_i)^2 / sum S_i^2 equal ones.
+        const double evenness = T.power[b] * T.power[b] / mean_square[b];
+        const double pairs = 0.5 * double(M.count[b]) * evenness / infl;
+        const double relvar = 1.0 / (pairs * tc.n_eff_spectrum) + c / tc.n_eff_population;
+        T.ratio[b] = M.power[b] / T.power[b];
+        T.z[b] = analysis::wilson_hilferty_z(T.ratio[b], 1.0 / relvar);
+        T.max_abs_z = std::max(T.max_abs_z, std::abs(T.z[b]));
+        ++T.compared;
+    }
+    T.threshold = analysis::bonferroni_threshold(T.compared, analysis::kFamilyAlpha);
+    T.agrees = T.compared > 0 && T.max_abs_z < T.threshold;
+    return T;
+}
+
+TheoryComparison compare_with_theory(const Scene& scene, const std::string& path,
+                                     AnalysisResult& R, const TimeCorrelation& tc, bool mapped,
+                                     double lo, double hi, double clipped) {
+    TheoryComparison T;
+    T.scene = path;
+    T.hash = scene.hash;
+    T.mapped = mapped;
+    T.map_lo = lo, T.map_hi = hi;
+    T.clipped_fraction = clipped;
+    T.z_limit = analysis::kZLimit;
+    const Theory th = scene_theory(scene);
+    T.field_mean = th.mean;
+    T.field_variance = th.variance;
+    const bool zoom_constant = scene.camera.zoom.is_constant();
+    T.zoom = scene.camera.zoom.value(0.0);
+    if (!zoom_constant) T.no_spectrum = "camera zoom is animated";
+    note_what_theory_misses(scene, R);
+
+    const DisplayEffects d = display_effects(th, R.bits, mapped, lo, hi);
+    const double g2 = d.cens.gain * d.cens.gain;
+    LayerSums S = sum_layers(scene, R, T.zoom, g2, d.quant);
+    compare_one_point(T, R, th, S, tc, d);
+    if (zoom_constant) {
+        // Autocovariance rings: Campbell's theorem with h * h~, less Var(frame mean) (every frame
+        // is measured about its own mean), plus the white quantisation noise at lag 0.
+        for (double& v : S.acov) v -= T.sd_frame_mean * T.sd_frame_mean;
+        S.acov[0] += d.quant;
+        T.autocovariance = S.acov;
+        T.spectrum = compare_spectrum(std::move(S), R, tc);
+        // Clipping at the ends of the display range is a nonlinearity: its distortion (odd
+        // Hermite terms of the clip, Price's theorem) spreads power into the nulls and the high
+        // frequencies, and for the heavier-than-Gaussian tails of sparse noise it is not known in
+        // closed form. Judge the spectrum of a display input only when clipping is negligible.
+        if (mapped && clipped > kMaxClippedForSpectrum) {
+            T.spectrum->not_judged =
+                format_number(100.0 * clipped, 3) + " % of the display values are clipped (more than " +
+                format_number(100.0 * kMaxClippedForSpectrum, 3) +
+                " %): the clip distorts the spectrum; widen output.range to compare";
+            T.spectrum->agrees = false;
+        }
+    }
+    if (S.diff_known) {
+        if (S.any_animated) S.diff_var += 2.0 * d.quant;  // rounding errors of two frames
+        T.diff_variance = S.diff_var;
+    }
+    return T;
+}
+
+/// A loaded scene's closed forms, as analysis::analyze_frames asks for them.
+class SceneClosedForm final : public analysis::ClosedForm {
+public:
+    SceneClosedForm(Scene scene, std::string path) : m_scene(std::move(scene)), m_path(std::move(path)) {}
+
+    std::vector<std::string> warnings() const override { return m_scene.warnings; }
+    std::pair<double, double> display_range() const override {
+        const output::ValueMapping m = Renderer(m_scene).mapping();
+        return {m.lo, m.hi};
+    }
+    bool sum_of_layers() const override { return is_sum_of_layers(m_scene); }
+    bool keyframed() const override {
+        bool k = false;
+        for (const auto& l : m_scene.layers) k = k || l.keyframed();
+        return k;
+    }
+    TimeCorrelation time_correlation(size_t n, size_t quarter) const override {
+        return scene_time_correlation(m_scene, n, quarter);
+    }
+    TheoryComparison compare(AnalysisResult& R, const TimeCorrelation& tc, bool mapped, double lo,
+                             double hi, double clipped) const override {
+        return compare_with_theory(m_scene, m_path, R, tc, mapped, lo, hi, clipped);
+    }
+
+private:
+    Scene m_scene;
+    std::string m_path;
+};
+
+}  // namespace
+
+std::unique_ptr<analysis::ClosedForm> closed_form(const std::string& scene,
+                                                  const std::vector<std::string>& sets) {
+    if (scene.empty()) return nullptr;
+    const std::string path = resolve_scene(scene);
+    return std::make_unique<SceneClosedForm>(load_scene(path, sets), path);
+}
+
+}  // namespace impulse::scenes
