@@ -155,9 +155,29 @@ std::vector<double> linear_ticks(double lo, double hi) {
     return t;
 }
 
-std::string svg_plot(const Plot& p) {
-    // Data range (non-positive values are left out on log axes).
+/// A plot's data range in axis units (log10 on a log axis), padded, and its map to SVG pixels.
+struct PlotArea {
+    static constexpr double pw = kW - kL - kR, ph = kH - kT - kB;  // the frame's size
+    bool logx = false, logy = false;
     double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+
+    double X(double x) const { return kL + ((logx ? std::log10(x) : x) - x0) / (x1 - x0) * pw; }
+    double Y(double y) const {
+        double v = logy ? std::log10(y) : y;
+        v = std::clamp(v, y0, y1);
+        return kT + (y1 - v) / (y1 - y0) * ph;
+    }
+    /// Whether (x, y) can be drawn: finite, and positive on a log axis.
+    bool ok(double x, double y) const {
+        return std::isfinite(x) && std::isfinite(y) && !(logx && x <= 0) && !(logy && y <= 0);
+    }
+};
+
+/// The range of everything drawn (non-positive values are left out on log axes).
+PlotArea plot_area(const Plot& p) {
+    PlotArea a;
+    a.logx = p.logx, a.logy = p.logy;
+    double &x0 = a.x0, &x1 = a.x1, &y0 = a.y0, &y1 = a.y1;
     const auto take = [&](double x, double y) {
         if (!std::isfinite(x) || !std::isfinite(y)) return;
         if (p.logx && x <= 0) return;
@@ -180,67 +200,47 @@ std::string svg_plot(const Plot& p) {
     if (y1 <= y0) y0 -= 0.5 * std::max(1.0, std::abs(y0)), y1 += 0.5 * std::max(1.0, std::abs(y1));
     const double pad = 0.04 * (y1 - y0);
     y0 -= pad, y1 += pad;
+    return a;
+}
 
-    const double pw = kW - kL - kR, ph = kH - kT - kB;
-    const auto X = [&](double x) {
-        return kL + ((p.logx ? std::log10(x) : x) - x0) / (x1 - x0) * pw;
-    };
-    const auto Y = [&](double y) {
-        double v = p.logy ? std::log10(y) : y;
-        v = std::clamp(v, y0, y1);
-        return kT + (y1 - v) / (y1 - y0) * ph;
-    };
-    const auto ok = [&](double x, double y) {
-        return std::isfinite(x) && std::isfinite(y) && !(p.logx && x <= 0) && !(p.logy && y <= 0);
-    };
+/// Tick values and labels over [lo, hi] in axis units: decades on a log axis (at most about
+/// `decades` of them labelled), else round linear steps.
+std::vector<std::pair<double, std::string>> axis_ticks(double lo, double hi, bool log,
+                                                       int decades) {
+    std::vector<std::pair<double, std::string>> t;
+    if (log) {
+        const int step = std::max(1, int(std::ceil((hi - lo) / decades)));
+        for (int d = int(std::ceil(lo)); d <= int(std::floor(hi)); d += step)
+            t.push_back({std::pow(10.0, d), "1e" + std::to_string(d)});
+        if (t.size() < 2)
+            for (double v : linear_ticks(std::pow(10.0, lo), std::pow(10.0, hi)))
+                if (v > 0) t.push_back({v, fmt(v, 3)});
+    } else {
+        for (double v : linear_ticks(lo, hi)) t.push_back({v, fmt(v, 4)});
+    }
+    return t;
+}
 
-    std::ostringstream o;
+/// The SVG header, the title, the grid with its tick labels, the frame and the axis labels.
+void draw_axes(std::ostream& o, const Plot& p, const PlotArea& a) {
+    constexpr double pw = PlotArea::pw, ph = PlotArea::ph;
     o << "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " << kW << ' ' << kH
       << "\" width=\"" << kW << "\" height=\"" << kH << "\" role=\"img\">\n";
     o << "<title>" << esc(p.title) << "</title>\n";
     o << "<rect x=\"0\" y=\"0\" width=\"" << kW << "\" height=\"" << kH << "\" fill=\"#fff\"/>\n";
     o << "<text x=\"" << kW / 2 << "\" y=\"20\" text-anchor=\"middle\" class=\"pt\">"
       << esc(p.title) << "</text>\n";
-    // Ticks and grid.
     o << "<g class=\"ax\">\n";
-    const auto xticks = [&]() {
-        std::vector<std::pair<double, std::string>> t;
-        if (p.logx) {
-            const int step = std::max(1, int(std::ceil((x1 - x0) / 8)));
-            for (int d = int(std::ceil(x0)); d <= int(std::floor(x1)); d += step)
-                t.push_back({std::pow(10.0, d), "1e" + std::to_string(d)});
-            if (t.size() < 2)
-                for (double v : linear_ticks(std::pow(10.0, x0), std::pow(10.0, x1)))
-                    if (v > 0) t.push_back({v, fmt(v, 3)});
-        } else {
-            for (double v : linear_ticks(x0, x1)) t.push_back({v, fmt(v, 4)});
-        }
-        return t;
-    }();
-    const auto yticks = [&]() {
-        std::vector<std::pair<double, std::string>> t;
-        if (p.logy) {
-            const int step = std::max(1, int(std::ceil((y1 - y0) / 7)));
-            for (int d = int(std::ceil(y0)); d <= int(std::floor(y1)); d += step)
-                t.push_back({std::pow(10.0, d), "1e" + std::to_string(d)});
-            if (t.size() < 2)
-                for (double v : linear_ticks(std::pow(10.0, y0), std::pow(10.0, y1)))
-                    if (v > 0) t.push_back({v, fmt(v, 3)});
-        } else {
-            for (double v : linear_ticks(y0, y1)) t.push_back({v, fmt(v, 4)});
-        }
-        return t;
-    }();
-    for (const auto& [v, label] : xticks) {
-        const double x = X(v);
+    for (const auto& [v, label] : axis_ticks(a.x0, a.x1, p.logx, 8)) {
+        const double x = a.X(v);
         if (x < kL - 0.5 || x > kW - kR + 0.5) continue;
         o << "<line x1=\"" << x << "\" y1=\"" << kT << "\" x2=\"" << x << "\" y2=\"" << kT + ph
           << "\" class=\"grid\"/><text x=\"" << x << "\" y=\"" << kT + ph + 16
           << "\" text-anchor=\"middle\">" << esc(label) << "</text>\n";
     }
-    for (const auto& [v, label] : yticks) {
-        const double y = Y(v);
-        if ((p.logy ? std::log10(v) : v) < y0 || (p.logy ? std::log10(v) : v) > y1) continue;
+    for (const auto& [v, label] : axis_ticks(a.y0, a.y1, p.logy, 7)) {
+        const double y = a.Y(v);
+        if ((p.logy ? std::log10(v) : v) < a.y0 || (p.logy ? std::log10(v) : v) > a.y1) continue;
         o << "<line x1=\"" << kL << "\" y1=\"" << y << "\" x2=\"" << kL + pw << "\" y2=\"" << y
           << "\" class=\"grid\"/><text x=\"" << kL - 6 << "\" y=\"" << y + 4
           << "\" text-anchor=\"end\">" << esc(label) << "</text>\n";
@@ -251,67 +251,86 @@ std::string svg_plot(const Plot& p) {
       << esc(p.xlabel) << "</text>\n";
     o << "<text transform=\"translate(16," << kT + ph / 2
       << ") rotate(-90)\" text-anchor=\"middle\">" << esc(p.ylabel) << "</text>\n</g>\n";
+}
 
-    // Bands, reference lines, series.
-    for (const auto& b : p.bands) {
-        std::ostringstream pts;
-        size_t used = 0;
-        for (size_t i = 0; i < b.x.size(); ++i)
-            if (ok(b.x[i], b.hi[i])) pts << X(b.x[i]) << ',' << Y(b.hi[i]) << ' ', ++used;
-        for (size_t i = b.x.size(); i-- > 0;)
-            if (ok(b.x[i], b.lo[i])) pts << X(b.x[i]) << ',' << Y(b.lo[i]) << ' ', ++used;
-        if (used >= 3)
-            o << "<polygon points=\"" << pts.str() << "\" fill=\"" << b.color
-              << "\" fill-opacity=\"0.15\" stroke=\"none\"/>\n";
+/// A shaded band between lo and hi (the hi edge left to right, the lo edge back).
+void draw_band(std::ostream& o, const Band& b, const PlotArea& a) {
+    std::ostringstream pts;
+    size_t used = 0;
+    for (size_t i = 0; i < b.x.size(); ++i)
+        if (a.ok(b.x[i], b.hi[i])) pts << a.X(b.x[i]) << ',' << a.Y(b.hi[i]) << ' ', ++used;
+    for (size_t i = b.x.size(); i-- > 0;)
+        if (a.ok(b.x[i], b.lo[i])) pts << a.X(b.x[i]) << ',' << a.Y(b.lo[i]) << ' ', ++used;
+    if (used >= 3)
+        o << "<polygon points=\"" << pts.str() << "\" fill=\"" << b.color
+          << "\" fill-opacity=\"0.15\" stroke=\"none\"/>\n";
+}
+
+/// Bars from the axis (or the bottom of a log axis) to y[i], over [x[i], x[i + 1]].
+void draw_bars(std::ostream& o, const Series& s, const PlotArea& a) {
+    for (size_t i = 0; i + 1 < s.x.size(); ++i) {
+        if (!a.ok(s.x[i], s.y[i])) continue;
+        const double xa = a.X(s.x[i]), xb = a.X(s.x[i + 1]);
+        const double yt = a.Y(s.y[i]),
+                     yb = a.Y(a.logy ? std::pow(10.0, a.y0) : std::max(a.y0, 0.0));
+        o << "<rect x=\"" << xa << "\" y=\"" << std::min(yt, yb) << "\" width=\""
+          << std::max(0.0, xb - xa - 0.5) << "\" height=\"" << std::abs(yb - yt) << "\" fill=\""
+          << s.color << "\" fill-opacity=\"0.75\"/>\n";
     }
+}
+
+void draw_points(std::ostream& o, const Series& s, const PlotArea& a) {
+    o << "<g fill=\"" << s.color << "\">";
+    for (size_t i = 0; i < s.x.size(); ++i)
+        if (a.ok(s.x[i], s.y[i]))
+            o << "<circle cx=\"" << a.X(s.x[i]) << "\" cy=\"" << a.Y(s.y[i]) << "\" r=\"1.8\"/>";
+    o << "</g>\n";
+}
+
+/// A polyline, broken where a value cannot be drawn.
+void draw_line(std::ostream& o, const Series& s, const PlotArea& a) {
+    std::ostringstream pts;
+    size_t count = 0;
+    const auto flush = [&]() {
+        if (count >= 2)
+            o << "<polyline points=\"" << pts.str() << "\" fill=\"none\" stroke=\"" << s.color
+              << "\" stroke-width=\"1.6\"" << (s.dashed ? " stroke-dasharray=\"6,4\"" : "")
+              << "/>\n";
+        pts.str("");
+        count = 0;
+    };
+    for (size_t i = 0; i < s.x.size(); ++i) {
+        if (!a.ok(s.x[i], s.y[i])) {
+            flush();
+            continue;
+        }
+        pts << a.X(s.x[i]) << ',' << a.Y(s.y[i]) << ' ';
+        ++count;
+    }
+    flush();
+}
+
+/// Bands, reference lines, series.
+void draw_data(std::ostream& o, const Plot& p, const PlotArea& a) {
+    for (const auto& b : p.bands) draw_band(o, b, a);
     for (const auto& h : p.hlines) {
         if (p.logy && h.y <= 0) continue;
-        const double y = Y(h.y);
-        o << "<line x1=\"" << kL << "\" y1=\"" << y << "\" x2=\"" << kL + pw << "\" y2=\"" << y
-          << "\" stroke=\"" << h.color << "\" stroke-dasharray=\"5,4\"/>\n";
+        const double y = a.Y(h.y);
+        o << "<line x1=\"" << kL << "\" y1=\"" << y << "\" x2=\"" << kL + PlotArea::pw << "\" y2=\""
+          << y << "\" stroke=\"" << h.color << "\" stroke-dasharray=\"5,4\"/>\n";
     }
     for (const auto& s : p.series) {
-        if (s.kind == Series::Bars) {
-            for (size_t i = 0; i + 1 < s.x.size(); ++i) {
-                if (!ok(s.x[i], s.y[i])) continue;
-                const double xa = X(s.x[i]), xb = X(s.x[i + 1]);
-                const double yt = Y(s.y[i]),
-                             yb = Y(p.logy ? std::pow(10.0, y0) : std::max(y0, 0.0));
-                o << "<rect x=\"" << xa << "\" y=\"" << std::min(yt, yb) << "\" width=\""
-                  << std::max(0.0, xb - xa - 0.5) << "\" height=\"" << std::abs(yb - yt)
-                  << "\" fill=\"" << s.color << "\" fill-opacity=\"0.75\"/>\n";
-            }
-        } else if (s.kind == Series::Points) {
-            o << "<g fill=\"" << s.color << "\">";
-            for (size_t i = 0; i < s.x.size(); ++i)
-                if (ok(s.x[i], s.y[i]))
-                    o << "<circle cx=\"" << X(s.x[i]) << "\" cy=\"" << Y(s.y[i])
-                      << "\" r=\"1.8\"/>";
-            o << "</g>\n";
-        } else {
-            // A polyline, broken where a value cannot be drawn.
-            std::ostringstream pts;
-            size_t count = 0;
-            const auto flush = [&]() {
-                if (count >= 2)
-                    o << "<polyline points=\"" << pts.str() << "\" fill=\"none\" stroke=\""
-                      << s.color << "\" stroke-width=\"1.6\""
-                      << (s.dashed ? " stroke-dasharray=\"6,4\"" : "") << "/>\n";
-                pts.str("");
-                count = 0;
-            };
-            for (size_t i = 0; i < s.x.size(); ++i) {
-                if (!ok(s.x[i], s.y[i])) {
-                    flush();
-                    continue;
-                }
-                pts << X(s.x[i]) << ',' << Y(s.y[i]) << ' ';
-                ++count;
-            }
-            flush();
-        }
+        if (s.kind == Series::Bars)
+            draw_bars(o, s, a);
+        else if (s.kind == Series::Points)
+            draw_points(o, s, a);
+        else
+            draw_line(o, s, a);
     }
-    // Legend, top right on a translucent panel sized to its longest label (~6.2 px a character).
+}
+
+/// Legend, top right on a translucent panel sized to its longest label (~6.2 px a character).
+void draw_legend(std::ostream& o, const Plot& p) {
     size_t longest = 0, entries = 0;
     const auto measure = [&](const std::string& label) {
         if (!label.empty()) longest = std::max(longest, label.size()), ++entries;
@@ -320,7 +339,7 @@ std::string svg_plot(const Plot& p) {
     for (const auto& b : p.bands) measure(b.label);
     for (const auto& h : p.hlines) measure(h.label);
     const double lw = 34 + 6.2 * double(longest);
-    const double lx = kL + pw - lw;
+    const double lx = kL + PlotArea::pw - lw;
     if (entries)
         o << "<rect x=\"" << lx - 4 << "\" y=\"" << kT + 3 << "\" width=\"" << lw << "\" height=\""
           << 15 * entries + 6 << "\" fill=\"#fff\" fill-opacity=\"0.85\"/>\n";
@@ -340,6 +359,14 @@ std::string svg_plot(const Plot& p) {
     for (const auto& s : p.series) legend(s.label, s.color, s.kind == Series::Bars);
     for (const auto& b : p.bands) legend(b.label, b.color, true);
     for (const auto& h : p.hlines) legend(h.label, h.color, false);
+}
+
+std::string svg_plot(const Plot& p) {
+    const PlotArea a = plot_area(p);
+    std::ostringstream o;
+    draw_axes(o, p, a);
+    draw_data(o, p, a);
+    draw_legend(o, p);
     o << "</svg>\n";
     return o.str();
 }
