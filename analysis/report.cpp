@@ -440,166 +440,181 @@ std::vector<double> iota_from(size_t n, double first) {
     return v;
 }
 
+const std::string kMeasured = "measured";
+const std::string kTheoryRed = "#d62728";
+
+/// The histogram against the Gaussian of the theory's mean and variance.
+std::string histogram_plot(const AnalysisResult& r) {
+    const auto& T = r.theory;
+    Plot p;
+    p.title = "Histogram of values (64 bins over mean +- 4 sd)";
+    p.xlabel = "value";
+    p.ylabel = "pixels per bin";
+    Series s;
+    s.label = kMeasured;
+    s.kind = Series::Bars;
+    const auto& hg = r.histogram;
+    const double bw = (hg.hi - hg.lo) / double(hg.counts.size());
+    for (size_t i = 0; i <= hg.counts.size(); ++i) {
+        s.x.push_back(hg.lo + bw * double(i));
+        s.y.push_back(i < hg.counts.size() ? double(hg.counts[i]) : 0.0);
+    }
+    p.series.push_back(s);
+    if (T && T->variance > 0) {
+        Series g;
+        g.label = "Gaussian, theory mean and variance";
+        g.color = kTheoryRed;
+        const double total = double(r.frames) * r.width * r.height;
+        const double sd = std::sqrt(T->variance);
+        for (int i = 0; i <= 256; ++i) {
+            const double x = hg.lo + (hg.hi - hg.lo) * i / 256.0;
+            const double z = (x - T->mean) / sd;
+            g.x.push_back(x);
+            g.y.push_back(total * bw * std::exp(-0.5 * z * z) /
+                          (sd * std::sqrt(2 * std::numbers::pi)));
+        }
+        p.series.push_back(g);
+    }
+    return svg_plot(p);
+}
+
+std::string radial_spectrum_plot(const AnalysisResult& r) {
+    const auto& T = r.theory;
+    Plot p;
+    p.title = "Radially averaged power spectrum";
+    p.xlabel = "frequency |k| (cycles/pixel)";
+    p.ylabel = "power (value^2 pixel^2)";
+    p.logx = p.logy = true;
+    Series s;
+    s.label =
+        kMeasured + " (" + std::to_string(r.frames) + (r.frames == 1 ? " frame)" : " frames)");
+    s.kind = Series::Points;
+    for (size_t b = 0; b < r.spectrum.power.size(); ++b)
+        if (r.spectrum.count[b] > 0)
+            s.x.push_back(r.spectrum.frequency[b]), s.y.push_back(r.spectrum.power[b]);
+    p.series.push_back(s);
+    if (T && T->spectrum) {
+        Series t;
+        t.label = "theory";
+        t.color = kTheoryRed;
+        for (size_t b = 0; b < r.spectrum.power.size(); ++b)
+            if (r.spectrum.count[b] > 0)
+                t.x.push_back(r.spectrum.frequency[b]), t.y.push_back(T->spectrum->power[b]);
+        p.series.push_back(t);
+    }
+    return svg_plot(p);
+}
+
+/// z per annulus with the Bonferroni limits +-threshold; `title` and `ylabel` name the test.
+std::string z_plot(const std::string& title, const std::string& ylabel, Series s,
+                   double threshold) {
+    Plot p;
+    p.title = title;
+    p.xlabel = "frequency |k| (cycles/pixel)";
+    p.ylabel = ylabel;
+    s.kind = Series::Points;
+    p.series.push_back(s);
+    p.hlines.push_back({threshold, "Bonferroni limit +-" + fixed(threshold, 2), "#777"});
+    p.hlines.push_back({-threshold, "", "#777"});
+    return svg_plot(p);
+}
+
+std::string spectrum_z_plot(const AnalysisResult& r) {
+    const SpectrumTheory& S = *r.theory->spectrum;
+    Series s;
+    s.label = "z";
+    for (size_t b = 0; b < S.z.size(); ++b)
+        if (std::isfinite(S.z[b])) s.x.push_back(r.spectrum.frequency[b]), s.y.push_back(S.z[b]);
+    return z_plot("Spectrum against theory: z per annulus", "z (Wilson-Hilferty)", s, S.threshold);
+}
+
+std::string autocovariance_plot(const AnalysisResult& r) {
+    const auto& T = r.theory;
+    Plot p;
+    p.title = "Radial autocovariance";
+    p.xlabel = "lag (pixels)";
+    p.ylabel = "covariance (value^2)";
+    Series s;
+    s.label = kMeasured;
+    s.kind = Series::Points;
+    s.x = iota_from(r.autocovariance.size(), 0);
+    s.y = r.autocovariance;
+    p.series.push_back(s);
+    if (T && !T->autocovariance.empty()) {
+        Series t;
+        t.label = "theory";
+        t.color = kTheoryRed;
+        t.x = iota_from(T->autocovariance.size(), 0);
+        t.y = T->autocovariance;
+        p.series.push_back(t);
+    }
+    p.hlines.push_back({0.0, "", "#aaa"});
+    return svg_plot(p);
+}
+
+/// One statistic per frame from frame `from` on, with the theory +- 2 sd of one frame.
+std::string per_frame_plot(const AnalysisResult& r, const std::string& title,
+                           const std::string& ylabel, double (*get)(const FrameStats&),
+                           double theory, double sd, size_t from) {
+    const auto x = iota_from(size_t(r.frames), double(r.first_frame));
+    Plot p;
+    p.title = title;
+    p.xlabel = "frame";
+    p.ylabel = ylabel;
+    Series s;
+    s.label = kMeasured;
+    for (size_t j = from; j < r.frame_stats.size(); ++j)
+        s.x.push_back(x[j]), s.y.push_back(get(r.frame_stats[j]));
+    p.series.push_back(s);
+    if (std::isfinite(theory)) {
+        if (sd > 0) {
+            Band b;
+            b.label = "theory +- 2 sd (one frame)";
+            b.x = {x[from], x.back()};
+            b.lo = {theory - 2 * sd, theory - 2 * sd};
+            b.hi = {theory + 2 * sd, theory + 2 * sd};
+            p.bands.push_back(b);
+        }
+        p.hlines.push_back({theory, "theory", kTheoryRed});
+    }
+    return svg_plot(p);
+}
+
+/// The per-frame mean, variance and difference variance (a sequence of frames).
+void add_per_frame_plots(const AnalysisResult& r, std::vector<std::string>& out) {
+    const auto& T = r.theory;
+    out.push_back(per_frame_plot(
+        r, "Per-frame mean", "mean", [](const FrameStats& f) { return f.mean; }, T ? T->mean : NAN,
+        T ? T->sd_frame_mean : 0.0, 0));
+    out.push_back(per_frame_plot(
+        r, "Per-frame variance", "variance", [](const FrameStats& f) { return f.variance; },
+        T ? T->variance + T->sd_mean * T->sd_mean - T->sd_frame_mean * T->sd_frame_mean : NAN,
+        T ? T->sd_frame_variance : 0.0, 0));
+    out.push_back(per_frame_plot(
+        r, "Per-frame difference variance (frame - previous)", "variance of the difference",
+        [](const FrameStats& f) { return f.diff_variance; },
+        T && T->diff_variance ? *T->diff_variance : NAN, 0.0, 1));
+}
+
+std::string drift_plot(const Stationarity& st) {
+    Series s;
+    s.label = "z, corrected";
+    s.x = st.drift.frequency;
+    s.y = st.z_corrected;
+    return z_plot("Spectral drift, first quarter against last: z per annulus",
+                  "z (correlation-corrected)", s, st.z_threshold);
+}
+
 /// The report's plots, in order.
 std::vector<std::string> plots(const AnalysisResult& r) {
     std::vector<std::string> out;
-    const auto& T = r.theory;
-    const std::string measured = "measured";
-    const std::string red = "#d62728";
-
-    {  // histogram
-        Plot p;
-        p.title = "Histogram of values (64 bins over mean +- 4 sd)";
-        p.xlabel = "value";
-        p.ylabel = "pixels per bin";
-        Series s;
-        s.label = measured;
-        s.kind = Series::Bars;
-        const auto& hg = r.histogram;
-        const double bw = (hg.hi - hg.lo) / double(hg.counts.size());
-        for (size_t i = 0; i <= hg.counts.size(); ++i) {
-            s.x.push_back(hg.lo + bw * double(i));
-            s.y.push_back(i < hg.counts.size() ? double(hg.counts[i]) : 0.0);
-        }
-        p.series.push_back(s);
-        if (T && T->variance > 0) {
-            Series g;
-            g.label = "Gaussian, theory mean and variance";
-            g.color = red;
-            const double total = double(r.frames) * r.width * r.height;
-            const double sd = std::sqrt(T->variance);
-            for (int i = 0; i <= 256; ++i) {
-                const double x = hg.lo + (hg.hi - hg.lo) * i / 256.0;
-                const double z = (x - T->mean) / sd;
-                g.x.push_back(x);
-                g.y.push_back(total * bw * std::exp(-0.5 * z * z) /
-                              (sd * std::sqrt(2 * std::numbers::pi)));
-            }
-            p.series.push_back(g);
-        }
-        out.push_back(svg_plot(p));
-    }
+    out.push_back(histogram_plot(r));
     out.push_back(svg_heatmap(r.periodogram, r.width, r.height));
-    {  // radial spectrum
-        Plot p;
-        p.title = "Radially averaged power spectrum";
-        p.xlabel = "frequency |k| (cycles/pixel)";
-        p.ylabel = "power (value^2 pixel^2)";
-        p.logx = p.logy = true;
-        Series s;
-        s.label =
-            measured + " (" + std::to_string(r.frames) + (r.frames == 1 ? " frame)" : " frames)");
-        s.kind = Series::Points;
-        for (size_t b = 0; b < r.spectrum.power.size(); ++b)
-            if (r.spectrum.count[b] > 0)
-                s.x.push_back(r.spectrum.frequency[b]), s.y.push_back(r.spectrum.power[b]);
-        p.series.push_back(s);
-        if (T && T->spectrum) {
-            Series t;
-            t.label = "theory";
-            t.color = red;
-            for (size_t b = 0; b < r.spectrum.power.size(); ++b)
-                if (r.spectrum.count[b] > 0)
-                    t.x.push_back(r.spectrum.frequency[b]), t.y.push_back(T->spectrum->power[b]);
-            p.series.push_back(t);
-        }
-        out.push_back(svg_plot(p));
-    }
-    if (T && T->spectrum) {  // spectrum z
-        Plot p;
-        p.title = "Spectrum against theory: z per annulus";
-        p.xlabel = "frequency |k| (cycles/pixel)";
-        p.ylabel = "z (Wilson-Hilferty)";
-        Series s;
-        s.label = "z";
-        s.kind = Series::Points;
-        for (size_t b = 0; b < T->spectrum->z.size(); ++b)
-            if (std::isfinite(T->spectrum->z[b]))
-                s.x.push_back(r.spectrum.frequency[b]), s.y.push_back(T->spectrum->z[b]);
-        p.series.push_back(s);
-        p.hlines.push_back({T->spectrum->threshold,
-                            "Bonferroni limit +-" + fixed(T->spectrum->threshold, 2), "#777"});
-        p.hlines.push_back({-T->spectrum->threshold, "", "#777"});
-        out.push_back(svg_plot(p));
-    }
-    {  // autocovariance
-        Plot p;
-        p.title = "Radial autocovariance";
-        p.xlabel = "lag (pixels)";
-        p.ylabel = "covariance (value^2)";
-        Series s;
-        s.label = measured;
-        s.kind = Series::Points;
-        s.x = iota_from(r.autocovariance.size(), 0);
-        s.y = r.autocovariance;
-        p.series.push_back(s);
-        if (T && !T->autocovariance.empty()) {
-            Series t;
-            t.label = "theory";
-            t.color = red;
-            t.x = iota_from(T->autocovariance.size(), 0);
-            t.y = T->autocovariance;
-            p.series.push_back(t);
-        }
-        p.hlines.push_back({0.0, "", "#aaa"});
-        out.push_back(svg_plot(p));
-    }
-    if (r.frames > 1) {
-        const auto x = iota_from(size_t(r.frames), double(r.first_frame));
-        const auto per_frame = [&](const std::string& title, const std::string& ylabel, auto get,
-                                   double theory, double sd, size_t from) {
-            Plot p;
-            p.title = title;
-            p.xlabel = "frame";
-            p.ylabel = ylabel;
-            Series s;
-            s.label = measured;
-            for (size_t j = from; j < r.frame_stats.size(); ++j)
-                s.x.push_back(x[j]), s.y.push_back(get(r.frame_stats[j]));
-            p.series.push_back(s);
-            if (std::isfinite(theory)) {
-                if (sd > 0) {
-                    Band b;
-                    b.label = "theory +- 2 sd (one frame)";
-                    b.x = {x[from], x.back()};
-                    b.lo = {theory - 2 * sd, theory - 2 * sd};
-                    b.hi = {theory + 2 * sd, theory + 2 * sd};
-                    p.bands.push_back(b);
-                }
-                p.hlines.push_back({theory, "theory", red});
-            }
-            out.push_back(svg_plot(p));
-        };
-        per_frame(
-            "Per-frame mean", "mean", [](const FrameStats& f) { return f.mean; },
-            T ? T->mean : NAN, T ? T->sd_frame_mean : 0.0, 0);
-        per_frame(
-            "Per-frame variance", "variance",
-            [](const FrameStats& f) { return f.variance; },
-            T ? T->variance + T->sd_mean * T->sd_mean - T->sd_frame_mean * T->sd_frame_mean : NAN,
-            T ? T->sd_frame_variance : 0.0, 0);
-        per_frame(
-            "Per-frame difference variance (frame - previous)", "variance of the difference",
-            [](const FrameStats& f) { return f.diff_variance; },
-            T && T->diff_variance ? *T->diff_variance : NAN, 0.0, 1);
-    }
-    if (r.stationarity.available) {
-        const auto& st = r.stationarity;
-        Plot p;
-        p.title = "Spectral drift, first quarter against last: z per annulus";
-        p.xlabel = "frequency |k| (cycles/pixel)";
-        p.ylabel = "z (correlation-corrected)";
-        Series s;
-        s.label = "z, corrected";
-        s.kind = Series::Points;
-        s.x = st.drift.frequency;
-        s.y = st.z_corrected;
-        p.series.push_back(s);
-        p.hlines.push_back(
-            {st.z_threshold, "Bonferroni limit +-" + fixed(st.z_threshold, 2), "#777"});
-        p.hlines.push_back({-st.z_threshold, "", "#777"});
-        out.push_back(svg_plot(p));
-    }
+    out.push_back(radial_spectrum_plot(r));
+    if (r.theory && r.theory->spectrum) out.push_back(spectrum_z_plot(r));
+    out.push_back(autocovariance_plot(r));
+    if (r.frames > 1) add_per_frame_plots(r, out);
+    if (r.stationarity.available) out.push_back(drift_plot(r.stationarity));
     return out;
 }
 
