@@ -726,15 +726,14 @@ Json structure_json(const StructureSummary& S) {
             {"hurst", hurst}};
 }
 
-}  // namespace
+/// "key          value": a text report line, the value in a column.
+void put_line(std::ostream& o, const std::string& k, const std::string& v) {
+    o << k << std::string(k.size() < 13 ? 13 - k.size() : 1, ' ') << v << "\n";
+}
 
-// ---------------------------------------------------------------------------------------------
-
-std::string to_text(const AnalysisResult& r) {
-    std::ostringstream o;
-    const auto line = [&](const std::string& k, const std::string& v) {
-        o << k << std::string(k.size() < 13 ? 13 - k.size() : 1, ' ') << v << "\n";
-    };
+/// The input, its moments, histogram range, periodogram summary and frame correlation.
+void put_measurements(std::ostream& o, const AnalysisResult& r) {
+    const auto line = [&](const std::string& k, const std::string& v) { put_line(o, k, v); };
     const auto& m = r.moments;
     line("input", r.input + ": " + source_text(r));
     line("size", std::to_string(r.width) + "x" + std::to_string(r.height) + ", " + frames_text(r));
@@ -757,51 +756,58 @@ std::string to_text(const AnalysisResult& r) {
     line("", "anisotropy " + fmt(p.anisotropy, 3) + " (0 = isotropic), axis " +
                  fixed(p.orientation_deg, 1) + " deg from +x towards +y (image rows down)");
     if (r.frames > 1) line("correlation", "frames per independent frame " + correlation_text(r));
+}
 
-    const auto& st = r.stationarity;
-    if (st.available) {
-        line("trend", "per-frame variance slope " + fmt(st.trend.slope, 4) + " per frame, stderr " +
-                          fmt(st.trend.stderr_slope, 4) + ", t " + fixed(st.trend.t, 2) + " (" +
-                          std::to_string(st.trend_blocks) + " blocks)");
-        line("drift", "first vs last " + std::to_string(st.quarter) + " frames: max|z| " +
-                          fixed(st.drift.max_abs_z, 2) + " as if independent, " +
-                          fixed(st.max_abs_z_corrected, 2) + " for " + fmt(st.q_eff, 3) +
-                          " independent frames per quarter and a common level varying by " +
-                          fmt(100 * std::sqrt(st.common_variance), 2) + " %");
-        line("level", "frame variance " + fmt(st.level.mean, 4) + ": trend z " +
-                          fixed(st.level.z_trend, 2) + ", " + std::to_string(st.level.blocks) +
-                          " block means chi2 " + fixed(st.level.chi2, 1) + " on " +
-                          std::to_string(st.level.dof) + " dof (z " + fixed(st.level.z_blocks, 2) +
-                          "); covariance: " + st.level_model);
+/// The stationarity tests' figures: variance trend, spectral drift, level of the variance.
+void put_stationarity(std::ostream& o, const Stationarity& st) {
+    put_line(o, "trend",
+             "per-frame variance slope " + fmt(st.trend.slope, 4) + " per frame, stderr " +
+                 fmt(st.trend.stderr_slope, 4) + ", t " + fixed(st.trend.t, 2) + " (" +
+                 std::to_string(st.trend_blocks) + " blocks)");
+    put_line(o, "drift",
+             "first vs last " + std::to_string(st.quarter) + " frames: max|z| " +
+                 fixed(st.drift.max_abs_z, 2) + " as if independent, " +
+                 fixed(st.max_abs_z_corrected, 2) + " for " + fmt(st.q_eff, 3) +
+                 " independent frames per quarter and a common level varying by " +
+                 fmt(100 * std::sqrt(st.common_variance), 2) + " %");
+    put_line(o, "level",
+             "frame variance " + fmt(st.level.mean, 4) + ": trend z " + fixed(st.level.z_trend, 2) +
+                 ", " + std::to_string(st.level.blocks) + " block means chi2 " +
+                 fixed(st.level.chi2, 1) + " on " + std::to_string(st.level.dof) + " dof (z " +
+                 fixed(st.level.z_blocks, 2) + "); covariance: " + st.level_model);
+}
+
+/// The scene's closed-form theory beside the measured figures.
+void put_theory(std::ostream& o, const AnalysisResult& r) {
+    const auto line = [&](const std::string& k, const std::string& v) { put_line(o, k, v); };
+    const auto& m = r.moments;
+    const auto& T = *r.theory;
+    o << "\ntheory       " << T.scene << " (hash " << T.hash << "), zoom " << fmt(T.zoom)
+      << " px/unit\n";
+    line("field", "mean " + fmt(T.field_mean) + ", variance " + fmt(T.field_variance) +
+                      " (Campbell's theorem)");
+    if (T.mapped)
+        line("mapping", "display values v -> " + fmt(T.map_lo) + " + v * (" + fmt(T.map_hi) +
+                            " - " + fmt(T.map_lo) + "); " + fixed(100 * T.clipped_fraction, 3) +
+                            " % clipped");
+    line("mean", "measured " + fmt(m.mean) + ", theory " + fmt(T.mean) + " +- " +
+                     fmt(T.sd_mean, 3) + ", z " + fixed(T.z_mean, 2));
+    line("variance", "measured " + fmt(m.variance) + ", theory " + fmt(T.variance) + " +- " +
+                         fmt(T.sd_variance, 3) + ", z " + fixed(T.z_variance, 2));
+    if (T.diff_variance && r.frames > 1) {
+        double dv = 0;
+        for (size_t j = 1; j < r.frame_stats.size(); ++j) dv += r.frame_stats[j].diff_variance;
+        dv /= double(r.frame_stats.size() - 1);
+        line("diff var",
+             "measured " + fmt(dv) + " (mean over frames), theory " + fmt(*T.diff_variance));
     }
+    if (T.spectrum)
+        line("spectrum", "max|z| " + fixed(T.spectrum->max_abs_z, 2) + " over " +
+                             std::to_string(T.spectrum->compared) + " annuli");
+}
 
-    if (r.theory) {
-        const auto& T = *r.theory;
-        o << "\ntheory       " << T.scene << " (hash " << T.hash << "), zoom " << fmt(T.zoom)
-          << " px/unit\n";
-        line("field", "mean " + fmt(T.field_mean) + ", variance " + fmt(T.field_variance) +
-                          " (Campbell's theorem)");
-        if (T.mapped)
-            line("mapping", "display values v -> " + fmt(T.map_lo) + " + v * (" + fmt(T.map_hi) +
-                                " - " + fmt(T.map_lo) + "); " + fixed(100 * T.clipped_fraction, 3) +
-                                " % clipped");
-        line("mean", "measured " + fmt(m.mean) + ", theory " + fmt(T.mean) + " +- " +
-                         fmt(T.sd_mean, 3) + ", z " + fixed(T.z_mean, 2));
-        line("variance", "measured " + fmt(m.variance) + ", theory " + fmt(T.variance) + " +- " +
-                             fmt(T.sd_variance, 3) + ", z " + fixed(T.z_variance, 2));
-        if (T.diff_variance && r.frames > 1) {
-            double dv = 0;
-            for (size_t j = 1; j < r.frame_stats.size(); ++j) dv += r.frame_stats[j].diff_variance;
-            dv /= double(r.frame_stats.size() - 1);
-            line("diff var",
-                 "measured " + fmt(dv) + " (mean over frames), theory " + fmt(*T.diff_variance));
-        }
-        if (T.spectrum)
-            line("spectrum", "max|z| " + fixed(T.spectrum->max_abs_z, 2) + " over " +
-                                 std::to_string(T.spectrum->compared) + " annuli");
-    }
-
-    o << "\n";
+/// The verdicts against theory and on stationarity, H(s) and the notes.
+void put_verdicts(std::ostream& o, const AnalysisResult& r) {
     if (r.theory) {
         const auto& T = *r.theory;
         o << "mean agrees with theory: " << yes_no(T.mean_agrees) << " ("
@@ -815,6 +821,7 @@ std::string to_text(const AnalysisResult& r) {
             o << "spectrum agrees with theory: n/a ("
               << (T.spectrum ? T.spectrum->not_judged : T.no_spectrum) << ")\n";
     }
+    const auto& st = r.stationarity;
     if (st.available)
         o << "stationary: " << verdict_word(st) << " (" << stationarity_verdict(st) << ")\n";
     else
@@ -825,12 +832,14 @@ std::string to_text(const AnalysisResult& r) {
         for (size_t s = 0; s < S.hurst.size(); ++s)
             hs += (s ? ", " : "") + fmt(S.hurst[s], 3) +
                   (S.realizations > 1 ? " +- " + fmt(S.hurst_stderr[s], 2) : "");
-        line("H(s)", "s = 0.." + std::to_string(S.hurst.size() - 1) + ": " + hs +
-                         " (Kaplan & Kuo eq. 21, f along x and y)");
+        put_line(o, "H(s)",
+                 "s = 0.." + std::to_string(S.hurst.size() - 1) + ": " + hs +
+                     " (Kaplan & Kuo eq. 21, f along x and y)");
     }
     for (const auto& n : r.notes) o << "note: " << n << "\n";
+}
 
-    // Tables.
+void put_histogram_table(std::ostream& o, const AnalysisResult& r) {
     o << "\nhistogram (bin start, count)\n";
     const double bw = (r.histogram.hi - r.histogram.lo) / double(r.histogram.counts.size());
     uint64_t most = 1;
@@ -843,6 +852,9 @@ std::string to_text(const AnalysisResult& r) {
           << std::string(size_t(40.0 * double(r.histogram.counts[i]) / double(most) + 0.5), '#')
           << "\n";
     }
+}
+
+void put_spectrum_table(std::ostream& o, const AnalysisResult& r) {
     const bool spec_theory = r.theory && r.theory->spectrum;
     o << "\nradial spectrum (annulus, frequency cycles/px, power, bins"
       << (spec_theory ? ", theory, ratio, z" : "") << ")\n";
@@ -861,6 +873,9 @@ std::string to_text(const AnalysisResult& r) {
         }
         o << "\n";
     }
+}
+
+void put_autocovariance_table(std::ostream& o, const AnalysisResult& r) {
     const bool acov_theory = r.theory && !r.theory->autocovariance.empty();
     o << "\nradial autocovariance (lag px, value" << (acov_theory ? ", theory" : "") << ")\n";
     for (size_t l = 0; l < r.autocovariance.size(); ++l) {
@@ -873,16 +888,35 @@ std::string to_text(const AnalysisResult& r) {
         }
         o << "\n";
     }
-    if (r.frames > 1) {
-        o << "\nper frame (frame, mean, variance, diff variance)\n";
-        for (size_t j = 0; j < r.frame_stats.size(); ++j) {
-            char buf[128];
-            std::snprintf(buf, sizeof buf, "  %6lld %13.6g %13.6g %13.6g\n",
-                          r.first_frame + static_cast<long long>(j), r.frame_stats[j].mean,
-                          r.frame_stats[j].variance, r.frame_stats[j].diff_variance);
-            o << buf;
-        }
+}
+
+void put_frame_table(std::ostream& o, const AnalysisResult& r) {
+    o << "\nper frame (frame, mean, variance, diff variance)\n";
+    for (size_t j = 0; j < r.frame_stats.size(); ++j) {
+        char buf[128];
+        std::snprintf(buf, sizeof buf, "  %6lld %13.6g %13.6g %13.6g\n",
+                      r.first_frame + static_cast<long long>(j), r.frame_stats[j].mean,
+                      r.frame_stats[j].variance, r.frame_stats[j].diff_variance);
+        o << buf;
     }
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+std::string to_text(const AnalysisResult& r) {
+    std::ostringstream o;
+    put_measurements(o, r);
+    if (r.stationarity.available) put_stationarity(o, r.stationarity);
+    if (r.theory) put_theory(o, r);
+    o << "\n";
+    put_verdicts(o, r);
+    // Tables.
+    put_histogram_table(o, r);
+    put_spectrum_table(o, r);
+    put_autocovariance_table(o, r);
+    if (r.frames > 1) put_frame_table(o, r);
     return o.str();
 }
 
