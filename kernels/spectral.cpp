@@ -207,17 +207,14 @@ bool parse_number(std::string_view field, double& out) {
 // ---------------------------------------------------------------------------------------------
 // Radial (isotropic) design
 
-DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
-    const double K = o.nyquist, kp = (1.0 - o.rolloff) * K;
-    auto S = [&](double k) { return sp.density(k, 0.0); };
-
-    // Check S on a fine grid: finite, not negative beyond noise, not all zero.
+/// Checks S(k) on a fine grid of [0, K]: finite, not negative beyond noise, not all zero.
+void check_radial_spectrum(const Spectrum& sp, double K) {
     const int nc = 4096;
     std::vector<SpectrumSample> check(nc + 1);
     double smax = 0.0;
     for (int i = 0; i <= nc; ++i) {
         const double k = K * i / nc;
-        const double s = S(k);
+        const double s = sp.density(k, 0.0);
         require_finite_sample(sp.name, k, s);
         check[i] = {k, 0.0, s};
         smax = std::max(smax, s);
@@ -226,82 +223,87 @@ DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
         throw ValueError(sp.name + ": S(k) <= 0 everywhere on [0, " + num(K) +
                          "]: nothing to design");
     refuse_negative(check, smax, true, 0.0, sp.name + " is negative", false);
+}
 
-    // sqrt(S) T at Gauss–Legendre nodes on [0, kp] and [kp, K] (T has a kink at kp). The panel
-    // count resolves J0(2 pi k r) up to r_hi (2 panels = 32 nodes per period 1/r_hi) and
-    // features of S down to K/256.
-    struct Amplitude {
-        Nodes n;
-        std::vector<double> wa;  // 2 pi w_j k_j sqrt(S_j) T_j
-        double energy = 0.0;     // 2 pi sum w_j k_j S_j T_j^2 = int A^2 d^2k
-    };
-    auto amplitude = [&](double r_hi) {
-        Amplitude a;
-        const int panels = std::max(256, 32 + static_cast<int>(std::ceil(2.0 * K * r_hi)));
-        const int pass = std::max(1, static_cast<int>(std::lround(panels * kp / K)));
-        if (kp > 0) a.n.add(0.0, kp, pass);
-        if (K > kp) a.n.add(kp, K, std::max(16, panels - pass));
-        for (size_t j = 0; j < a.n.x.size(); ++j) {
-            const double k = a.n.x[j];
-            const double amp = std::sqrt(std::max(S(k), 0.0)) * rolloff(k, K, kp);
-            a.wa.push_back(2 * kPi * a.n.w[j] * k * amp);
-            a.energy += 2 * kPi * a.n.w[j] * k * amp * amp;
-        }
-        return a;
-    };
-    auto h_at = [](const Amplitude& a, double r) {
-        double s = 0.0;
-        for (size_t j = 0; j < a.wa.size(); ++j)
-            s += a.wa[j] * detail::bessel_j0(2 * kPi * a.n.x[j] * r);
-        return s;
-    };
-    const double total = amplitude(0.0).energy;
+/// The amplitude A = sqrt(S) T at Gauss–Legendre nodes on [0, kp] and [kp, K] (T has a kink at
+/// kp), as the weights of the Hankel transform h(r) = sum_j wa_j J0(2 pi k_j r).
+struct RadialAmplitude {
+    Nodes n;
+    std::vector<double> wa;  // 2 pi w_j k_j sqrt(S_j) T_j
+    double energy = 0.0;     // 2 pi sum w_j k_j S_j T_j^2 = int A^2 d^2k
+};
 
-    // Radius: the energy radius R_f where 2 pi int_0^R_f h^2 r dr reaches `energy` of the total
-    // (Parseval: int h^2 = int A^2 d^2k). 16-point Gauss–Legendre panels of width 1/K (two
-    // periods of h^2, whose band reaches 2K); not the trapezoid rule, whose Euler–Maclaurin
-    // end correction dr^2/12 * 2 pi h(0)^2 at r = 0 is ~1 % for peaked kernels (markov).
-    // Within the panel that crosses the target, R_f is interpolated linearly.
+/// The panel count resolves J0(2 pi k r) up to r_hi (2 panels = 32 nodes per period 1/r_hi)
+/// and features of S down to K/256.
+RadialAmplitude radial_amplitude(const Spectrum& sp, double K, double kp, double r_hi) {
+    RadialAmplitude a;
+    const int panels = std::max(256, 32 + static_cast<int>(std::ceil(2.0 * K * r_hi)));
+    const int pass = std::max(1, static_cast<int>(std::lround(panels * kp / K)));
+    if (kp > 0) a.n.add(0.0, kp, pass);
+    if (K > kp) a.n.add(kp, K, std::max(16, panels - pass));
+    for (size_t j = 0; j < a.n.x.size(); ++j) {
+        const double k = a.n.x[j];
+        const double amp = std::sqrt(std::max(sp.density(k, 0.0), 0.0)) * rolloff(k, K, kp);
+        a.wa.push_back(2 * kPi * a.n.w[j] * k * amp);
+        a.energy += 2 * kPi * a.n.w[j] * k * amp * amp;
+    }
+    return a;
+}
+
+/// h(r) = int A(k) J0(2 pi k r) 2 pi k dk (the 2-D inverse Fourier transform of a radial A).
+double radial_h(const RadialAmplitude& a, double r) {
+    double s = 0.0;
+    for (size_t j = 0; j < a.wa.size(); ++j)
+        s += a.wa[j] * detail::bessel_j0(2 * kPi * a.n.x[j] * r);
+    return s;
+}
+
+/// The radius for `o.energy` of the kernel energy: the energy radius R_f where
+/// 2 pi int_0^R_f h^2 r dr reaches `energy` of the total (Parseval: int h^2 = int A^2 d^2k).
+/// 16-point Gauss–Legendre panels of width 1/K (two periods of h^2, whose band reaches 2K);
+/// not the trapezoid rule, whose Euler–Maclaurin end correction dr^2/12 * 2 pi h(0)^2 at
+/// r = 0 is ~1 % for peaked kernels (markov). Within the panel that crosses the target, R_f is
+/// interpolated linearly; a window's taper starts at R_f.
+double radial_energy_radius(const Spectrum& sp, const DesignOptions& o, double K, double kp,
+                            double total) {
     const bool tapered = o.window != DesignWindow::None;
-    double R = o.radius;
-    if (R == 0.0) {
-        const double limit = tapered ? kTaperStart * o.max_radius : o.max_radius;
-        const double pw = 1.0 / K, target = o.energy * total;
-        double cum = 0.0, r = 0.0, rf = -1.0;
-        while (rf < 0.0) {
-            const double chunk_end = r + 64.0 * pw;
-            const Amplitude a = amplitude(chunk_end);
-            for (; r < chunk_end - 0.5 * pw; r += pw) {
-                Nodes pn;
-                pn.add(r, r + pw, 1);
-                double add = 0.0;
-                for (size_t j = 0; j < pn.x.size(); ++j) {
-                    const double h = h_at(a, pn.x[j]);
-                    add += pn.w[j] * 2 * kPi * pn.x[j] * h * h;
-                }
-                if (cum + add >= target) {
-                    rf = r + pw * (target - cum) / add;
-                    break;
-                }
-                cum += add;
-                if (r + pw > limit) {
-                    throw ValueError(sp.name + ": keeping " + num(100 * o.energy) +
-                                     " % of the kernel energy needs a radius beyond " +
-                                     num(tapered ? limit / kTaperStart : limit) +
-                                     " units (max_radius = " + num(o.max_radius) + "; " +
-                                     num(100 * cum / total) +
-                                     " % kept there): lower energy, give a radius, or raise "
-                                     "max_radius");
-                }
+    const double limit = tapered ? kTaperStart * o.max_radius : o.max_radius;
+    const double pw = 1.0 / K, target = o.energy * total;
+    double cum = 0.0, r = 0.0, rf = -1.0;
+    while (rf < 0.0) {
+        const double chunk_end = r + 64.0 * pw;
+        const RadialAmplitude a = radial_amplitude(sp, K, kp, chunk_end);
+        for (; r < chunk_end - 0.5 * pw; r += pw) {
+            Nodes pn;
+            pn.add(r, r + pw, 1);
+            double add = 0.0;
+            for (size_t j = 0; j < pn.x.size(); ++j) {
+                const double h = radial_h(a, pn.x[j]);
+                add += pn.w[j] * 2 * kPi * pn.x[j] * h * h;
+            }
+            if (cum + add >= target) {
+                rf = r + pw * (target - cum) / add;
+                break;
+            }
+            cum += add;
+            if (r + pw > limit) {
+                throw ValueError(sp.name + ": keeping " + num(100 * o.energy) +
+                                 " % of the kernel energy needs a radius beyond " +
+                                 num(tapered ? limit / kTaperStart : limit) +
+                                 " units (max_radius = " + num(o.max_radius) + "; " +
+                                 num(100 * cum / total) +
+                                 " % kept there): lower energy, give a radius, or raise "
+                                 "max_radius");
             }
         }
-        R = std::max(tapered ? rf / kTaperStart : rf, 1.0 / K);
     }
+    return std::max(tapered ? rf / kTaperStart : rf, 1.0 / K);
+}
 
-    // Samples for the Catmull–Rom profile: 16 per shortest period 1/K (interpolation error
-    // < 0.1 % at K), at most 4097.
-    const int n = std::clamp(static_cast<int>(std::ceil(16.0 * K * R)) + 1, 64, 4097);
-    const Amplitude a = amplitude(R);
+/// The windowed profile h(r) at n samples on [0, R], zero at R.
+std::shared_ptr<SampledKernel> radial_profile(const RadialAmplitude& a, const DesignOptions& o,
+                                              double R, int n) {
+    const bool tapered = o.window != DesignWindow::None;
     auto sk = std::make_shared<SampledKernel>();
     sk->radial = true;
     sk->n = n;
@@ -309,22 +311,16 @@ DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
     const double taper_start = tapered ? kTaperStart * R : R;
     for (int i = 0; i < n; ++i) {
         const double r = R * i / (n - 1);
-        sk->values[i] = h_at(a, r) * window_weight(o.window, r, R, taper_start);
+        sk->values[i] = radial_h(a, r) * window_weight(o.window, r, R, taper_start);
     }
     sk->values[n - 1] = 0.0;  // the profile is zero from R on
-    DesignedKernel out;
-    out.params.type = KernelType::Sampled;
-    out.params.radius = R;
-    out.params.sampled = sk;
-    const Kernel kern(out.params);
+    return sk;
+}
 
-    // Report: |H|^2 of the final profile (as Kernel evaluates it) against S.
-    DesignReport& rep = out.report;
-    rep.radius = R;
-    rep.samples = n;
-    rep.passband = kp;
-    rep.energy_fraction = kern.integral_sq() / a.energy;
-    rep.effective_area = kern.integral_sq() * kern.integral_sq() / kern.integral_4();
+/// |H|^2 of the final profile (as Kernel evaluates it) against S on [0, K]: the relative
+/// spectrum error, the achieved |H|^2 and the worst ratio error in the pass band.
+void report_radial_spectrum(DesignReport& rep, const Kernel& kern, const Spectrum& sp, double K,
+                            double kp, double R, int n) {
     Nodes rn;
     rn.add(0.0, R, std::max({64, (n - 1) / 2, 32 + static_cast<int>(std::ceil(2.0 * K * R))}));
     std::vector<double> hr(rn.x.size());
@@ -339,7 +335,7 @@ DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
         for (size_t j = 0; j < rn.x.size(); ++j)
             H += hr[j] * detail::bessel_j0(2 * kPi * k * rn.x[j]);
         hk2[m] = H * H;
-        sm[m] = std::max(S(k), 0.0);
+        sm[m] = std::max(sp.density(k, 0.0), 0.0);
         pmax = std::max(pmax, sm[m]);
         const double wt = (m == 0 || m == M ? 0.5 : 1.0) * k;
         num2 += wt * (hk2[m] - sm[m]) * (hk2[m] - sm[m]);
@@ -350,11 +346,14 @@ DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
     for (int m = 0; m <= M; ++m)
         if (K * m / M <= kp && sm[m] >= 0.01 * pmax)
             rep.passband_error = std::max(rep.passband_error, std::abs(hk2[m] / sm[m] - 1.0));
+}
 
-    // What the renderer evaluates: the Chebyshev polynomial, or the q-table (linear in q, so
-    // coarse in r near the centre: the first entry spans r < R / 64).
+/// The largest error, relative to max |h|, of what the renderer evaluates: the Chebyshev
+/// polynomial, or the q-table (linear in q, so coarse in r near the centre: the first entry
+/// spans r < R / 64).
+double radial_render_error(const SampledKernel& sk, const Kernel& kern, double R) {
     double hmax = 0.0, err = 0.0;
-    for (double v : sk->values) hmax = std::max(hmax, std::abs(v));
+    for (double v : sk.values) hmax = std::max(hmax, std::abs(v));
     const auto& table = kern.envelope_table();
     for (int i = 0; i < 20000; ++i) {
         const double r = R * i / 20000.0, q = (r / R) * (r / R);
@@ -368,7 +367,34 @@ DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
         }
         err = std::max(err, std::abs(fast - kern.envelope(q)));
     }
-    rep.render_error = hmax > 0 ? err / hmax : 0.0;
+    return hmax > 0 ? err / hmax : 0.0;
+}
+
+DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
+    const double K = o.nyquist, kp = (1.0 - o.rolloff) * K;
+    check_radial_spectrum(sp, K);
+    const double total = radial_amplitude(sp, K, kp, 0.0).energy;
+    const double R = o.radius == 0.0 ? radial_energy_radius(sp, o, K, kp, total) : o.radius;
+
+    // Samples for the Catmull–Rom profile: 16 per shortest period 1/K (interpolation error
+    // < 0.1 % at K), at most 4097.
+    const int n = std::clamp(static_cast<int>(std::ceil(16.0 * K * R)) + 1, 64, 4097);
+    const RadialAmplitude a = radial_amplitude(sp, K, kp, R);
+    const auto sk = radial_profile(a, o, R, n);
+    DesignedKernel out;
+    out.params.type = KernelType::Sampled;
+    out.params.radius = R;
+    out.params.sampled = sk;
+    const Kernel kern(out.params);
+
+    DesignReport& rep = out.report;
+    rep.radius = R;
+    rep.samples = n;
+    rep.passband = kp;
+    rep.energy_fraction = kern.integral_sq() / a.energy;
+    rep.effective_area = kern.integral_sq() * kern.integral_sq() / kern.integral_4();
+    report_radial_spectrum(rep, kern, sp, K, kp, R, n);
+    rep.render_error = radial_render_error(*sk, kern, R);
     return out;
 }
 
