@@ -401,21 +401,170 @@ DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
 // ---------------------------------------------------------------------------------------------
 // Grid (angle-dependent) design
 
+/// The smallest even 2^a 3^b 5^c >= max(n, 16): a fast FFT size.
+int fft_size(int n) {
+    for (int m = std::max(n, 16);; ++m) {
+        if (m % 2) continue;
+        int x = m;
+        for (int f : {2, 3, 5})
+            while (x % f == 0) x /= f;
+        if (x == 1) return m;
+    }
+}
+
+/// Fills `inv`'s half-plane spectrum with the amplitude sqrt(S) T / (sinc^2 sinc^2) on an
+/// N x N grid of spacing d (the sinc^2 of the bilinear interpolant compensated) and returns
+/// the symmetrised target S there. With `check`, first refuses a non-finite, negative or zero S.
+std::vector<double> grid_amplitude(const Spectrum& sp, double K, double kp, int N, double d,
+                                   bool check, numeric::RealFft2d& inv) {
+    const double dk = 1.0 / (N * d);
+    const int hw = N / 2 + 1;
+    std::vector<double> target(size_t(N) * hw, 0.0);  // symmetrised S on the half grid
+    std::vector<SpectrumSample> samples;
+    double smax = 0.0;
+    for (int j = 0; j < N; ++j) {
+        const int sj = j < N / 2 ? j : j - N;
+        for (int i = 0; i < hw; ++i) {
+            const int si = i == N / 2 ? -i : i;  // the Nyquist column is its own mirror
+            const double kx = si * dk, ky = sj * dk, k = std::hypot(kx, ky);
+            if (k >= K) continue;
+            const double th = std::atan2(ky, kx);
+            const double s1 = sp.density(k, th), s2 = sp.density(k, th + (th > 0 ? -kPi : kPi));
+            require_finite_sample(sp.name, k, s1);
+            require_finite_sample(sp.name, k, s2);
+            if (check) samples.push_back({k, th, std::min(s1, s2)});
+            // A real field has S(k) = S(-k): use the symmetric part (Lewis 1987: the
+            // spectrum of a real noise is symmetric).
+            const double s = 0.5 * (s1 + s2);
+            smax = std::max(smax, std::max(s1, s2));
+            target[size_t(j) * hw + i] = std::max(s, 0.0);
+            const double comp = std::pow(sinc(kx * d) * sinc(ky * d), 2);
+            inv.spectrum()[size_t(j) * hw + i] =
+                std::sqrt(std::max(s, 0.0)) * rolloff(k, K, kp) / comp;
+        }
+    }
+    if (check) {
+        if (!(smax > 0.0))
+            throw ValueError(sp.name + ": S <= 0 everywhere on |k| < " + num(K) +
+                             ": nothing to design");
+        refuse_negative(samples, smax, false, 0.125 * K, sp.name + " is negative", true);
+    }
+    return target;
+}
+
+/// h at signed sample indices (x, y) of the periodic N x N grid.
+double periodic_at(const std::vector<double>& h, int N, int x, int y) {
+    return h[size_t((y + N) % N) * N + size_t((x + N) % N)];
+}
+
+/// The energy of h in rings of width d/2 about the centre, and in all.
+struct RingEnergy {
+    std::vector<double> ring;
+    double total = 0.0;
+};
+
+RingEnergy ring_energy(const std::vector<double>& h, int N) {
+    RingEnergy e;
+    const int rings = N;  // radius up to N d / sqrt(2) < N * d/2 * 2
+    e.ring.assign(rings + 1, 0.0);
+    for (int y = -N / 2; y < N / 2; ++y)
+        for (int x = -N / 2; x < N / 2; ++x) {
+            const double v = periodic_at(h, N, x, y);
+            const int b = std::min(rings, static_cast<int>(2.0 * std::hypot(x, y)));
+            e.ring[b] += v * v;
+            e.total += v * v;
+        }
+    return e;
+}
+
+/// The radius holding `o.energy` of the total (interpolated within its ring); a window's
+/// taper starts there. Refuses one beyond max_radius.
+double grid_energy_radius(const Spectrum& sp, const DesignOptions& o, const RingEnergy& e,
+                          double d) {
+    const bool tapered = o.window != DesignWindow::None;
+    double cum = 0.0, rf = 0.0;
+    for (size_t b = 0; b < e.ring.size(); ++b) {
+        if (cum + e.ring[b] >= o.energy * e.total) {
+            rf = 0.5 * d * (int(b) + (o.energy * e.total - cum) / e.ring[b]);
+            break;
+        }
+        cum += e.ring[b];
+    }
+    const double R = std::max(tapered ? rf / kTaperStart : rf, 2.0 * d);
+    if (R > o.max_radius)
+        throw ValueError(sp.name + ": keeping " + num(100 * o.energy) +
+                         " % of the kernel energy needs a radius of " + num(R) +
+                         " units (max_radius = " + num(o.max_radius) +
+                         "): lower energy, give a radius, or raise max_radius");
+    return R;
+}
+
+/// h cropped to R (rounded up to whole samples) and windowed, also written into `fwd`'s real
+/// grid for the report; the report's radius, samples and energy fraction filled.
+DesignedKernel crop_grid_kernel(const std::vector<double>& h, int N, double d, double R,
+                                const DesignOptions& o, double total, numeric::RealFft2d& fwd) {
+    const bool tapered = o.window != DesignWindow::None;
+    const int m = static_cast<int>(std::ceil(R / d - 1e-9));
+    R = m * d;
+    const int n = 2 * m + 1;
+    const double taper_start = tapered ? kTaperStart * R : R;
+    auto sk = std::make_shared<SampledKernel>();
+    sk->radial = false;
+    sk->n = n;
+    sk->values.assign(size_t(n) * n, 0.0);
+    double kept = 0.0;
+    for (int y = -m; y <= m; ++y)
+        for (int x = -m; x <= m; ++x) {
+            const double v = periodic_at(h, N, x, y) *
+                             window_weight(o.window, std::hypot(x, y) * d, R, taper_start);
+            sk->values[size_t(y + m) * n + size_t(x + m)] = v;
+            fwd.real()[size_t((y + N) % N) * N + size_t((x + N) % N)] = v;
+            kept += v * v;
+        }
+    DesignedKernel out;
+    out.params.type = KernelType::Sampled;
+    out.params.radius = R;
+    out.params.sampled = sk;
+    out.report.radius = R;
+    out.report.samples = n;
+    out.report.grid = true;
+    out.report.energy_fraction = kept / total;
+    return out;
+}
+
+/// |H(k)|^2 of the bilinear interpolant, (d^2 sinc^2(kx d) sinc^2(ky d) |DFT|)^2 (exact at the
+/// grid frequencies), against the target: the spectrum error and the pass-band error. Both
+/// halves of the plane count (weights 2 except columns 0 and N/2). `fwd` holds the kernel.
+void report_grid_spectrum(DesignReport& rep, numeric::RealFft2d& fwd,
+                          const std::vector<double>& target, int N, double d, double K, double kp) {
+    const double dk = 1.0 / (N * d);
+    const int hw = N / 2 + 1;
+    fwd.forward();
+    double num2 = 0.0, den2 = 0.0, pmax = 0.0;
+    for (double t : target) pmax = std::max(pmax, t);
+    for (int j = 0; j < N; ++j) {
+        const int sj = j < N / 2 ? j : j - N;
+        for (int i = 0; i < hw; ++i) {
+            const double kx = i * dk, ky = sj * dk, k = std::hypot(kx, ky);
+            if (k >= K) continue;
+            const double f = d * d * std::pow(sinc(kx * d) * sinc(ky * d), 2);
+            const double H2 = f * f * std::norm(fwd.spectrum()[size_t(j) * hw + i]);
+            const double s = target[size_t(j) * hw + i];
+            const double wt = (i == 0 || i == N / 2) ? 1.0 : 2.0;
+            num2 += wt * (H2 - s) * (H2 - s);
+            den2 += wt * s * s;
+            if (k <= kp && s >= 0.01 * pmax)
+                rep.passband_error = std::max(rep.passband_error, std::abs(H2 / s - 1.0));
+        }
+    }
+    rep.spectrum_error = den2 > 0 ? std::sqrt(num2 / den2) : 0.0;
+}
+
 DesignedKernel design_grid(const Spectrum& sp, const DesignOptions& o) {
     const double K = o.nyquist, kp = (1.0 - o.rolloff) * K;
     // Grid spacing 1/(4K): the samples carry frequencies up to 2K, twice the designed band, so
     // the bilinear interpolant's images (at multiples of 4K) sit far from the band.
     const double d = 0.25 / K;
-    const bool tapered = o.window != DesignWindow::None;
-    auto fft_size = [](int n) {  // smallest 2^a 3^b 5^c >= n, even
-        for (int m = std::max(n, 16);; ++m) {
-            if (m % 2) continue;
-            int x = m;
-            for (int f : {2, 3, 5})
-                while (x % f == 0) x /= f;
-            if (x == 1) return m;
-        }
-    };
     // The FFT domain must hold the kernel plus its tail: side >= 4 R (the periodic copies of
     // the tail stay beyond 2 R). Start at 256 samples (or from the given radius), double as
     // needed, at most 2048.
@@ -429,74 +578,18 @@ DesignedKernel design_grid(const Spectrum& sp, const DesignOptions& o) {
     bool checked = false;
     for (;;) {
         const double dk = 1.0 / (N * d);
-        const int hw = N / 2 + 1;
         numeric::RealFft2d inv(N, N, numeric::FftPlans::Inverse);
-        std::vector<double> target(size_t(N) * hw, 0.0);  // symmetrised S on the half grid
-        std::vector<SpectrumSample> samples;
-        double smax = 0.0;
-        for (int j = 0; j < N; ++j) {
-            const int sj = j < N / 2 ? j : j - N;
-            for (int i = 0; i < hw; ++i) {
-                const int si = i == N / 2 ? -i : i;  // the Nyquist column is its own mirror
-                const double kx = si * dk, ky = sj * dk, k = std::hypot(kx, ky);
-                if (k >= K) continue;
-                const double th = std::atan2(ky, kx);
-                const double s1 = sp.density(k, th), s2 = sp.density(k, th + (th > 0 ? -kPi : kPi));
-                require_finite_sample(sp.name, k, s1);
-                require_finite_sample(sp.name, k, s2);
-                if (!checked) samples.push_back({k, th, std::min(s1, s2)});
-                // A real field has S(k) = S(-k): use the symmetric part (Lewis 1987: the
-                // spectrum of a real noise is symmetric).
-                const double s = 0.5 * (s1 + s2);
-                smax = std::max(smax, std::max(s1, s2));
-                target[size_t(j) * hw + i] = std::max(s, 0.0);
-                const double comp = std::pow(sinc(kx * d) * sinc(ky * d), 2);
-                inv.spectrum()[size_t(j) * hw + i] =
-                    std::sqrt(std::max(s, 0.0)) * rolloff(k, K, kp) / comp;
-            }
-        }
-        if (!checked) {
-            if (!(smax > 0.0))
-                throw ValueError(sp.name + ": S <= 0 everywhere on |k| < " + num(K) +
-                                 ": nothing to design");
-            refuse_negative(samples, smax, false, 0.125 * K, sp.name + " is negative", true);
-            checked = true;
-        }
+        const std::vector<double> target = grid_amplitude(sp, K, kp, N, d, !checked, inv);
+        checked = true;
         inv.inverse();
         // h(x) = sum_k A(k) e^{2 pi i k.x} dk^2; index (i, j) <-> x = (si d, sj d).
         const double* raw = inv.real();
         std::vector<double> h(size_t(N) * N);
         for (size_t t = 0; t < h.size(); ++t) h[t] = raw[t] * dk * dk;
-        auto at = [&](int x, int y) {  // signed sample indices
-            return h[size_t((y + N) % N) * N + size_t((x + N) % N)];
-        };
-        // Energy in rings of width d/2 for the energy radius.
-        const int rings = N;  // radius up to N d / sqrt(2) < N * d/2 * 2
-        std::vector<double> ring(rings + 1, 0.0);
-        double total = 0.0;
-        for (int y = -N / 2; y < N / 2; ++y)
-            for (int x = -N / 2; x < N / 2; ++x) {
-                const double v = at(x, y);
-                const int b = std::min(rings, static_cast<int>(2.0 * std::hypot(x, y)));
-                ring[b] += v * v;
-                total += v * v;
-            }
+        const RingEnergy e = ring_energy(h, N);
         double R = o.radius;
         if (R == 0.0) {
-            double cum = 0.0, rf = 0.0;
-            for (int b = 0; b <= rings; ++b) {
-                if (cum + ring[b] >= o.energy * total) {
-                    rf = 0.5 * d * (b + (o.energy * total - cum) / ring[b]);
-                    break;
-                }
-                cum += ring[b];
-            }
-            R = std::max(tapered ? rf / kTaperStart : rf, 2.0 * d);
-            if (R > o.max_radius)
-                throw ValueError(sp.name + ": keeping " + num(100 * o.energy) +
-                                 " % of the kernel energy needs a radius of " + num(R) +
-                                 " units (max_radius = " + num(o.max_radius) +
-                                 "): lower energy, give a radius, or raise max_radius");
+            R = grid_energy_radius(sp, o, e, d);
             if (4.0 * R > N * d) {
                 if (2 * N > kMaxN)
                     throw ValueError(sp.name + ": the kernel needs a radius of " + num(R) +
@@ -508,60 +601,15 @@ DesignedKernel design_grid(const Spectrum& sp, const DesignOptions& o) {
                 continue;
             }
         }
-        // Crop to R (rounded up to whole samples), windowed.
-        const int m = static_cast<int>(std::ceil(R / d - 1e-9));
-        R = m * d;
-        const int n = 2 * m + 1;
-        const double taper_start = tapered ? kTaperStart * R : R;
-        auto sk = std::make_shared<SampledKernel>();
-        sk->radial = false;
-        sk->n = n;
-        sk->values.assign(size_t(n) * n, 0.0);
-        double kept = 0.0;
         numeric::RealFft2d fwd(N, N, numeric::FftPlans::Forward);  // the final kernel's transform, for the report
-        for (int y = -m; y <= m; ++y)
-            for (int x = -m; x <= m; ++x) {
-                const double v =
-                    at(x, y) * window_weight(o.window, std::hypot(x, y) * d, R, taper_start);
-                sk->values[size_t(y + m) * n + size_t(x + m)] = v;
-                fwd.real()[size_t((y + N) % N) * N + size_t((x + N) % N)] = v;
-                kept += v * v;
-            }
-        DesignedKernel out;
-        out.params.type = KernelType::Sampled;
-        out.params.radius = R;
-        out.params.sampled = sk;
+        DesignedKernel out = crop_grid_kernel(h, N, d, R, o, e.total, fwd);
         DesignReport& rep = out.report;
-        rep.radius = R;
-        rep.samples = n;
-        rep.grid = true;
         rep.passband = kp;
-        rep.energy_fraction = kept / total;
         {
             const Kernel kern(out.params);
             rep.effective_area = kern.integral_sq() * kern.integral_sq() / kern.integral_4();
         }
-        // |H(k)|^2 of the bilinear interpolant: (d^2 sinc^2(kx d) sinc^2(ky d) |DFT|)^2, exact at
-        // the grid frequencies. Both halves of the plane count (weights 2 except columns 0, N/2).
-        fwd.forward();
-        double num2 = 0.0, den2 = 0.0, pmax = 0.0;
-        for (double t : target) pmax = std::max(pmax, t);
-        for (int j = 0; j < N; ++j) {
-            const int sj = j < N / 2 ? j : j - N;
-            for (int i = 0; i < hw; ++i) {
-                const double kx = i * dk, ky = sj * dk, k = std::hypot(kx, ky);
-                if (k >= K) continue;
-                const double f = d * d * std::pow(sinc(kx * d) * sinc(ky * d), 2);
-                const double H2 = f * f * std::norm(fwd.spectrum()[size_t(j) * hw + i]);
-                const double s = target[size_t(j) * hw + i];
-                const double wt = (i == 0 || i == N / 2) ? 1.0 : 2.0;
-                num2 += wt * (H2 - s) * (H2 - s);
-                den2 += wt * s * s;
-                if (k <= kp && s >= 0.01 * pmax)
-                    rep.passband_error = std::max(rep.passband_error, std::abs(H2 / s - 1.0));
-            }
-        }
-        rep.spectrum_error = den2 > 0 ? std::sqrt(num2 / den2) : 0.0;
+        report_grid_spectrum(rep, fwd, target, N, d, K, kp);
         return out;
     }
 }
