@@ -440,16 +440,22 @@ std::vector<double> iota_from(size_t n, double first) {
     return v;
 }
 
+/// A plot with its title and axis labels.
+Plot titled(const std::string& title, const std::string& xlabel, const std::string& ylabel) {
+    Plot p;
+    p.title = title;
+    p.xlabel = xlabel;
+    p.ylabel = ylabel;
+    return p;
+}
+
 const std::string kMeasured = "measured";
 const std::string kTheoryRed = "#d62728";
 
 /// The histogram against the Gaussian of the theory's mean and variance.
 std::string histogram_plot(const AnalysisResult& r) {
     const auto& T = r.theory;
-    Plot p;
-    p.title = "Histogram of values (64 bins over mean +- 4 sd)";
-    p.xlabel = "value";
-    p.ylabel = "pixels per bin";
+    Plot p = titled("Histogram of values (64 bins over mean +- 4 sd)", "value", "pixels per bin");
     Series s;
     s.label = kMeasured;
     s.kind = Series::Bars;
@@ -480,10 +486,8 @@ std::string histogram_plot(const AnalysisResult& r) {
 
 std::string radial_spectrum_plot(const AnalysisResult& r) {
     const auto& T = r.theory;
-    Plot p;
-    p.title = "Radially averaged power spectrum";
-    p.xlabel = "frequency |k| (cycles/pixel)";
-    p.ylabel = "power (value^2 pixel^2)";
+    Plot p = titled("Radially averaged power spectrum", "frequency |k| (cycles/pixel)",
+                    "power (value^2 pixel^2)");
     p.logx = p.logy = true;
     Series s;
     s.label =
@@ -508,10 +512,7 @@ std::string radial_spectrum_plot(const AnalysisResult& r) {
 /// z per annulus with the Bonferroni limits +-threshold; `title` and `ylabel` name the test.
 std::string z_plot(const std::string& title, const std::string& ylabel, Series s,
                    double threshold) {
-    Plot p;
-    p.title = title;
-    p.xlabel = "frequency |k| (cycles/pixel)";
-    p.ylabel = ylabel;
+    Plot p = titled(title, "frequency |k| (cycles/pixel)", ylabel);
     s.kind = Series::Points;
     p.series.push_back(s);
     p.hlines.push_back({threshold, "Bonferroni limit +-" + fixed(threshold, 2), "#777"});
@@ -530,10 +531,7 @@ std::string spectrum_z_plot(const AnalysisResult& r) {
 
 std::string autocovariance_plot(const AnalysisResult& r) {
     const auto& T = r.theory;
-    Plot p;
-    p.title = "Radial autocovariance";
-    p.xlabel = "lag (pixels)";
-    p.ylabel = "covariance (value^2)";
+    Plot p = titled("Radial autocovariance", "lag (pixels)", "covariance (value^2)");
     Series s;
     s.label = kMeasured;
     s.kind = Series::Points;
@@ -557,10 +555,7 @@ std::string per_frame_plot(const AnalysisResult& r, const std::string& title,
                            const std::string& ylabel, double (*get)(const FrameStats&),
                            double theory, double sd, size_t from) {
     const auto x = iota_from(size_t(r.frames), double(r.first_frame));
-    Plot p;
-    p.title = title;
-    p.xlabel = "frame";
-    p.ylabel = ylabel;
+    Plot p = titled(title, "frame", ylabel);
     Series s;
     s.label = kMeasured;
     for (size_t j = from; j < r.frame_stats.size(); ++j)
