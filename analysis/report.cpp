@@ -155,9 +155,29 @@ std::vector<double> linear_ticks(double lo, double hi) {
     return t;
 }
 
-std::string svg_plot(const Plot& p) {
-    // Data range (non-positive values are left out on log axes).
+/// A plot's data range in axis units (log10 on a log axis), padded, and its map to SVG pixels.
+struct PlotArea {
+    static constexpr double pw = kW - kL - kR, ph = kH - kT - kB;  // the frame's size
+    bool logx = false, logy = false;
     double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+
+    double X(double x) const { return kL + ((logx ? std::log10(x) : x) - x0) / (x1 - x0) * pw; }
+    double Y(double y) const {
+        double v = logy ? std::log10(y) : y;
+        v = std::clamp(v, y0, y1);
+        return kT + (y1 - v) / (y1 - y0) * ph;
+    }
+    /// Whether (x, y) can be drawn: finite, and positive on a log axis.
+    bool ok(double x, double y) const {
+        return std::isfinite(x) && std::isfinite(y) && !(logx && x <= 0) && !(logy && y <= 0);
+    }
+};
+
+/// The range of everything drawn (non-positive values are left out on log axes).
+PlotArea plot_area(const Plot& p) {
+    PlotArea a;
+    a.logx = p.logx, a.logy = p.logy;
+    double &x0 = a.x0, &x1 = a.x1, &y0 = a.y0, &y1 = a.y1;
     const auto take = [&](double x, double y) {
         if (!std::isfinite(x) || !std::isfinite(y)) return;
         if (p.logx && x <= 0) return;
@@ -180,67 +200,47 @@ std::string svg_plot(const Plot& p) {
     if (y1 <= y0) y0 -= 0.5 * std::max(1.0, std::abs(y0)), y1 += 0.5 * std::max(1.0, std::abs(y1));
     const double pad = 0.04 * (y1 - y0);
     y0 -= pad, y1 += pad;
+    return a;
+}
 
-    const double pw = kW - kL - kR, ph = kH - kT - kB;
-    const auto X = [&](double x) {
-        return kL + ((p.logx ? std::log10(x) : x) - x0) / (x1 - x0) * pw;
-    };
-    const auto Y = [&](double y) {
-        double v = p.logy ? std::log10(y) : y;
-        v = std::clamp(v, y0, y1);
-        return kT + (y1 - v) / (y1 - y0) * ph;
-    };
-    const auto ok = [&](double x, double y) {
-        return std::isfinite(x) && std::isfinite(y) && !(p.logx && x <= 0) && !(p.logy && y <= 0);
-    };
+/// Tick values and labels over [lo, hi] in axis units: decades on a log axis (at most about
+/// `decades` of them labelled), else round linear steps.
+std::vector<std::pair<double, std::string>> axis_ticks(double lo, double hi, bool log,
+                                                       int decades) {
+    std::vector<std::pair<double, std::string>> t;
+    if (log) {
+        const int step = std::max(1, int(std::ceil((hi - lo) / decades)));
+        for (int d = int(std::ceil(lo)); d <= int(std::floor(hi)); d += step)
+            t.push_back({std::pow(10.0, d), "1e" + std::to_string(d)});
+        if (t.size() < 2)
+            for (double v : linear_ticks(std::pow(10.0, lo), std::pow(10.0, hi)))
+                if (v > 0) t.push_back({v, fmt(v, 3)});
+    } else {
+        for (double v : linear_ticks(lo, hi)) t.push_back({v, fmt(v, 4)});
+    }
+    return t;
+}
 
-    std::ostringstream o;
+/// The SVG header, the title, the grid with its tick labels, the frame and the axis labels.
+void draw_axes(std::ostream& o, const Plot& p, const PlotArea& a) {
+    constexpr double pw = PlotArea::pw, ph = PlotArea::ph;
     o << "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " << kW << ' ' << kH
       << "\" width=\"" << kW << "\" height=\"" << kH << "\" role=\"img\">\n";
     o << "<title>" << esc(p.title) << "</title>\n";
     o << "<rect x=\"0\" y=\"0\" width=\"" << kW << "\" height=\"" << kH << "\" fill=\"#fff\"/>\n";
     o << "<text x=\"" << kW / 2 << "\" y=\"20\" text-anchor=\"middle\" class=\"pt\">"
       << esc(p.title) << "</text>\n";
-    // Ticks and grid.
     o << "<g class=\"ax\">\n";
-    const auto xticks = [&]() {
-        std::vector<std::pair<double, std::string>> t;
-        if (p.logx) {
-            const int step = std::max(1, int(std::ceil((x1 - x0) / 8)));
-            for (int d = int(std::ceil(x0)); d <= int(std::floor(x1)); d += step)
-                t.push_back({std::pow(10.0, d), "1e" + std::to_string(d)});
-            if (t.size() < 2)
-                for (double v : linear_ticks(std::pow(10.0, x0), std::pow(10.0, x1)))
-                    if (v > 0) t.push_back({v, fmt(v, 3)});
-        } else {
-            for (double v : linear_ticks(x0, x1)) t.push_back({v, fmt(v, 4)});
-        }
-        return t;
-    }();
-    const auto yticks = [&]() {
-        std::vector<std::pair<double, std::string>> t;
-        if (p.logy) {
-            const int step = std::max(1, int(std::ceil((y1 - y0) / 7)));
-            for (int d = int(std::ceil(y0)); d <= int(std::floor(y1)); d += step)
-                t.push_back({std::pow(10.0, d), "1e" + std::to_string(d)});
-            if (t.size() < 2)
-                for (double v : linear_ticks(std::pow(10.0, y0), std::pow(10.0, y1)))
-                    if (v > 0) t.push_back({v, fmt(v, 3)});
-        } else {
-            for (double v : linear_ticks(y0, y1)) t.push_back({v, fmt(v, 4)});
-        }
-        return t;
-    }();
-    for (const auto& [v, label] : xticks) {
-        const double x = X(v);
+    for (const auto& [v, label] : axis_ticks(a.x0, a.x1, p.logx, 8)) {
+        const double x = a.X(v);
         if (x < kL - 0.5 || x > kW - kR + 0.5) continue;
         o << "<line x1=\"" << x << "\" y1=\"" << kT << "\" x2=\"" << x << "\" y2=\"" << kT + ph
           << "\" class=\"grid\"/><text x=\"" << x << "\" y=\"" << kT + ph + 16
           << "\" text-anchor=\"middle\">" << esc(label) << "</text>\n";
     }
-    for (const auto& [v, label] : yticks) {
-        const double y = Y(v);
-        if ((p.logy ? std::log10(v) : v) < y0 || (p.logy ? std::log10(v) : v) > y1) continue;
+    for (const auto& [v, label] : axis_ticks(a.y0, a.y1, p.logy, 7)) {
+        const double y = a.Y(v);
+        if ((p.logy ? std::log10(v) : v) < a.y0 || (p.logy ? std::log10(v) : v) > a.y1) continue;
         o << "<line x1=\"" << kL << "\" y1=\"" << y << "\" x2=\"" << kL + pw << "\" y2=\"" << y
           << "\" class=\"grid\"/><text x=\"" << kL - 6 << "\" y=\"" << y + 4
           << "\" text-anchor=\"end\">" << esc(label) << "</text>\n";
@@ -251,67 +251,86 @@ std::string svg_plot(const Plot& p) {
       << esc(p.xlabel) << "</text>\n";
     o << "<text transform=\"translate(16," << kT + ph / 2
       << ") rotate(-90)\" text-anchor=\"middle\">" << esc(p.ylabel) << "</text>\n</g>\n";
+}
 
-    // Bands, reference lines, series.
-    for (const auto& b : p.bands) {
-        std::ostringstream pts;
-        size_t used = 0;
-        for (size_t i = 0; i < b.x.size(); ++i)
-            if (ok(b.x[i], b.hi[i])) pts << X(b.x[i]) << ',' << Y(b.hi[i]) << ' ', ++used;
-        for (size_t i = b.x.size(); i-- > 0;)
-            if (ok(b.x[i], b.lo[i])) pts << X(b.x[i]) << ',' << Y(b.lo[i]) << ' ', ++used;
-        if (used >= 3)
-            o << "<polygon points=\"" << pts.str() << "\" fill=\"" << b.color
-              << "\" fill-opacity=\"0.15\" stroke=\"none\"/>\n";
+/// A shaded band between lo and hi (the hi edge left to right, the lo edge back).
+void draw_band(std::ostream& o, const Band& b, const PlotArea& a) {
+    std::ostringstream pts;
+    size_t used = 0;
+    for (size_t i = 0; i < b.x.size(); ++i)
+        if (a.ok(b.x[i], b.hi[i])) pts << a.X(b.x[i]) << ',' << a.Y(b.hi[i]) << ' ', ++used;
+    for (size_t i = b.x.size(); i-- > 0;)
+        if (a.ok(b.x[i], b.lo[i])) pts << a.X(b.x[i]) << ',' << a.Y(b.lo[i]) << ' ', ++used;
+    if (used >= 3)
+        o << "<polygon points=\"" << pts.str() << "\" fill=\"" << b.color
+          << "\" fill-opacity=\"0.15\" stroke=\"none\"/>\n";
+}
+
+/// Bars from the axis (or the bottom of a log axis) to y[i], over [x[i], x[i + 1]].
+void draw_bars(std::ostream& o, const Series& s, const PlotArea& a) {
+    for (size_t i = 0; i + 1 < s.x.size(); ++i) {
+        if (!a.ok(s.x[i], s.y[i])) continue;
+        const double xa = a.X(s.x[i]), xb = a.X(s.x[i + 1]);
+        const double yt = a.Y(s.y[i]),
+                     yb = a.Y(a.logy ? std::pow(10.0, a.y0) : std::max(a.y0, 0.0));
+        o << "<rect x=\"" << xa << "\" y=\"" << std::min(yt, yb) << "\" width=\""
+          << std::max(0.0, xb - xa - 0.5) << "\" height=\"" << std::abs(yb - yt) << "\" fill=\""
+          << s.color << "\" fill-opacity=\"0.75\"/>\n";
     }
+}
+
+void draw_points(std::ostream& o, const Series& s, const PlotArea& a) {
+    o << "<g fill=\"" << s.color << "\">";
+    for (size_t i = 0; i < s.x.size(); ++i)
+        if (a.ok(s.x[i], s.y[i]))
+            o << "<circle cx=\"" << a.X(s.x[i]) << "\" cy=\"" << a.Y(s.y[i]) << "\" r=\"1.8\"/>";
+    o << "</g>\n";
+}
+
+/// A polyline, broken where a value cannot be drawn.
+void draw_line(std::ostream& o, const Series& s, const PlotArea& a) {
+    std::ostringstream pts;
+    size_t count = 0;
+    const auto flush = [&]() {
+        if (count >= 2)
+            o << "<polyline points=\"" << pts.str() << "\" fill=\"none\" stroke=\"" << s.color
+              << "\" stroke-width=\"1.6\"" << (s.dashed ? " stroke-dasharray=\"6,4\"" : "")
+              << "/>\n";
+        pts.str("");
+        count = 0;
+    };
+    for (size_t i = 0; i < s.x.size(); ++i) {
+        if (!a.ok(s.x[i], s.y[i])) {
+            flush();
+            continue;
+        }
+        pts << a.X(s.x[i]) << ',' << a.Y(s.y[i]) << ' ';
+        ++count;
+    }
+    flush();
+}
+
+/// Bands, reference lines, series.
+void draw_data(std::ostream& o, const Plot& p, const PlotArea& a) {
+    for (const auto& b : p.bands) draw_band(o, b, a);
     for (const auto& h : p.hlines) {
         if (p.logy && h.y <= 0) continue;
-        const double y = Y(h.y);
-        o << "<line x1=\"" << kL << "\" y1=\"" << y << "\" x2=\"" << kL + pw << "\" y2=\"" << y
-          << "\" stroke=\"" << h.color << "\" stroke-dasharray=\"5,4\"/>\n";
+        const double y = a.Y(h.y);
+        o << "<line x1=\"" << kL << "\" y1=\"" << y << "\" x2=\"" << kL + PlotArea::pw << "\" y2=\""
+          << y << "\" stroke=\"" << h.color << "\" stroke-dasharray=\"5,4\"/>\n";
     }
     for (const auto& s : p.series) {
-        if (s.kind == Series::Bars) {
-            for (size_t i = 0; i + 1 < s.x.size(); ++i) {
-                if (!ok(s.x[i], s.y[i])) continue;
-                const double xa = X(s.x[i]), xb = X(s.x[i + 1]);
-                const double yt = Y(s.y[i]),
-                             yb = Y(p.logy ? std::pow(10.0, y0) : std::max(y0, 0.0));
-                o << "<rect x=\"" << xa << "\" y=\"" << std::min(yt, yb) << "\" width=\""
-                  << std::max(0.0, xb - xa - 0.5) << "\" height=\"" << std::abs(yb - yt)
-                  << "\" fill=\"" << s.color << "\" fill-opacity=\"0.75\"/>\n";
-            }
-        } else if (s.kind == Series::Points) {
-            o << "<g fill=\"" << s.color << "\">";
-            for (size_t i = 0; i < s.x.size(); ++i)
-                if (ok(s.x[i], s.y[i]))
-                    o << "<circle cx=\"" << X(s.x[i]) << "\" cy=\"" << Y(s.y[i])
-                      << "\" r=\"1.8\"/>";
-            o << "</g>\n";
-        } else {
-            // A polyline, broken where a value cannot be drawn.
-            std::ostringstream pts;
-            size_t count = 0;
-            const auto flush = [&]() {
-                if (count >= 2)
-                    o << "<polyline points=\"" << pts.str() << "\" fill=\"none\" stroke=\""
-                      << s.color << "\" stroke-width=\"1.6\""
-                      << (s.dashed ? " stroke-dasharray=\"6,4\"" : "") << "/>\n";
-                pts.str("");
-                count = 0;
-            };
-            for (size_t i = 0; i < s.x.size(); ++i) {
-                if (!ok(s.x[i], s.y[i])) {
-                    flush();
-                    continue;
-                }
-                pts << X(s.x[i]) << ',' << Y(s.y[i]) << ' ';
-                ++count;
-            }
-            flush();
-        }
+        if (s.kind == Series::Bars)
+            draw_bars(o, s, a);
+        else if (s.kind == Series::Points)
+            draw_points(o, s, a);
+        else
+            draw_line(o, s, a);
     }
-    // Legend, top right on a translucent panel sized to its longest label (~6.2 px a character).
+}
+
+/// Legend, top right on a translucent panel sized to its longest label (~6.2 px a character).
+void draw_legend(std::ostream& o, const Plot& p) {
     size_t longest = 0, entries = 0;
     const auto measure = [&](const std::string& label) {
         if (!label.empty()) longest = std::max(longest, label.size()), ++entries;
@@ -320,7 +339,7 @@ std::string svg_plot(const Plot& p) {
     for (const auto& b : p.bands) measure(b.label);
     for (const auto& h : p.hlines) measure(h.label);
     const double lw = 34 + 6.2 * double(longest);
-    const double lx = kL + pw - lw;
+    const double lx = kL + PlotArea::pw - lw;
     if (entries)
         o << "<rect x=\"" << lx - 4 << "\" y=\"" << kT + 3 << "\" width=\"" << lw << "\" height=\""
           << 15 * entries + 6 << "\" fill=\"#fff\" fill-opacity=\"0.85\"/>\n";
@@ -340,6 +359,14 @@ std::string svg_plot(const Plot& p) {
     for (const auto& s : p.series) legend(s.label, s.color, s.kind == Series::Bars);
     for (const auto& b : p.bands) legend(b.label, b.color, true);
     for (const auto& h : p.hlines) legend(h.label, h.color, false);
+}
+
+std::string svg_plot(const Plot& p) {
+    const PlotArea a = plot_area(p);
+    std::ostringstream o;
+    draw_axes(o, p, a);
+    draw_data(o, p, a);
+    draw_legend(o, p);
     o << "</svg>\n";
     return o.str();
 }
@@ -413,166 +440,176 @@ std::vector<double> iota_from(size_t n, double first) {
     return v;
 }
 
+/// A plot with its title and axis labels.
+Plot titled(const std::string& title, const std::string& xlabel, const std::string& ylabel) {
+    Plot p;
+    p.title = title;
+    p.xlabel = xlabel;
+    p.ylabel = ylabel;
+    return p;
+}
+
+const std::string kMeasured = "measured";
+const std::string kTheoryRed = "#d62728";
+
+/// The histogram against the Gaussian of the theory's mean and variance.
+std::string histogram_plot(const AnalysisResult& r) {
+    const auto& T = r.theory;
+    Plot p = titled("Histogram of values (64 bins over mean +- 4 sd)", "value", "pixels per bin");
+    Series s;
+    s.label = kMeasured;
+    s.kind = Series::Bars;
+    const auto& hg = r.histogram;
+    const double bw = (hg.hi - hg.lo) / double(hg.counts.size());
+    for (size_t i = 0; i <= hg.counts.size(); ++i) {
+        s.x.push_back(hg.lo + bw * double(i));
+        s.y.push_back(i < hg.counts.size() ? double(hg.counts[i]) : 0.0);
+    }
+    p.series.push_back(s);
+    if (T && T->variance > 0) {
+        Series g;
+        g.label = "Gaussian, theory mean and variance";
+        g.color = kTheoryRed;
+        const double total = double(r.frames) * r.width * r.height;
+        const double sd = std::sqrt(T->variance);
+        for (int i = 0; i <= 256; ++i) {
+            const double x = hg.lo + (hg.hi - hg.lo) * i / 256.0;
+            const double z = (x - T->mean) / sd;
+            g.x.push_back(x);
+            g.y.push_back(total * bw * std::exp(-0.5 * z * z) /
+                          (sd * std::sqrt(2 * std::numbers::pi)));
+        }
+        p.series.push_back(g);
+    }
+    return svg_plot(p);
+}
+
+std::string radial_spectrum_plot(const AnalysisResult& r) {
+    const auto& T = r.theory;
+    Plot p = titled("Radially averaged power spectrum", "frequency |k| (cycles/pixel)",
+                    "power (value^2 pixel^2)");
+    p.logx = p.logy = true;
+    Series s;
+    s.label =
+        kMeasured + " (" + std::to_string(r.frames) + (r.frames == 1 ? " frame)" : " frames)");
+    s.kind = Series::Points;
+    for (size_t b = 0; b < r.spectrum.power.size(); ++b)
+        if (r.spectrum.count[b] > 0)
+            s.x.push_back(r.spectrum.frequency[b]), s.y.push_back(r.spectrum.power[b]);
+    p.series.push_back(s);
+    if (T && T->spectrum) {
+        Series t;
+        t.label = "theory";
+        t.color = kTheoryRed;
+        for (size_t b = 0; b < r.spectrum.power.size(); ++b)
+            if (r.spectrum.count[b] > 0)
+                t.x.push_back(r.spectrum.frequency[b]), t.y.push_back(T->spectrum->power[b]);
+        p.series.push_back(t);
+    }
+    return svg_plot(p);
+}
+
+/// z per annulus with the Bonferroni limits +-threshold; `title` and `ylabel` name the test.
+std::string z_plot(const std::string& title, const std::string& ylabel, Series s,
+                   double threshold) {
+    Plot p = titled(title, "frequency |k| (cycles/pixel)", ylabel);
+    s.kind = Series::Points;
+    p.series.push_back(s);
+    p.hlines.push_back({threshold, "Bonferroni limit +-" + fixed(threshold, 2), "#777"});
+    p.hlines.push_back({-threshold, "", "#777"});
+    return svg_plot(p);
+}
+
+std::string spectrum_z_plot(const AnalysisResult& r) {
+    const SpectrumTheory& S = *r.theory->spectrum;
+    Series s;
+    s.label = "z";
+    for (size_t b = 0; b < S.z.size(); ++b)
+        if (std::isfinite(S.z[b])) s.x.push_back(r.spectrum.frequency[b]), s.y.push_back(S.z[b]);
+    return z_plot("Spectrum against theory: z per annulus", "z (Wilson-Hilferty)", s, S.threshold);
+}
+
+std::string autocovariance_plot(const AnalysisResult& r) {
+    const auto& T = r.theory;
+    Plot p = titled("Radial autocovariance", "lag (pixels)", "covariance (value^2)");
+    Series s;
+    s.label = kMeasured;
+    s.kind = Series::Points;
+    s.x = iota_from(r.autocovariance.size(), 0);
+    s.y = r.autocovariance;
+    p.series.push_back(s);
+    if (T && !T->autocovariance.empty()) {
+        Series t;
+        t.label = "theory";
+        t.color = kTheoryRed;
+        t.x = iota_from(T->autocovariance.size(), 0);
+        t.y = T->autocovariance;
+        p.series.push_back(t);
+    }
+    p.hlines.push_back({0.0, "", "#aaa"});
+    return svg_plot(p);
+}
+
+/// One statistic per frame from frame `from` on, with the theory +- 2 sd of one frame.
+std::string per_frame_plot(const AnalysisResult& r, const std::string& title,
+                           const std::string& ylabel, double (*get)(const FrameStats&),
+                           double theory, double sd, size_t from) {
+    const auto x = iota_from(size_t(r.frames), double(r.first_frame));
+    Plot p = titled(title, "frame", ylabel);
+    Series s;
+    s.label = kMeasured;
+    for (size_t j = from; j < r.frame_stats.size(); ++j)
+        s.x.push_back(x[j]), s.y.push_back(get(r.frame_stats[j]));
+    p.series.push_back(s);
+    if (std::isfinite(theory)) {
+        if (sd > 0) {
+            Band b;
+            b.label = "theory +- 2 sd (one frame)";
+            b.x = {x[from], x.back()};
+            b.lo = {theory - 2 * sd, theory - 2 * sd};
+            b.hi = {theory + 2 * sd, theory + 2 * sd};
+            p.bands.push_back(b);
+        }
+        p.hlines.push_back({theory, "theory", kTheoryRed});
+    }
+    return svg_plot(p);
+}
+
+/// The per-frame mean, variance and difference variance (a sequence of frames).
+void add_per_frame_plots(const AnalysisResult& r, std::vector<std::string>& out) {
+    const auto& T = r.theory;
+    out.push_back(per_frame_plot(
+        r, "Per-frame mean", "mean", [](const FrameStats& f) { return f.mean; }, T ? T->mean : NAN,
+        T ? T->sd_frame_mean : 0.0, 0));
+    out.push_back(per_frame_plot(
+        r, "Per-frame variance", "variance", [](const FrameStats& f) { return f.variance; },
+        T ? T->variance + T->sd_mean * T->sd_mean - T->sd_frame_mean * T->sd_frame_mean : NAN,
+        T ? T->sd_frame_variance : 0.0, 0));
+    out.push_back(per_frame_plot(
+        r, "Per-frame difference variance (frame - previous)", "variance of the difference",
+        [](const FrameStats& f) { return f.diff_variance; },
+        T && T->diff_variance ? *T->diff_variance : NAN, 0.0, 1));
+}
+
+std::string drift_plot(const Stationarity& st) {
+    Series s;
+    s.label = "z, corrected";
+    s.x = st.drift.frequency;
+    s.y = st.z_corrected;
+    return z_plot("Spectral drift, first quarter against last: z per annulus",
+                  "z (correlation-corrected)", s, st.z_threshold);
+}
+
 /// The report's plots, in order.
 std::vector<std::string> plots(const AnalysisResult& r) {
     std::vector<std::string> out;
-    const auto& T = r.theory;
-    const std::string measured = "measured";
-    const std::string red = "#d62728";
-
-    {  // histogram
-        Plot p;
-        p.title = "Histogram of values (64 bins over mean +- 4 sd)";
-        p.xlabel = "value";
-        p.ylabel = "pixels per bin";
-        Series s;
-        s.label = measured;
-        s.kind = Series::Bars;
-        const auto& hg = r.histogram;
-        const double bw = (hg.hi - hg.lo) / double(hg.counts.size());
-        for (size_t i = 0; i <= hg.counts.size(); ++i) {
-            s.x.push_back(hg.lo + bw * double(i));
-            s.y.push_back(i < hg.counts.size() ? double(hg.counts[i]) : 0.0);
-        }
-        p.series.push_back(s);
-        if (T && T->variance > 0) {
-            Series g;
-            g.label = "Gaussian, theory mean and variance";
-            g.color = red;
-            const double total = double(r.frames) * r.width * r.height;
-            const double sd = std::sqrt(T->variance);
-            for (int i = 0; i <= 256; ++i) {
-                const double x = hg.lo + (hg.hi - hg.lo) * i / 256.0;
-                const double z = (x - T->mean) / sd;
-                g.x.push_back(x);
-                g.y.push_back(total * bw * std::exp(-0.5 * z * z) /
-                              (sd * std::sqrt(2 * std::numbers::pi)));
-            }
-            p.series.push_back(g);
-        }
-        out.push_back(svg_plot(p));
-    }
+    out.push_back(histogram_plot(r));
     out.push_back(svg_heatmap(r.periodogram, r.width, r.height));
-    {  // radial spectrum
-        Plot p;
-        p.title = "Radially averaged power spectrum";
-        p.xlabel = "frequency |k| (cycles/pixel)";
-        p.ylabel = "power (value^2 pixel^2)";
-        p.logx = p.logy = true;
-        Series s;
-        s.label =
-            measured + " (" + std::to_string(r.frames) + (r.frames == 1 ? " frame)" : " frames)");
-        s.kind = Series::Points;
-        for (size_t b = 0; b < r.spectrum.power.size(); ++b)
-            if (r.spectrum.count[b] > 0)
-                s.x.push_back(r.spectrum.frequency[b]), s.y.push_back(r.spectrum.power[b]);
-        p.series.push_back(s);
-        if (T && T->spectrum) {
-            Series t;
-            t.label = "theory";
-            t.color = red;
-            for (size_t b = 0; b < r.spectrum.power.size(); ++b)
-                if (r.spectrum.count[b] > 0)
-                    t.x.push_back(r.spectrum.frequency[b]), t.y.push_back(T->spectrum->power[b]);
-            p.series.push_back(t);
-        }
-        out.push_back(svg_plot(p));
-    }
-    if (T && T->spectrum) {  // spectrum z
-        Plot p;
-        p.title = "Spectrum against theory: z per annulus";
-        p.xlabel = "frequency |k| (cycles/pixel)";
-        p.ylabel = "z (Wilson-Hilferty)";
-        Series s;
-        s.label = "z";
-        s.kind = Series::Points;
-        for (size_t b = 0; b < T->spectrum->z.size(); ++b)
-            if (std::isfinite(T->spectrum->z[b]))
-                s.x.push_back(r.spectrum.frequency[b]), s.y.push_back(T->spectrum->z[b]);
-        p.series.push_back(s);
-        p.hlines.push_back({T->spectrum->threshold,
-                            "Bonferroni limit +-" + fixed(T->spectrum->threshold, 2), "#777"});
-        p.hlines.push_back({-T->spectrum->threshold, "", "#777"});
-        out.push_back(svg_plot(p));
-    }
-    {  // autocovariance
-        Plot p;
-        p.title = "Radial autocovariance";
-        p.xlabel = "lag (pixels)";
-        p.ylabel = "covariance (value^2)";
-        Series s;
-        s.label = measured;
-        s.kind = Series::Points;
-        s.x = iota_from(r.autocovariance.size(), 0);
-        s.y = r.autocovariance;
-        p.series.push_back(s);
-        if (T && !T->autocovariance.empty()) {
-            Series t;
-            t.label = "theory";
-            t.color = red;
-            t.x = iota_from(T->autocovariance.size(), 0);
-            t.y = T->autocovariance;
-            p.series.push_back(t);
-        }
-        p.hlines.push_back({0.0, "", "#aaa"});
-        out.push_back(svg_plot(p));
-    }
-    if (r.frames > 1) {
-        const auto x = iota_from(size_t(r.frames), double(r.first_frame));
-        const auto per_frame = [&](const std::string& title, const std::string& ylabel, auto get,
-                                   double theory, double sd, size_t from) {
-            Plot p;
-            p.title = title;
-            p.xlabel = "frame";
-            p.ylabel = ylabel;
-            Series s;
-            s.label = measured;
-            for (size_t j = from; j < r.frame_stats.size(); ++j)
-                s.x.push_back(x[j]), s.y.push_back(get(r.frame_stats[j]));
-            p.series.push_back(s);
-            if (std::isfinite(theory)) {
-                if (sd > 0) {
-                    Band b;
-                    b.label = "theory +- 2 sd (one frame)";
-                    b.x = {x[from], x.back()};
-                    b.lo = {theory - 2 * sd, theory - 2 * sd};
-                    b.hi = {theory + 2 * sd, theory + 2 * sd};
-                    p.bands.push_back(b);
-                }
-                p.hlines.push_back({theory, "theory", red});
-            }
-            out.push_back(svg_plot(p));
-        };
-        per_frame(
-            "Per-frame mean", "mean", [](const FrameStats& f) { return f.mean; },
-            T ? T->mean : NAN, T ? T->sd_frame_mean : 0.0, 0);
-        per_frame(
-            "Per-frame variance", "variance",
-            [](const FrameStats& f) { return f.variance; },
-            T ? T->variance + T->sd_mean * T->sd_mean - T->sd_frame_mean * T->sd_frame_mean : NAN,
-            T ? T->sd_frame_variance : 0.0, 0);
-        per_frame(
-            "Per-frame difference variance (frame - previous)", "variance of the difference",
-            [](const FrameStats& f) { return f.diff_variance; },
-            T && T->diff_variance ? *T->diff_variance : NAN, 0.0, 1);
-    }
-    if (r.stationarity.available) {
-        const auto& st = r.stationarity;
-        Plot p;
-        p.title = "Spectral drift, first quarter against last: z per annulus";
-        p.xlabel = "frequency |k| (cycles/pixel)";
-        p.ylabel = "z (correlation-corrected)";
-        Series s;
-        s.label = "z, corrected";
-        s.kind = Series::Points;
-        s.x = st.drift.frequency;
-        s.y = st.z_corrected;
-        p.series.push_back(s);
-        p.hlines.push_back(
-            {st.z_threshold, "Bonferroni limit +-" + fixed(st.z_threshold, 2), "#777"});
-        p.hlines.push_back({-st.z_threshold, "", "#777"});
-        out.push_back(svg_plot(p));
-    }
+    out.push_back(radial_spectrum_plot(r));
+    if (r.theory && r.theory->spectrum) out.push_back(spectrum_z_plot(r));
+    out.push_back(autocovariance_plot(r));
+    if (r.frames > 1) add_per_frame_plots(r, out);
+    if (r.stationarity.available) out.push_back(drift_plot(r.stationarity));
     return out;
 }
 
@@ -684,15 +721,14 @@ Json structure_json(const StructureSummary& S) {
             {"hurst", hurst}};
 }
 
-}  // namespace
+/// "key          value": a text report line, the value in a column.
+void put_line(std::ostream& o, const std::string& k, const std::string& v) {
+    o << k << std::string(k.size() < 13 ? 13 - k.size() : 1, ' ') << v << "\n";
+}
 
-// ---------------------------------------------------------------------------------------------
-
-std::string to_text(const AnalysisResult& r) {
-    std::ostringstream o;
-    const auto line = [&](const std::string& k, const std::string& v) {
-        o << k << std::string(k.size() < 13 ? 13 - k.size() : 1, ' ') << v << "\n";
-    };
+/// The input, its moments, histogram range, periodogram summary and frame correlation.
+void put_measurements(std::ostream& o, const AnalysisResult& r) {
+    const auto line = [&](const std::string& k, const std::string& v) { put_line(o, k, v); };
     const auto& m = r.moments;
     line("input", r.input + ": " + source_text(r));
     line("size", std::to_string(r.width) + "x" + std::to_string(r.height) + ", " + frames_text(r));
@@ -715,51 +751,58 @@ std::string to_text(const AnalysisResult& r) {
     line("", "anisotropy " + fmt(p.anisotropy, 3) + " (0 = isotropic), axis " +
                  fixed(p.orientation_deg, 1) + " deg from +x towards +y (image rows down)");
     if (r.frames > 1) line("correlation", "frames per independent frame " + correlation_text(r));
+}
 
-    const auto& st = r.stationarity;
-    if (st.available) {
-        line("trend", "per-frame variance slope " + fmt(st.trend.slope, 4) + " per frame, stderr " +
-                          fmt(st.trend.stderr_slope, 4) + ", t " + fixed(st.trend.t, 2) + " (" +
-                          std::to_string(st.trend_blocks) + " blocks)");
-        line("drift", "first vs last " + std::to_string(st.quarter) + " frames: max|z| " +
-                          fixed(st.drift.max_abs_z, 2) + " as if independent, " +
-                          fixed(st.max_abs_z_corrected, 2) + " for " + fmt(st.q_eff, 3) +
-                          " independent frames per quarter and a common level varying by " +
-                          fmt(100 * std::sqrt(st.common_variance), 2) + " %");
-        line("level", "frame variance " + fmt(st.level.mean, 4) + ": trend z " +
-                          fixed(st.level.z_trend, 2) + ", " + std::to_string(st.level.blocks) +
-                          " block means chi2 " + fixed(st.level.chi2, 1) + " on " +
-                          std::to_string(st.level.dof) + " dof (z " + fixed(st.level.z_blocks, 2) +
-                          "); covariance: " + st.level_model);
+/// The stationarity tests' figures: variance trend, spectral drift, level of the variance.
+void put_stationarity(std::ostream& o, const Stationarity& st) {
+    put_line(o, "trend",
+             "per-frame variance slope " + fmt(st.trend.slope, 4) + " per frame, stderr " +
+                 fmt(st.trend.stderr_slope, 4) + ", t " + fixed(st.trend.t, 2) + " (" +
+                 std::to_string(st.trend_blocks) + " blocks)");
+    put_line(o, "drift",
+             "first vs last " + std::to_string(st.quarter) + " frames: max|z| " +
+                 fixed(st.drift.max_abs_z, 2) + " as if independent, " +
+                 fixed(st.max_abs_z_corrected, 2) + " for " + fmt(st.q_eff, 3) +
+                 " independent frames per quarter and a common level varying by " +
+                 fmt(100 * std::sqrt(st.common_variance), 2) + " %");
+    put_line(o, "level",
+             "frame variance " + fmt(st.level.mean, 4) + ": trend z " + fixed(st.level.z_trend, 2) +
+                 ", " + std::to_string(st.level.blocks) + " block means chi2 " +
+                 fixed(st.level.chi2, 1) + " on " + std::to_string(st.level.dof) + " dof (z " +
+                 fixed(st.level.z_blocks, 2) + "); covariance: " + st.level_model);
+}
+
+/// The scene's closed-form theory beside the measured figures.
+void put_theory(std::ostream& o, const AnalysisResult& r) {
+    const auto line = [&](const std::string& k, const std::string& v) { put_line(o, k, v); };
+    const auto& m = r.moments;
+    const auto& T = *r.theory;
+    o << "\ntheory       " << T.scene << " (hash " << T.hash << "), zoom " << fmt(T.zoom)
+      << " px/unit\n";
+    line("field", "mean " + fmt(T.field_mean) + ", variance " + fmt(T.field_variance) +
+                      " (Campbell's theorem)");
+    if (T.mapped)
+        line("mapping", "display values v -> " + fmt(T.map_lo) + " + v * (" + fmt(T.map_hi) +
+                            " - " + fmt(T.map_lo) + "); " + fixed(100 * T.clipped_fraction, 3) +
+                            " % clipped");
+    line("mean", "measured " + fmt(m.mean) + ", theory " + fmt(T.mean) + " +- " +
+                     fmt(T.sd_mean, 3) + ", z " + fixed(T.z_mean, 2));
+    line("variance", "measured " + fmt(m.variance) + ", theory " + fmt(T.variance) + " +- " +
+                         fmt(T.sd_variance, 3) + ", z " + fixed(T.z_variance, 2));
+    if (T.diff_variance && r.frames > 1) {
+        double dv = 0;
+        for (size_t j = 1; j < r.frame_stats.size(); ++j) dv += r.frame_stats[j].diff_variance;
+        dv /= double(r.frame_stats.size() - 1);
+        line("diff var",
+             "measured " + fmt(dv) + " (mean over frames), theory " + fmt(*T.diff_variance));
     }
+    if (T.spectrum)
+        line("spectrum", "max|z| " + fixed(T.spectrum->max_abs_z, 2) + " over " +
+                             std::to_string(T.spectrum->compared) + " annuli");
+}
 
-    if (r.theory) {
-        const auto& T = *r.theory;
-        o << "\ntheory       " << T.scene << " (hash " << T.hash << "), zoom " << fmt(T.zoom)
-          << " px/unit\n";
-        line("field", "mean " + fmt(T.field_mean) + ", variance " + fmt(T.field_variance) +
-                          " (Campbell's theorem)");
-        if (T.mapped)
-            line("mapping", "display values v -> " + fmt(T.map_lo) + " + v * (" + fmt(T.map_hi) +
-                                " - " + fmt(T.map_lo) + "); " + fixed(100 * T.clipped_fraction, 3) +
-                                " % clipped");
-        line("mean", "measured " + fmt(m.mean) + ", theory " + fmt(T.mean) + " +- " +
-                         fmt(T.sd_mean, 3) + ", z " + fixed(T.z_mean, 2));
-        line("variance", "measured " + fmt(m.variance) + ", theory " + fmt(T.variance) + " +- " +
-                             fmt(T.sd_variance, 3) + ", z " + fixed(T.z_variance, 2));
-        if (T.diff_variance && r.frames > 1) {
-            double dv = 0;
-            for (size_t j = 1; j < r.frame_stats.size(); ++j) dv += r.frame_stats[j].diff_variance;
-            dv /= double(r.frame_stats.size() - 1);
-            line("diff var",
-                 "measured " + fmt(dv) + " (mean over frames), theory " + fmt(*T.diff_variance));
-        }
-        if (T.spectrum)
-            line("spectrum", "max|z| " + fixed(T.spectrum->max_abs_z, 2) + " over " +
-                                 std::to_string(T.spectrum->compared) + " annuli");
-    }
-
-    o << "\n";
+/// The verdicts against theory and on stationarity, H(s) and the notes.
+void put_verdicts(std::ostream& o, const AnalysisResult& r) {
     if (r.theory) {
         const auto& T = *r.theory;
         o << "mean agrees with theory: " << yes_no(T.mean_agrees) << " ("
@@ -773,6 +816,7 @@ std::string to_text(const AnalysisResult& r) {
             o << "spectrum agrees with theory: n/a ("
               << (T.spectrum ? T.spectrum->not_judged : T.no_spectrum) << ")\n";
     }
+    const auto& st = r.stationarity;
     if (st.available)
         o << "stationary: " << verdict_word(st) << " (" << stationarity_verdict(st) << ")\n";
     else
@@ -783,12 +827,14 @@ std::string to_text(const AnalysisResult& r) {
         for (size_t s = 0; s < S.hurst.size(); ++s)
             hs += (s ? ", " : "") + fmt(S.hurst[s], 3) +
                   (S.realizations > 1 ? " +- " + fmt(S.hurst_stderr[s], 2) : "");
-        line("H(s)", "s = 0.." + std::to_string(S.hurst.size() - 1) + ": " + hs +
-                         " (Kaplan & Kuo eq. 21, f along x and y)");
+        put_line(o, "H(s)",
+                 "s = 0.." + std::to_string(S.hurst.size() - 1) + ": " + hs +
+                     " (Kaplan & Kuo eq. 21, f along x and y)");
     }
     for (const auto& n : r.notes) o << "note: " << n << "\n";
+}
 
-    // Tables.
+void put_histogram_table(std::ostream& o, const AnalysisResult& r) {
     o << "\nhistogram (bin start, count)\n";
     const double bw = (r.histogram.hi - r.histogram.lo) / double(r.histogram.counts.size());
     uint64_t most = 1;
@@ -801,6 +847,9 @@ std::string to_text(const AnalysisResult& r) {
           << std::string(size_t(40.0 * double(r.histogram.counts[i]) / double(most) + 0.5), '#')
           << "\n";
     }
+}
+
+void put_spectrum_table(std::ostream& o, const AnalysisResult& r) {
     const bool spec_theory = r.theory && r.theory->spectrum;
     o << "\nradial spectrum (annulus, frequency cycles/px, power, bins"
       << (spec_theory ? ", theory, ratio, z" : "") << ")\n";
@@ -819,6 +868,9 @@ std::string to_text(const AnalysisResult& r) {
         }
         o << "\n";
     }
+}
+
+void put_autocovariance_table(std::ostream& o, const AnalysisResult& r) {
     const bool acov_theory = r.theory && !r.theory->autocovariance.empty();
     o << "\nradial autocovariance (lag px, value" << (acov_theory ? ", theory" : "") << ")\n";
     for (size_t l = 0; l < r.autocovariance.size(); ++l) {
@@ -831,16 +883,35 @@ std::string to_text(const AnalysisResult& r) {
         }
         o << "\n";
     }
-    if (r.frames > 1) {
-        o << "\nper frame (frame, mean, variance, diff variance)\n";
-        for (size_t j = 0; j < r.frame_stats.size(); ++j) {
-            char buf[128];
-            std::snprintf(buf, sizeof buf, "  %6lld %13.6g %13.6g %13.6g\n",
-                          r.first_frame + static_cast<long long>(j), r.frame_stats[j].mean,
-                          r.frame_stats[j].variance, r.frame_stats[j].diff_variance);
-            o << buf;
-        }
+}
+
+void put_frame_table(std::ostream& o, const AnalysisResult& r) {
+    o << "\nper frame (frame, mean, variance, diff variance)\n";
+    for (size_t j = 0; j < r.frame_stats.size(); ++j) {
+        char buf[128];
+        std::snprintf(buf, sizeof buf, "  %6lld %13.6g %13.6g %13.6g\n",
+                      r.first_frame + static_cast<long long>(j), r.frame_stats[j].mean,
+                      r.frame_stats[j].variance, r.frame_stats[j].diff_variance);
+        o << buf;
     }
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+std::string to_text(const AnalysisResult& r) {
+    std::ostringstream o;
+    put_measurements(o, r);
+    if (r.stationarity.available) put_stationarity(o, r.stationarity);
+    if (r.theory) put_theory(o, r);
+    o << "\n";
+    put_verdicts(o, r);
+    // Tables.
+    put_histogram_table(o, r);
+    put_spectrum_table(o, r);
+    put_autocovariance_table(o, r);
+    if (r.frames > 1) put_frame_table(o, r);
     return o.str();
 }
 

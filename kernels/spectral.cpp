@@ -207,17 +207,14 @@ bool parse_number(std::string_view field, double& out) {
 // ---------------------------------------------------------------------------------------------
 // Radial (isotropic) design
 
-DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
-    const double K = o.nyquist, kp = (1.0 - o.rolloff) * K;
-    auto S = [&](double k) { return sp.density(k, 0.0); };
-
-    // Check S on a fine grid: finite, not negative beyond noise, not all zero.
+/// Checks S(k) on a fine grid of [0, K]: finite, not negative beyond noise, not all zero.
+void check_radial_spectrum(const Spectrum& sp, double K) {
     const int nc = 4096;
     std::vector<SpectrumSample> check(nc + 1);
     double smax = 0.0;
     for (int i = 0; i <= nc; ++i) {
         const double k = K * i / nc;
-        const double s = S(k);
+        const double s = sp.density(k, 0.0);
         require_finite_sample(sp.name, k, s);
         check[i] = {k, 0.0, s};
         smax = std::max(smax, s);
@@ -226,82 +223,87 @@ DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
         throw ValueError(sp.name + ": S(k) <= 0 everywhere on [0, " + num(K) +
                          "]: nothing to design");
     refuse_negative(check, smax, true, 0.0, sp.name + " is negative", false);
+}
 
-    // sqrt(S) T at Gauss–Legendre nodes on [0, kp] and [kp, K] (T has a kink at kp). The panel
-    // count resolves J0(2 pi k r) up to r_hi (2 panels = 32 nodes per period 1/r_hi) and
-    // features of S down to K/256.
-    struct Amplitude {
-        Nodes n;
-        std::vector<double> wa;  // 2 pi w_j k_j sqrt(S_j) T_j
-        double energy = 0.0;     // 2 pi sum w_j k_j S_j T_j^2 = int A^2 d^2k
-    };
-    auto amplitude = [&](double r_hi) {
-        Amplitude a;
-        const int panels = std::max(256, 32 + static_cast<int>(std::ceil(2.0 * K * r_hi)));
-        const int pass = std::max(1, static_cast<int>(std::lround(panels * kp / K)));
-        if (kp > 0) a.n.add(0.0, kp, pass);
-        if (K > kp) a.n.add(kp, K, std::max(16, panels - pass));
-        for (size_t j = 0; j < a.n.x.size(); ++j) {
-            const double k = a.n.x[j];
-            const double amp = std::sqrt(std::max(S(k), 0.0)) * rolloff(k, K, kp);
-            a.wa.push_back(2 * kPi * a.n.w[j] * k * amp);
-            a.energy += 2 * kPi * a.n.w[j] * k * amp * amp;
-        }
-        return a;
-    };
-    auto h_at = [](const Amplitude& a, double r) {
-        double s = 0.0;
-        for (size_t j = 0; j < a.wa.size(); ++j)
-            s += a.wa[j] * detail::bessel_j0(2 * kPi * a.n.x[j] * r);
-        return s;
-    };
-    const double total = amplitude(0.0).energy;
+/// The amplitude A = sqrt(S) T at Gauss–Legendre nodes on [0, kp] and [kp, K] (T has a kink at
+/// kp), as the weights of the Hankel transform h(r) = sum_j wa_j J0(2 pi k_j r).
+struct RadialAmplitude {
+    Nodes n;
+    std::vector<double> wa;  // 2 pi w_j k_j sqrt(S_j) T_j
+    double energy = 0.0;     // 2 pi sum w_j k_j S_j T_j^2 = int A^2 d^2k
+};
 
-    // Radius: the energy radius R_f where 2 pi int_0^R_f h^2 r dr reaches `energy` of the total
-    // (Parseval: int h^2 = int A^2 d^2k). 16-point Gauss–Legendre panels of width 1/K (two
-    // periods of h^2, whose band reaches 2K); not the trapezoid rule, whose Euler–Maclaurin
-    // end correction dr^2/12 * 2 pi h(0)^2 at r = 0 is ~1 % for peaked kernels (markov).
-    // Within the panel that crosses the target, R_f is interpolated linearly.
+/// The panel count resolves J0(2 pi k r) up to r_hi (2 panels = 32 nodes per period 1/r_hi)
+/// and features of S down to K/256.
+RadialAmplitude radial_amplitude(const Spectrum& sp, double K, double kp, double r_hi) {
+    RadialAmplitude a;
+    const int panels = std::max(256, 32 + static_cast<int>(std::ceil(2.0 * K * r_hi)));
+    const int pass = std::max(1, static_cast<int>(std::lround(panels * kp / K)));
+    if (kp > 0) a.n.add(0.0, kp, pass);
+    if (K > kp) a.n.add(kp, K, std::max(16, panels - pass));
+    for (size_t j = 0; j < a.n.x.size(); ++j) {
+        const double k = a.n.x[j];
+        const double amp = std::sqrt(std::max(sp.density(k, 0.0), 0.0)) * rolloff(k, K, kp);
+        a.wa.push_back(2 * kPi * a.n.w[j] * k * amp);
+        a.energy += 2 * kPi * a.n.w[j] * k * amp * amp;
+    }
+    return a;
+}
+
+/// h(r) = int A(k) J0(2 pi k r) 2 pi k dk (the 2-D inverse Fourier transform of a radial A).
+double radial_h(const RadialAmplitude& a, double r) {
+    double s = 0.0;
+    for (size_t j = 0; j < a.wa.size(); ++j)
+        s += a.wa[j] * detail::bessel_j0(2 * kPi * a.n.x[j] * r);
+    return s;
+}
+
+/// The radius for `o.energy` of the kernel energy: the energy radius R_f where
+/// 2 pi int_0^R_f h^2 r dr reaches `energy` of the total (Parseval: int h^2 = int A^2 d^2k).
+/// 16-point Gauss–Legendre panels of width 1/K (two periods of h^2, whose band reaches 2K);
+/// not the trapezoid rule, whose Euler–Maclaurin end correction dr^2/12 * 2 pi h(0)^2 at
+/// r = 0 is ~1 % for peaked kernels (markov). Within the panel that crosses the target, R_f is
+/// interpolated linearly; a window's taper starts at R_f.
+double radial_energy_radius(const Spectrum& sp, const DesignOptions& o, double K, double kp,
+                            double total) {
     const bool tapered = o.window != DesignWindow::None;
-    double R = o.radius;
-    if (R == 0.0) {
-        const double limit = tapered ? kTaperStart * o.max_radius : o.max_radius;
-        const double pw = 1.0 / K, target = o.energy * total;
-        double cum = 0.0, r = 0.0, rf = -1.0;
-        while (rf < 0.0) {
-            const double chunk_end = r + 64.0 * pw;
-            const Amplitude a = amplitude(chunk_end);
-            for (; r < chunk_end - 0.5 * pw; r += pw) {
-                Nodes pn;
-                pn.add(r, r + pw, 1);
-                double add = 0.0;
-                for (size_t j = 0; j < pn.x.size(); ++j) {
-                    const double h = h_at(a, pn.x[j]);
-                    add += pn.w[j] * 2 * kPi * pn.x[j] * h * h;
-                }
-                if (cum + add >= target) {
-                    rf = r + pw * (target - cum) / add;
-                    break;
-                }
-                cum += add;
-                if (r + pw > limit) {
-                    throw ValueError(sp.name + ": keeping " + num(100 * o.energy) +
-                                     " % of the kernel energy needs a radius beyond " +
-                                     num(tapered ? limit / kTaperStart : limit) +
-                                     " units (max_radius = " + num(o.max_radius) + "; " +
-                                     num(100 * cum / total) +
-                                     " % kept there): lower energy, give a radius, or raise "
-                                     "max_radius");
-                }
+    const double limit = tapered ? kTaperStart * o.max_radius : o.max_radius;
+    const double pw = 1.0 / K, target = o.energy * total;
+    double cum = 0.0, r = 0.0, rf = -1.0;
+    while (rf < 0.0) {
+        const double chunk_end = r + 64.0 * pw;
+        const RadialAmplitude a = radial_amplitude(sp, K, kp, chunk_end);
+        for (; r < chunk_end - 0.5 * pw; r += pw) {
+            Nodes pn;
+            pn.add(r, r + pw, 1);
+            double add = 0.0;
+            for (size_t j = 0; j < pn.x.size(); ++j) {
+                const double h = radial_h(a, pn.x[j]);
+                add += pn.w[j] * 2 * kPi * pn.x[j] * h * h;
+            }
+            if (cum + add >= target) {
+                rf = r + pw * (target - cum) / add;
+                break;
+            }
+            cum += add;
+            if (r + pw > limit) {
+                throw ValueError(sp.name + ": keeping " + num(100 * o.energy) +
+                                 " % of the kernel energy needs a radius beyond " +
+                                 num(tapered ? limit / kTaperStart : limit) +
+                                 " units (max_radius = " + num(o.max_radius) + "; " +
+                                 num(100 * cum / total) +
+                                 " % kept there): lower energy, give a radius, or raise "
+                                 "max_radius");
             }
         }
-        R = std::max(tapered ? rf / kTaperStart : rf, 1.0 / K);
     }
+    return std::max(tapered ? rf / kTaperStart : rf, 1.0 / K);
+}
 
-    // Samples for the Catmull–Rom profile: 16 per shortest period 1/K (interpolation error
-    // < 0.1 % at K), at most 4097.
-    const int n = std::clamp(static_cast<int>(std::ceil(16.0 * K * R)) + 1, 64, 4097);
-    const Amplitude a = amplitude(R);
+/// The windowed profile h(r) at n samples on [0, R], zero at R.
+std::shared_ptr<SampledKernel> radial_profile(const RadialAmplitude& a, const DesignOptions& o,
+                                              double R, int n) {
+    const bool tapered = o.window != DesignWindow::None;
     auto sk = std::make_shared<SampledKernel>();
     sk->radial = true;
     sk->n = n;
@@ -309,22 +311,16 @@ DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
     const double taper_start = tapered ? kTaperStart * R : R;
     for (int i = 0; i < n; ++i) {
         const double r = R * i / (n - 1);
-        sk->values[i] = h_at(a, r) * window_weight(o.window, r, R, taper_start);
+        sk->values[i] = radial_h(a, r) * window_weight(o.window, r, R, taper_start);
     }
     sk->values[n - 1] = 0.0;  // the profile is zero from R on
-    DesignedKernel out;
-    out.params.type = KernelType::Sampled;
-    out.params.radius = R;
-    out.params.sampled = sk;
-    const Kernel kern(out.params);
+    return sk;
+}
 
-    // Report: |H|^2 of the final profile (as Kernel evaluates it) against S.
-    DesignReport& rep = out.report;
-    rep.radius = R;
-    rep.samples = n;
-    rep.passband = kp;
-    rep.energy_fraction = kern.integral_sq() / a.energy;
-    rep.effective_area = kern.integral_sq() * kern.integral_sq() / kern.integral_4();
+/// |H|^2 of the final profile (as Kernel evaluates it) against S on [0, K]: the relative
+/// spectrum error, the achieved |H|^2 and the worst ratio error in the pass band.
+void report_radial_spectrum(DesignReport& rep, const Kernel& kern, const Spectrum& sp, double K,
+                            double kp, double R, int n) {
     Nodes rn;
     rn.add(0.0, R, std::max({64, (n - 1) / 2, 32 + static_cast<int>(std::ceil(2.0 * K * R))}));
     std::vector<double> hr(rn.x.size());
@@ -339,7 +335,7 @@ DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
         for (size_t j = 0; j < rn.x.size(); ++j)
             H += hr[j] * detail::bessel_j0(2 * kPi * k * rn.x[j]);
         hk2[m] = H * H;
-        sm[m] = std::max(S(k), 0.0);
+        sm[m] = std::max(sp.density(k, 0.0), 0.0);
         pmax = std::max(pmax, sm[m]);
         const double wt = (m == 0 || m == M ? 0.5 : 1.0) * k;
         num2 += wt * (hk2[m] - sm[m]) * (hk2[m] - sm[m]);
@@ -350,11 +346,14 @@ DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
     for (int m = 0; m <= M; ++m)
         if (K * m / M <= kp && sm[m] >= 0.01 * pmax)
             rep.passband_error = std::max(rep.passband_error, std::abs(hk2[m] / sm[m] - 1.0));
+}
 
-    // What the renderer evaluates: the Chebyshev polynomial, or the q-table (linear in q, so
-    // coarse in r near the centre: the first entry spans r < R / 64).
+/// The largest error, relative to max |h|, of what the renderer evaluates: the Chebyshev
+/// polynomial, or the q-table (linear in q, so coarse in r near the centre: the first entry
+/// spans r < R / 64).
+double radial_render_error(const SampledKernel& sk, const Kernel& kern, double R) {
     double hmax = 0.0, err = 0.0;
-    for (double v : sk->values) hmax = std::max(hmax, std::abs(v));
+    for (double v : sk.values) hmax = std::max(hmax, std::abs(v));
     const auto& table = kern.envelope_table();
     for (int i = 0; i < 20000; ++i) {
         const double r = R * i / 20000.0, q = (r / R) * (r / R);
@@ -368,28 +367,204 @@ DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
         }
         err = std::max(err, std::abs(fast - kern.envelope(q)));
     }
-    rep.render_error = hmax > 0 ? err / hmax : 0.0;
+    return hmax > 0 ? err / hmax : 0.0;
+}
+
+DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
+    const double K = o.nyquist, kp = (1.0 - o.rolloff) * K;
+    check_radial_spectrum(sp, K);
+    const double total = radial_amplitude(sp, K, kp, 0.0).energy;
+    const double R = o.radius == 0.0 ? radial_energy_radius(sp, o, K, kp, total) : o.radius;
+
+    // Samples for the Catmull–Rom profile: 16 per shortest period 1/K (interpolation error
+    // < 0.1 % at K), at most 4097.
+    const int n = std::clamp(static_cast<int>(std::ceil(16.0 * K * R)) + 1, 64, 4097);
+    const RadialAmplitude a = radial_amplitude(sp, K, kp, R);
+    const auto sk = radial_profile(a, o, R, n);
+    DesignedKernel out;
+    out.params.type = KernelType::Sampled;
+    out.params.radius = R;
+    out.params.sampled = sk;
+    const Kernel kern(out.params);
+
+    DesignReport& rep = out.report;
+    rep.radius = R;
+    rep.samples = n;
+    rep.passband = kp;
+    rep.energy_fraction = kern.integral_sq() / a.energy;
+    rep.effective_area = kern.integral_sq() * kern.integral_sq() / kern.integral_4();
+    report_radial_spectrum(rep, kern, sp, K, kp, R, n);
+    rep.render_error = radial_render_error(*sk, kern, R);
     return out;
 }
 
 // ---------------------------------------------------------------------------------------------
 // Grid (angle-dependent) design
 
+/// The smallest even 2^a 3^b 5^c >= max(n, 16): a fast FFT size.
+int fft_size(int n) {
+    for (int m = std::max(n, 16);; ++m) {
+        if (m % 2) continue;
+        int x = m;
+        for (int f : {2, 3, 5})
+            while (x % f == 0) x /= f;
+        if (x == 1) return m;
+    }
+}
+
+/// Fills `inv`'s half-plane spectrum with the amplitude sqrt(S) T / (sinc^2 sinc^2) on an
+/// N x N grid of spacing d (the sinc^2 of the bilinear interpolant compensated) and returns
+/// the symmetrised target S there. With `check`, first refuses a non-finite, negative or zero S.
+std::vector<double> grid_amplitude(const Spectrum& sp, double K, double kp, int N, double d,
+                                   bool check, numeric::RealFft2d& inv) {
+    const double dk = 1.0 / (N * d);
+    const int hw = N / 2 + 1;
+    std::vector<double> target(size_t(N) * hw, 0.0);  // symmetrised S on the half grid
+    std::vector<SpectrumSample> samples;
+    double smax = 0.0;
+    for (int j = 0; j < N; ++j) {
+        const int sj = j < N / 2 ? j : j - N;
+        for (int i = 0; i < hw; ++i) {
+            const int si = i == N / 2 ? -i : i;  // the Nyquist column is its own mirror
+            const double kx = si * dk, ky = sj * dk, k = std::hypot(kx, ky);
+            if (k >= K) continue;
+            const double th = std::atan2(ky, kx);
+            const double s1 = sp.density(k, th), s2 = sp.density(k, th + (th > 0 ? -kPi : kPi));
+            require_finite_sample(sp.name, k, s1);
+            require_finite_sample(sp.name, k, s2);
+            if (check) samples.push_back({k, th, std::min(s1, s2)});
+            // A real field has S(k) = S(-k): use the symmetric part (Lewis 1987: the
+            // spectrum of a real noise is symmetric).
+            const double s = 0.5 * (s1 + s2);
+            smax = std::max(smax, std::max(s1, s2));
+            target[size_t(j) * hw + i] = std::max(s, 0.0);
+            const double comp = std::pow(sinc(kx * d) * sinc(ky * d), 2);
+            inv.spectrum()[size_t(j) * hw + i] =
+                std::sqrt(std::max(s, 0.0)) * rolloff(k, K, kp) / comp;
+        }
+    }
+    if (check) {
+        if (!(smax > 0.0))
+            throw ValueError(sp.name + ": S <= 0 everywhere on |k| < " + num(K) +
+                             ": nothing to design");
+        refuse_negative(samples, smax, false, 0.125 * K, sp.name + " is negative", true);
+    }
+    return target;
+}
+
+/// h at signed sample indices (x, y) of the periodic N x N grid.
+double periodic_at(const std::vector<double>& h, int N, int x, int y) {
+    return h[size_t((y + N) % N) * N + size_t((x + N) % N)];
+}
+
+/// The energy of h in rings of width d/2 about the centre, and in all.
+struct RingEnergy {
+    std::vector<double> ring;
+    double total = 0.0;
+};
+
+RingEnergy ring_energy(const std::vector<double>& h, int N) {
+    RingEnergy e;
+    const int rings = N;  // radius up to N d / sqrt(2) < N * d/2 * 2
+    e.ring.assign(rings + 1, 0.0);
+    for (int y = -N / 2; y < N / 2; ++y)
+        for (int x = -N / 2; x < N / 2; ++x) {
+            const double v = periodic_at(h, N, x, y);
+            const int b = std::min(rings, static_cast<int>(2.0 * std::hypot(x, y)));
+            e.ring[b] += v * v;
+            e.total += v * v;
+        }
+    return e;
+}
+
+/// The radius holding `o.energy` of the total (interpolated within its ring); a window's
+/// taper starts there. Refuses one beyond max_radius.
+double grid_energy_radius(const Spectrum& sp, const DesignOptions& o, const RingEnergy& e,
+                          double d) {
+    const bool tapered = o.window != DesignWindow::None;
+    double cum = 0.0, rf = 0.0;
+    for (size_t b = 0; b < e.ring.size(); ++b) {
+        if (cum + e.ring[b] >= o.energy * e.total) {
+            rf = 0.5 * d * (int(b) + (o.energy * e.total - cum) / e.ring[b]);
+            break;
+        }
+        cum += e.ring[b];
+    }
+    const double R = std::max(tapered ? rf / kTaperStart : rf, 2.0 * d);
+    if (R > o.max_radius)
+        throw ValueError(sp.name + ": keeping " + num(100 * o.energy) +
+                         " % of the kernel energy needs a radius of " + num(R) +
+                         " units (max_radius = " + num(o.max_radius) +
+                         "): lower energy, give a radius, or raise max_radius");
+    return R;
+}
+
+/// h cropped to R (rounded up to whole samples) and windowed, also written into `fwd`'s real
+/// grid for the report; the report's radius, samples and energy fraction filled.
+DesignedKernel crop_grid_kernel(const std::vector<double>& h, int N, double d, double R,
+                                const DesignOptions& o, double total, numeric::RealFft2d& fwd) {
+    const bool tapered = o.window != DesignWindow::None;
+    const int m = static_cast<int>(std::ceil(R / d - 1e-9));
+    R = m * d;
+    const int n = 2 * m + 1;
+    const double taper_start = tapered ? kTaperStart * R : R;
+    auto sk = std::make_shared<SampledKernel>();
+    sk->radial = false;
+    sk->n = n;
+    sk->values.assign(size_t(n) * n, 0.0);
+    double kept = 0.0;
+    for (int y = -m; y <= m; ++y)
+        for (int x = -m; x <= m; ++x) {
+            const double v = periodic_at(h, N, x, y) *
+                             window_weight(o.window, std::hypot(x, y) * d, R, taper_start);
+            sk->values[size_t(y + m) * n + size_t(x + m)] = v;
+            fwd.real()[size_t((y + N) % N) * N + size_t((x + N) % N)] = v;
+            kept += v * v;
+        }
+    DesignedKernel out;
+    out.params.type = KernelType::Sampled;
+    out.params.radius = R;
+    out.params.sampled = sk;
+    out.report.radius = R;
+    out.report.samples = n;
+    out.report.grid = true;
+    out.report.energy_fraction = kept / total;
+    return out;
+}
+
+/// |H(k)|^2 of the bilinear interpolant, (d^2 sinc^2(kx d) sinc^2(ky d) |DFT|)^2 (exact at the
+/// grid frequencies), against the target: the spectrum error and the pass-band error. Both
+/// halves of the plane count (weights 2 except columns 0 and N/2). `fwd` holds the kernel.
+void report_grid_spectrum(DesignReport& rep, numeric::RealFft2d& fwd,
+                          const std::vector<double>& target, int N, double d, double K, double kp) {
+    const double dk = 1.0 / (N * d);
+    const int hw = N / 2 + 1;
+    fwd.forward();
+    double num2 = 0.0, den2 = 0.0, pmax = 0.0;
+    for (double t : target) pmax = std::max(pmax, t);
+    for (int j = 0; j < N; ++j) {
+        const int sj = j < N / 2 ? j : j - N;
+        for (int i = 0; i < hw; ++i) {
+            const double kx = i * dk, ky = sj * dk, k = std::hypot(kx, ky);
+            if (k >= K) continue;
+            const double f = d * d * std::pow(sinc(kx * d) * sinc(ky * d), 2);
+            const double H2 = f * f * std::norm(fwd.spectrum()[size_t(j) * hw + i]);
+            const double s = target[size_t(j) * hw + i];
+            const double wt = (i == 0 || i == N / 2) ? 1.0 : 2.0;
+            num2 += wt * (H2 - s) * (H2 - s);
+            den2 += wt * s * s;
+            if (k <= kp && s >= 0.01 * pmax)
+                rep.passband_error = std::max(rep.passband_error, std::abs(H2 / s - 1.0));
+        }
+    }
+    rep.spectrum_error = den2 > 0 ? std::sqrt(num2 / den2) : 0.0;
+}
+
 DesignedKernel design_grid(const Spectrum& sp, const DesignOptions& o) {
     const double K = o.nyquist, kp = (1.0 - o.rolloff) * K;
     // Grid spacing 1/(4K): the samples carry frequencies up to 2K, twice the designed band, so
     // the bilinear interpolant's images (at multiples of 4K) sit far from the band.
     const double d = 0.25 / K;
-    const bool tapered = o.window != DesignWindow::None;
-    auto fft_size = [](int n) {  // smallest 2^a 3^b 5^c >= n, even
-        for (int m = std::max(n, 16);; ++m) {
-            if (m % 2) continue;
-            int x = m;
-            for (int f : {2, 3, 5})
-                while (x % f == 0) x /= f;
-            if (x == 1) return m;
-        }
-    };
     // The FFT domain must hold the kernel plus its tail: side >= 4 R (the periodic copies of
     // the tail stay beyond 2 R). Start at 256 samples (or from the given radius), double as
     // needed, at most 2048.
@@ -403,74 +578,18 @@ DesignedKernel design_grid(const Spectrum& sp, const DesignOptions& o) {
     bool checked = false;
     for (;;) {
         const double dk = 1.0 / (N * d);
-        const int hw = N / 2 + 1;
         numeric::RealFft2d inv(N, N, numeric::FftPlans::Inverse);
-        std::vector<double> target(size_t(N) * hw, 0.0);  // symmetrised S on the half grid
-        std::vector<SpectrumSample> samples;
-        double smax = 0.0;
-        for (int j = 0; j < N; ++j) {
-            const int sj = j < N / 2 ? j : j - N;
-            for (int i = 0; i < hw; ++i) {
-                const int si = i == N / 2 ? -i : i;  // the Nyquist column is its own mirror
-                const double kx = si * dk, ky = sj * dk, k = std::hypot(kx, ky);
-                if (k >= K) continue;
-                const double th = std::atan2(ky, kx);
-                const double s1 = sp.density(k, th), s2 = sp.density(k, th + (th > 0 ? -kPi : kPi));
-                require_finite_sample(sp.name, k, s1);
-                require_finite_sample(sp.name, k, s2);
-                if (!checked) samples.push_back({k, th, std::min(s1, s2)});
-                // A real field has S(k) = S(-k): use the symmetric part (Lewis 1987: the
-                // spectrum of a real noise is symmetric).
-                const double s = 0.5 * (s1 + s2);
-                smax = std::max(smax, std::max(s1, s2));
-                target[size_t(j) * hw + i] = std::max(s, 0.0);
-                const double comp = std::pow(sinc(kx * d) * sinc(ky * d), 2);
-                inv.spectrum()[size_t(j) * hw + i] =
-                    std::sqrt(std::max(s, 0.0)) * rolloff(k, K, kp) / comp;
-            }
-        }
-        if (!checked) {
-            if (!(smax > 0.0))
-                throw ValueError(sp.name + ": S <= 0 everywhere on |k| < " + num(K) +
-                                 ": nothing to design");
-            refuse_negative(samples, smax, false, 0.125 * K, sp.name + " is negative", true);
-            checked = true;
-        }
+        const std::vector<double> target = grid_amplitude(sp, K, kp, N, d, !checked, inv);
+        checked = true;
         inv.inverse();
         // h(x) = sum_k A(k) e^{2 pi i k.x} dk^2; index (i, j) <-> x = (si d, sj d).
         const double* raw = inv.real();
         std::vector<double> h(size_t(N) * N);
         for (size_t t = 0; t < h.size(); ++t) h[t] = raw[t] * dk * dk;
-        auto at = [&](int x, int y) {  // signed sample indices
-            return h[size_t((y + N) % N) * N + size_t((x + N) % N)];
-        };
-        // Energy in rings of width d/2 for the energy radius.
-        const int rings = N;  // radius up to N d / sqrt(2) < N * d/2 * 2
-        std::vector<double> ring(rings + 1, 0.0);
-        double total = 0.0;
-        for (int y = -N / 2; y < N / 2; ++y)
-            for (int x = -N / 2; x < N / 2; ++x) {
-                const double v = at(x, y);
-                const int b = std::min(rings, static_cast<int>(2.0 * std::hypot(x, y)));
-                ring[b] += v * v;
-                total += v * v;
-            }
+        const RingEnergy e = ring_energy(h, N);
         double R = o.radius;
         if (R == 0.0) {
-            double cum = 0.0, rf = 0.0;
-            for (int b = 0; b <= rings; ++b) {
-                if (cum + ring[b] >= o.energy * total) {
-                    rf = 0.5 * d * (b + (o.energy * total - cum) / ring[b]);
-                    break;
-                }
-                cum += ring[b];
-            }
-            R = std::max(tapered ? rf / kTaperStart : rf, 2.0 * d);
-            if (R > o.max_radius)
-                throw ValueError(sp.name + ": keeping " + num(100 * o.energy) +
-                                 " % of the kernel energy needs a radius of " + num(R) +
-                                 " units (max_radius = " + num(o.max_radius) +
-                                 "): lower energy, give a radius, or raise max_radius");
+            R = grid_energy_radius(sp, o, e, d);
             if (4.0 * R > N * d) {
                 if (2 * N > kMaxN)
                     throw ValueError(sp.name + ": the kernel needs a radius of " + num(R) +
@@ -482,60 +601,15 @@ DesignedKernel design_grid(const Spectrum& sp, const DesignOptions& o) {
                 continue;
             }
         }
-        // Crop to R (rounded up to whole samples), windowed.
-        const int m = static_cast<int>(std::ceil(R / d - 1e-9));
-        R = m * d;
-        const int n = 2 * m + 1;
-        const double taper_start = tapered ? kTaperStart * R : R;
-        auto sk = std::make_shared<SampledKernel>();
-        sk->radial = false;
-        sk->n = n;
-        sk->values.assign(size_t(n) * n, 0.0);
-        double kept = 0.0;
         numeric::RealFft2d fwd(N, N, numeric::FftPlans::Forward);  // the final kernel's transform, for the report
-        for (int y = -m; y <= m; ++y)
-            for (int x = -m; x <= m; ++x) {
-                const double v =
-                    at(x, y) * window_weight(o.window, std::hypot(x, y) * d, R, taper_start);
-                sk->values[size_t(y + m) * n + size_t(x + m)] = v;
-                fwd.real()[size_t((y + N) % N) * N + size_t((x + N) % N)] = v;
-                kept += v * v;
-            }
-        DesignedKernel out;
-        out.params.type = KernelType::Sampled;
-        out.params.radius = R;
-        out.params.sampled = sk;
+        DesignedKernel out = crop_grid_kernel(h, N, d, R, o, e.total, fwd);
         DesignReport& rep = out.report;
-        rep.radius = R;
-        rep.samples = n;
-        rep.grid = true;
         rep.passband = kp;
-        rep.energy_fraction = kept / total;
         {
             const Kernel kern(out.params);
             rep.effective_area = kern.integral_sq() * kern.integral_sq() / kern.integral_4();
         }
-        // |H(k)|^2 of the bilinear interpolant: (d^2 sinc^2(kx d) sinc^2(ky d) |DFT|)^2, exact at
-        // the grid frequencies. Both halves of the plane count (weights 2 except columns 0, N/2).
-        fwd.forward();
-        double num2 = 0.0, den2 = 0.0, pmax = 0.0;
-        for (double t : target) pmax = std::max(pmax, t);
-        for (int j = 0; j < N; ++j) {
-            const int sj = j < N / 2 ? j : j - N;
-            for (int i = 0; i < hw; ++i) {
-                const double kx = i * dk, ky = sj * dk, k = std::hypot(kx, ky);
-                if (k >= K) continue;
-                const double f = d * d * std::pow(sinc(kx * d) * sinc(ky * d), 2);
-                const double H2 = f * f * std::norm(fwd.spectrum()[size_t(j) * hw + i]);
-                const double s = target[size_t(j) * hw + i];
-                const double wt = (i == 0 || i == N / 2) ? 1.0 : 2.0;
-                num2 += wt * (H2 - s) * (H2 - s);
-                den2 += wt * s * s;
-                if (k <= kp && s >= 0.01 * pmax)
-                    rep.passband_error = std::max(rep.passband_error, std::abs(H2 / s - 1.0));
-            }
-        }
-        rep.spectrum_error = den2 > 0 ? std::sqrt(num2 / den2) : 0.0;
+        report_grid_spectrum(rep, fwd, target, N, d, K, kp);
         return out;
     }
 }

@@ -131,6 +131,119 @@ void read_camera_view(Reader& r, CameraConfig& c, int width, int height) {
     c.anisotropic = r.boolean("anisotropic", true);
 }
 
+namespace {
+
+/// center = [x, y], or center_x / center_y (which may be keyframed), of a radial or circular
+/// field.
+void read_field_center(Reader& f, numeric::Keyframed& x, numeric::Keyframed& y) {
+    if (f.node("center")) {
+        auto c = f.pair("center", "[x, y] in texture units");
+        x = numeric::Keyframed((*c)[0]);
+        y = numeric::Keyframed((*c)[1]);
+    } else if (f.has("center_x") || f.has("center_y")) {
+        x = f.keyframed("center_x", 0.0);
+        y = f.keyframed("center_y", 0.0);
+    } else {
+        f.fail(nullptr, "center", "missing: expected [x, y] in texture units");
+    }
+    f.node("center_x"), f.node("center_y");
+}
+
+/// type = "radial" or "circular": along or around the (keyframed) center.
+std::shared_ptr<sim::OrientationField> read_centered_orientation(Reader& f, bool radial) {
+    numeric::Keyframed cx, cy;
+    read_field_center(f, cx, cy);
+    if (radial) return sim::make_radial_orientation(cx, cy);
+    return sim::make_circular_orientation(cx, cy, f.boolean("clockwise", false));
+}
+
+/// type = "polyline": along the nearest segment of points = [[x, y], ...], smoothed.
+std::shared_ptr<sim::OrientationField> read_polyline_orientation(Reader& f) {
+    const toml::node* pn = f.node("points");
+    const toml::array* a = pn ? pn->as_array() : nullptr;
+    static const char* kPoints = "expected at least two [x, y] points, consecutive points distinct";
+    if (!a || a->size() < 2) f.fail(pn, "points", kPoints);
+    std::vector<std::array<double, 2>> pts;
+    for (const auto& e : *a) {
+        const toml::array* q = e.as_array();
+        if (!q || q->size() != 2 || !(*q)[0].is_number() || !(*q)[1].is_number())
+            f.fail(pn, "points", kPoints);
+        const std::array<double, 2> v{(*q)[0].value<double>().value_or(0),
+                                      (*q)[1].value<double>().value_or(0)};
+        if (!std::isfinite(v[0]) || !std::isfinite(v[1]) || (!pts.empty() && pts.back() == v))
+            f.fail(pn, "points", kPoints);
+        pts.push_back(v);
+    }
+    const numeric::Keyframed smooth = f.keyframed(
+        "smooth", 0.0, [](double v) { return v >= 0.0; },
+        "a distance >= 0 in texture units (0: nearest segment)");
+    return sim::make_polyline_orientation(std::move(pts), smooth);
+}
+
+/// type = "sine": along a sine wave of the given amplitude, wavelength, phase and direction.
+std::shared_ptr<sim::OrientationField> read_sine_orientation(Reader& f) {
+    const numeric::Keyframed amp = f.keyframed("amplitude", 16.0);
+    const numeric::Keyframed wl =
+        f.keyframed("wavelength", 128.0, kPositive, "a wavelength > 0 (texture units)");
+    const numeric::Keyframed phase = f.keyframed("phase", 0.0);
+    const numeric::Keyframed angle = f.keyframed("angle", 0.0);
+    double ox = 0.0, oy = 0.0;
+    if (auto o = f.pair("origin", "[x, y] in texture units")) ox = (*o)[0], oy = (*o)[1];
+    return sim::make_sine_orientation(amp, wl, phase, angle, ox, oy);
+}
+
+/// The pixels of an orientation image (1 channel: angle; 2: direction), failing at `pn`.
+sim::OrientationGrid read_orientation_pixels(Reader& f, const toml::node* pn,
+                                             const fs::path& path) {
+    std::string error;
+    auto in = output::open_image_input(path.string(), error);
+    if (!in) f.fail(pn, "path", error);
+    const auto& spec = in->spec();
+    if (const std::string bad =
+            output::image_size_problem(spec.width, spec.height, spec.depth, spec.nchannels);
+        !bad.empty())
+        f.fail(pn, "path", bad);
+    if (spec.nchannels != 1 && spec.nchannels != 2)
+        f.fail(pn, "path",
+               "expected an image with 1 channel (angle in radians) or 2 "
+               "(direction x, y), found " +
+                   std::to_string(spec.nchannels));
+    sim::OrientationGrid g;
+    g.width = spec.width, g.height = spec.height, g.channels = spec.nchannels;
+    g.values.resize(size_t(g.width) * g.height * g.channels);
+    if (!in->read_image(0, 0, 0, g.channels, OIIO::TypeDesc::FLOAT, g.values.data())) {
+        std::string e = in->geterror();
+        std::replace(e.begin(), e.end(), '\n', ' ');
+        f.fail(pn, "path", "cannot read: " + e);
+    }
+    // Integer images store [0, 1]: an angle channel spans [0, pi] (an orientation), a
+    // direction map [-1, 1] (grey is no direction, as for the image flow).
+    if (spec.format != OIIO::TypeDesc::FLOAT && spec.format != OIIO::TypeDesc::HALF)
+        for (float& v : g.values) v = g.channels == 1 ? v * 3.14159265f : 2.0f * v - 1.0f;
+    return g;
+}
+
+/// type = "image": an orientation image placed by spacing and origin.
+std::shared_ptr<sim::OrientationField> read_image_orientation(Reader& f, const fs::path& base) {
+    const toml::node* pn = f.node("path");
+    const std::string rel = f.string("path", "");
+    if (rel.empty())
+        f.fail(pn, "path",
+               "expected the path of an orientation image (1 channel: angle in "
+               "radians; 2 channels: direction x, y)");
+    sim::OrientationGrid g = read_orientation_pixels(f, pn, resolve_path(pn, rel, base));
+    g.spacing = f.number("spacing", 1.0, kPositive, "texture units per image pixel, > 0");
+    if (auto o = f.pair("origin", "[x, y] in texture units"))
+        g.origin_x = (*o)[0], g.origin_y = (*o)[1];
+    try {
+        return sim::make_grid_orientation(std::move(g));
+    } catch (const ValueError& e) {
+        f.fail(pn, "path", e.what());
+    }
+}
+
+}  // namespace
+
 void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base,
                       const std::function<void(Reader&)>& layer_source) {
     const toml::node* n = layer.node("orientation");
@@ -154,112 +267,24 @@ void read_orientation(Reader& layer, sim::ProcessConfig& p, const fs::path& base
                "missing: expected one of constant, radial, circular, polyline, sine, image, fixed, "
                "random, flow, vorticity, layer");
     const size_t type = f.choice("type", types, 0);
-    auto center = [&](numeric::Keyframed& x, numeric::Keyframed& y) {
-        if (f.node("center")) {
-            auto c = f.pair("center", "[x, y] in texture units");
-            x = numeric::Keyframed((*c)[0]);
-            y = numeric::Keyframed((*c)[1]);
-        } else if (f.has("center_x") || f.has("center_y")) {
-            x = f.keyframed("center_x", 0.0);
-            y = f.keyframed("center_y", 0.0);
-        } else {
-            f.fail(nullptr, "center", "missing: expected [x, y] in texture units");
-        }
-        f.node("center_x"), f.node("center_y");
-    };
     std::shared_ptr<sim::OrientationField> field;
     switch (type) {
         case 0:  // constant
             field = sim::make_constant_orientation(f.keyframed("angle", 0.0));
             break;
-        case 1:
-        case 2: {  // radial, circular
-            numeric::Keyframed cx, cy;
-            center(cx, cy);
-            if (type == 1)
-                field = sim::make_radial_orientation(cx, cy);
-            else
-                field = sim::make_circular_orientation(cx, cy, f.boolean("clockwise", false));
+        case 1:  // radial
+        case 2:  // circular
+            field = read_centered_orientation(f, type == 1);
             break;
-        }
-        case 3: {  // polyline
-            const toml::node* pn = f.node("points");
-            const toml::array* a = pn ? pn->as_array() : nullptr;
-            static const char* kPoints =
-                "expected at least two [x, y] points, consecutive points distinct";
-            if (!a || a->size() < 2) f.fail(pn, "points", kPoints);
-            std::vector<std::array<double, 2>> pts;
-            for (const auto& e : *a) {
-                const toml::array* q = e.as_array();
-                if (!q || q->size() != 2 || !(*q)[0].is_number() || !(*q)[1].is_number())
-                    f.fail(pn, "points", kPoints);
-                const std::array<double, 2> v{(*q)[0].value<double>().value_or(0),
-                                              (*q)[1].value<double>().value_or(0)};
-                if (!std::isfinite(v[0]) || !std::isfinite(v[1]) ||
-                    (!pts.empty() && pts.back() == v))
-                    f.fail(pn, "points", kPoints);
-                pts.push_back(v);
-            }
-            const numeric::Keyframed smooth = f.keyframed(
-                "smooth", 0.0, [](double v) { return v >= 0.0; },
-                "a distance >= 0 in texture units (0: nearest segment)");
-            field = sim::make_polyline_orientation(std::move(pts), smooth);
+        case 3:
+            field = read_polyline_orientation(f);
             break;
-        }
-        case 4: {  // sine
-            const numeric::Keyframed amp = f.keyframed("amplitude", 16.0);
-            const numeric::Keyframed wl =
-                f.keyframed("wavelength", 128.0, kPositive, "a wavelength > 0 (texture units)");
-            const numeric::Keyframed phase = f.keyframed("phase", 0.0);
-            const numeric::Keyframed angle = f.keyframed("angle", 0.0);
-            double ox = 0.0, oy = 0.0;
-            if (auto o = f.pair("origin", "[x, y] in texture units")) ox = (*o)[0], oy = (*o)[1];
-            field = sim::make_sine_orientation(amp, wl, phase, angle, ox, oy);
+        case 4:
+            field = read_sine_orientation(f);
             break;
-        }
-        case 5: {  // image
-            const toml::node* pn = f.node("path");
-            const std::string rel = f.string("path", "");
-            if (rel.empty())
-                f.fail(pn, "path",
-                       "expected the path of an orientation image (1 channel: angle in "
-                       "radians; 2 channels: direction x, y)");
-            const fs::path path = resolve_path(pn, rel, base);
-            std::string error;
-            auto in = output::open_image_input(path.string(), error);
-            if (!in) f.fail(pn, "path", error);
-            const auto& spec = in->spec();
-            if (const std::string bad = output::image_size_problem(spec.width, spec.height,
-                                                                   spec.depth, spec.nchannels);
-                !bad.empty())
-                f.fail(pn, "path", bad);
-            if (spec.nchannels != 1 && spec.nchannels != 2)
-                f.fail(pn, "path",
-                       "expected an image with 1 channel (angle in radians) or 2 "
-                       "(direction x, y), found " +
-                           std::to_string(spec.nchannels));
-            sim::OrientationGrid g;
-            g.width = spec.width, g.height = spec.height, g.channels = spec.nchannels;
-            g.values.resize(size_t(g.width) * g.height * g.channels);
-            if (!in->read_image(0, 0, 0, g.channels, OIIO::TypeDesc::FLOAT, g.values.data())) {
-                std::string e = in->geterror();
-                std::replace(e.begin(), e.end(), '\n', ' ');
-                f.fail(pn, "path", "cannot read: " + e);
-            }
-            // Integer images store [0, 1]: an angle channel spans [0, pi] (an orientation), a
-            // direction map [-1, 1] (grey is no direction, as for the image flow).
-            if (spec.format != OIIO::TypeDesc::FLOAT && spec.format != OIIO::TypeDesc::HALF)
-                for (float& v : g.values) v = g.channels == 1 ? v * 3.14159265f : 2.0f * v - 1.0f;
-            g.spacing = f.number("spacing", 1.0, kPositive, "texture units per image pixel, > 0");
-            if (auto o = f.pair("origin", "[x, y] in texture units"))
-                g.origin_x = (*o)[0], g.origin_y = (*o)[1];
-            try {
-                field = sim::make_grid_orientation(std::move(g));
-            } catch (const ValueError& e) {
-                f.fail(pn, "path", e.what());
-            }
+        case 5:
+            field = read_image_orientation(f, base);
             break;
-        }
         case 10:  // another layer's field: the renderer sets the field for each frame
             layer_source(f);
             break;

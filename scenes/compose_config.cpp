@@ -134,13 +134,65 @@ void CompositionReader::read_flow(Reader& f, size_t index, sim::FlowSum& sum) {
     m_refs.push_back(ref);
 }
 
-void CompositionReader::resolve(Scene& scene) {
-    auto& layers = scene.layers;
-    const size_t n = layers.size();
-    // Names are unique.
+namespace {
+
+/// What to suggest for an unknown layer name: the nearest name, or the list of names.
+std::string name_hint(const std::string& name, const std::vector<std::string>& names) {
+    if (auto near = nearest(name, names)) return " (did you mean \"" + *near + "\"?)";
+    if (names.empty()) return " (no layer has a name: give the source layer name = \"...\")";
+    std::string hint = " (names:";
+    for (size_t i = 0; i < names.size(); ++i) hint += (i ? ", " : " ") + names[i];
+    return hint + ")";
+}
+
+/// Why `source` cannot be a stream function (the first reason), or nothing when it can.
+std::optional<std::string> unfit_stream_function(const LayerConfig& source) {
+    if (source.source)
+        return "is a " + std::string(source.source->kind()) +
+               " layer: a stream function is an impulse layer's field, whose "
+               "derivatives the flow takes in closed form";
+    const auto& p = source.process;
+    if (p.lifetime_s > 0)
+        return "has lifetime = " + num(p.lifetime_s) +
+               ": a stream function must be a still layer (lifetime = 0), so the flow "
+               "is the same at every time and each frame stays independent of the "
+               "others";
+    if (source.marginal) return "has a marginal: a stream function must be an unshaped layer";
+    if (source.compose.warp) return "is warped: a stream function must be an unwarped layer";
+    if (p.orientation == sim::OrientationMode::Field)
+        return "has an orientation field: a stream function takes fixed or random "
+               "orientations only";
+    if (source.keyframed())
+        return "has keyframed parameters: a stream function must be the same at every "
+               "time, so each frame stays independent of the others";
+    if (source.gain.value(0.0) == 0.0) return "has gain = 0: a constant field has no level lines";
+    return std::nullopt;
+}
+
+/// The still impulse layer `source` as a stream function psi, whose kernel and semivariogram
+/// the flow differentiates.
+sim::StreamFunction stream_function_of(const LayerConfig& source) {
+    auto kernel = std::make_shared<const kernels::Kernel>(source.kernel);
+    const bool random = source.process.orientation == sim::OrientationMode::Random;
+    sim::StreamFunction psi;
+    psi.process = source.process;
+    psi.gain = source.gain.value(0.0);
+    psi.radius = source.kernel.radius;
+    psi.kernel = [kernel](double dx, double dy, double theta) {
+        return kernel->evaluate(dx, dy, theta);
+    };
+    psi.semivariogram = [kernel, random](double tx, double ty) {
+        return sampled_semivariogram(*kernel, random, tx, ty);
+    };
+    return psi;
+}
+
+}  // namespace
+
+std::map<std::string, size_t> CompositionReader::unique_names(
+    const std::vector<LayerConfig>& layers, std::vector<std::string>& names) {
     std::map<std::string, size_t> by_name;
-    std::vector<std::string> names;
-    for (size_t i = 0; i < n; ++i) {
+    for (size_t i = 0; i < layers.size(); ++i) {
         const std::string& name = layers[i].compose.name;
         if (name.empty()) continue;
         auto [it, fresh] = by_name.emplace(name, i);
@@ -149,120 +201,67 @@ void CompositionReader::resolve(Scene& scene) {
                               layer_name(it->second) + " has the same name: names must be unique");
         names.push_back(name);
     }
+    return by_name;
+}
 
-    // References -> layer indices.
-    for (Ref& ref : m_refs) {
-        const toml::node* v = ref.node;
-        if (const auto* s = v->as_string()) {
-            auto it = by_name.find(s->get());
-            if (it == by_name.end()) {
-                std::string hint;
-                if (auto near = nearest(s->get(), names))
-                    hint = " (did you mean \"" + *near + "\"?)";
-                else if (names.empty())
-                    hint = " (no layer has a name: give the source layer name = \"...\")";
-                else {
-                    hint = " (names:";
-                    for (size_t i = 0; i < names.size(); ++i) hint += (i ? ", " : " ") + names[i];
-                    hint += ")";
-                }
-                ref.reader.fail(v, ref.key, "no layer is named \"" + s->get() + "\"" + hint);
-            }
-            ref.target = it->second;
-        } else if (v->is_integer()) {
-            const int64_t i = v->value<int64_t>().value_or(-1);
-            if (i < 0 || i >= static_cast<int64_t>(n))
-                ref.reader.fail(v, ref.key,
-                                "expected a layer index in [0, " + std::to_string(n - 1) +
-                                    "] or a layer's name");
-            ref.target = static_cast<size_t>(i);
-        } else {
-            ref.reader.fail(v, ref.key, "expected a layer's name or index, found " + type_name(*v));
-        }
-        if (ref.target == ref.layer) {
-            static const char* kSelf[] = {
-                "a layer cannot warp itself", "a layer cannot warp itself",
-                "a layer cannot take its orientation from itself",
-                "a layer cannot flow along its own field"};
-            ref.reader.fail(v, ref.key, kSelf[static_cast<int>(ref.use)]);
-        }
+void CompositionReader::resolve_target(Ref& ref, const std::map<std::string, size_t>& by_name,
+                                       const std::vector<std::string>& names, size_t n) {
+    const toml::node* v = ref.node;
+    if (const auto* s = v->as_string()) {
+        auto it = by_name.find(s->get());
+        if (it == by_name.end())
+            ref.reader.fail(v, ref.key,
+                            "no layer is named \"" + s->get() + "\"" + name_hint(s->get(), names));
+        ref.target = it->second;
+    } else if (v->is_integer()) {
+        const int64_t i = v->value<int64_t>().value_or(-1);
+        if (i < 0 || i >= static_cast<int64_t>(n))
+            ref.reader.fail(
+                v, ref.key,
+                "expected a layer index in [0, " + std::to_string(n - 1) + "] or a layer's name");
+        ref.target = static_cast<size_t>(i);
+    } else {
+        ref.reader.fail(v, ref.key, "expected a layer's name or index, found " + type_name(*v));
     }
-
-    // Each use, with what it needs of its source.
-    for (Ref& ref : m_refs) {
-        LayerConfig& target = layers[ref.layer];
-        const LayerConfig& source = layers[ref.target];
-        const std::string src = layer_name(ref.target);
-        switch (ref.use) {
-            case Ref::Use::WarpX:
-            case Ref::Use::WarpY: {
-                if (scene.camera.type == CameraConfig::Type::Perspective) {
-                    Reader& r = *m_layers[ref.layer];
-                    r.fail(r.node("warp"), "warp",
-                           "a domain warp needs an orthographic camera, not camera.type = "
-                           "\"perspective\" (the warp resamples the layer's image)");
-                }
-                if (!(layer_theory(source).variance > 0.0))
-                    ref.reader.fail(ref.node, ref.key,
-                                    src + " has no variance (gain = 0): its standardised values, "
-                                          "the displacement, are undefined");
-                target.compose.warp->source[ref.use == Ref::Use::WarpX ? 0 : 1] = ref.target;
-                break;
-            }
-            case Ref::Use::Orientation:
-                target.compose.orientation = LayerOrientation{ref.target, ref.level_lines};
-                break;
-            case Ref::Use::Flow: {
-                auto unfit = [&](const std::string& why) {
-                    ref.reader.fail(ref.node, ref.key, src + " " + why);
-                };
-                if (source.source)
-                    unfit("is a " + std::string(source.source->kind()) +
-                          " layer: a stream function is an impulse layer's field, whose "
-                          "derivatives the flow takes in closed form");
-                const auto& p = source.process;
-                if (p.lifetime_s > 0)
-                    unfit("has lifetime = " + num(p.lifetime_s) +
-                          ": a stream function must be a still layer (lifetime = 0), so the flow "
-                          "is the same at every time and each frame stays independent of the "
-                          "others");
-                if (source.marginal)
-                    unfit("has a marginal: a stream function must be an unshaped layer");
-                if (source.compose.warp)
-                    unfit("is warped: a stream function must be an unwarped layer");
-                if (p.orientation == sim::OrientationMode::Field)
-                    unfit("has an orientation field: a stream function takes fixed or random "
-                          "orientations only");
-                if (source.keyframed())
-                    unfit("has keyframed parameters: a stream function must be the same at every "
-                          "time, so each frame stays independent of the others");
-                if (source.gain.value(0.0) == 0.0)
-                    unfit("has gain = 0: a constant field has no level lines");
-                auto kernel = std::make_shared<const kernels::Kernel>(source.kernel);
-                const bool random = p.orientation == sim::OrientationMode::Random;
-                sim::StreamFunction psi;
-                psi.process = p;
-                psi.gain = source.gain.value(0.0);
-                psi.radius = source.kernel.radius;
-                psi.kernel = [kernel](double dx, double dy, double theta) {
-                    return kernel->evaluate(dx, dy, theta);
-                };
-                psi.semivariogram = [kernel, random](double tx, double ty) {
-                    return sampled_semivariogram(*kernel, random, tx, ty);
-                };
-                PendingFlow& pf = *m_flows[ref.flow];
-                try {
-                    pf.term->set(sim::make_stream_flow(std::move(psi), pf.speed));
-                } catch (const ValueError& e) {
-                    unfit(std::string("cannot be a stream function: ") + e.what());
-                }
-                target.compose.flow_sources.push_back(ref.target);
-                break;
-            }
-        }
+    if (ref.target == ref.layer) {
+        static const char* kSelf[] = {"a layer cannot warp itself", "a layer cannot warp itself",
+                                      "a layer cannot take its orientation from itself",
+                                      "a layer cannot flow along its own field"};
+        ref.reader.fail(v, ref.key, kSelf[static_cast<int>(ref.use)]);
     }
+}
 
-    // No layer may need its own field through a chain of warps and orientations.
+void CompositionReader::connect_warp(const Ref& ref, Scene& scene) {
+    if (scene.camera.type == CameraConfig::Type::Perspective) {
+        Reader& r = *m_layers[ref.layer];
+        r.fail(r.node("warp"), "warp",
+               "a domain warp needs an orthographic camera, not camera.type = "
+               "\"perspective\" (the warp resamples the layer's image)");
+    }
+    if (!(layer_theory(scene.layers[ref.target]).variance > 0.0))
+        ref.reader.fail(ref.node, ref.key,
+                        layer_name(ref.target) +
+                            " has no variance (gain = 0): its standardised values, "
+                            "the displacement, are undefined");
+    scene.layers[ref.layer].compose.warp->source[ref.use == Ref::Use::WarpX ? 0 : 1] = ref.target;
+}
+
+void CompositionReader::connect_flow(const Ref& ref, std::vector<LayerConfig>& layers) {
+    const LayerConfig& source = layers[ref.target];
+    auto unfit = [&](const std::string& why) {
+        ref.reader.fail(ref.node, ref.key, layer_name(ref.target) + " " + why);
+    };
+    if (auto why = unfit_stream_function(source)) unfit(*why);
+    PendingFlow& pf = *m_flows[ref.flow];
+    try {
+        pf.term->set(sim::make_stream_flow(stream_function_of(source), pf.speed));
+    } catch (const ValueError& e) {
+        unfit(std::string("cannot be a stream function: ") + e.what());
+    }
+    layers[ref.layer].compose.flow_sources.push_back(ref.target);
+}
+
+void CompositionReader::refuse_cycles(size_t n) {
     std::vector<std::vector<const Ref*>> needs(n);
     for (const Ref& ref : m_refs)
         if (ref.use != Ref::Use::Flow) needs[ref.layer].push_back(&ref);
@@ -287,9 +286,10 @@ void CompositionReader::resolve(Scene& scene) {
     };
     for (size_t i = 0; i < n; ++i)
         if (state[i] == 0) visit(visit, i);
+}
 
-    // Visibility: something to show, and a first layer that has nothing under it can only add
-    // or lie over the empty (zero) picture.
+void CompositionReader::check_visibility(const std::vector<LayerConfig>& layers) {
+    const size_t n = layers.size();
     std::vector<bool> used(n, false);
     for (const Ref& ref : m_refs) used[ref.target] = true;
     size_t first = n;
@@ -313,6 +313,34 @@ void CompositionReader::resolve(Scene& scene) {
         if (!layers[i].compose.visible && !used[i])
             m_layers[i]->warn("visible", "this hidden layer is no layer's source: it is never "
                                          "rendered");
+}
+
+void CompositionReader::resolve(Scene& scene) {
+    auto& layers = scene.layers;
+    std::vector<std::string> names;
+    const std::map<std::string, size_t> by_name = unique_names(layers, names);
+    for (Ref& ref : m_refs) resolve_target(ref, by_name, names, layers.size());
+    // Each use, with what it needs of its source.
+    for (const Ref& ref : m_refs) {
+        switch (ref.use) {
+            case Ref::Use::WarpX:
+            case Ref::Use::WarpY:
+                connect_warp(ref, scene);
+                break;
+            case Ref::Use::Orientation:
+                layers[ref.layer].compose.orientation =
+                    LayerOrientation{ref.target, ref.level_lines};
+                break;
+            case Ref::Use::Flow:
+                connect_flow(ref, layers);
+                break;
+        }
+    }
+    // No layer may need its own field through a chain of warps and orientations.
+    refuse_cycles(layers.size());
+    // Visibility: something to show, and a first layer that has nothing under it can only add
+    // or lie over the empty (zero) picture.
+    check_visibility(layers);
 }
 
 double sampled_semivariogram(const kernels::Kernel& kernel, bool random_orientation, double tx,

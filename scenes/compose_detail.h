@@ -4,6 +4,7 @@
 // layers (scenes/compose_config.cpp) and the per-pixel operations of the renderer
 // (scenes/compose_render.cpp). Internal to impulse::scenes.
 
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -40,6 +41,22 @@ private:
     std::vector<Ref> m_refs;
     std::vector<std::unique_ptr<PendingFlow>> m_flows;
     std::vector<std::optional<Reader>> m_layers;  ///< each layer's reader, for messages
+
+    // The steps of resolve, in order.
+    /// Layer names -> indices (appended to `names` in file order); a repeated name fails.
+    std::map<std::string, size_t> unique_names(const std::vector<LayerConfig>& layers,
+                                               std::vector<std::string>& names);
+    /// Sets ref.target from a name or an index of `n` layers; refuses a self reference.
+    void resolve_target(Ref& ref, const std::map<std::string, size_t>& by_name,
+                        const std::vector<std::string>& names, size_t n);
+    /// A domain warp's source: an orthographic camera and a source with variance.
+    void connect_warp(const Ref& ref, Scene& scene);
+    /// A flow along a still impulse layer's level lines: completes the pending term.
+    void connect_flow(const Ref& ref, std::vector<LayerConfig>& layers);
+    /// No layer may need its own field through a chain of warps and orientations.
+    void refuse_cycles(size_t n);
+    /// Something to show; a first visible layer that adds or lies over; unused hidden layers.
+    void check_visibility(const std::vector<LayerConfig>& layers);
 };
 
 /// The semivariogram (1/2) int (h(x) - h(x + tau))^2 d^2x = C(0) - C(tau) of a kernel at

@@ -89,6 +89,25 @@ bool whole_frames(double seconds, double fps) {
     return std::abs(f - std::round(f)) < 1e-6;
 }
 
+/// The value of "--set key=value" as the table { v = value }: a TOML value, or a bare word as
+/// a string.
+toml::table override_value(const std::string& text, const std::string& value) {
+    try {
+        return toml::parse("v = " + value);
+    } catch (const toml::parse_error& e) {
+        // A bare word is a string (--set layer.0.kernel.type=gabor); something that starts
+        // like a number or a TOML value but does not parse is an error, not a string.
+        const char c = value.empty() ? ' ' : value[0];
+        if (std::isdigit(static_cast<unsigned char>(c)) || c == '-' || c == '+' || c == '.' ||
+            c == '[' || c == '{' || c == '"' || c == '\'')
+            throw SceneError("--set " + text +
+                             ": cannot parse the value: " + std::string(e.description()));
+        toml::table doc;
+        doc.insert("v", value);
+        return doc;
+    }
+}
+
 /// Apply one "--set a.b.0.c=value" to the document.
 void apply_override(toml::table& root, const std::string& text, Source& src) {
     const size_t eq = text.find('=');
@@ -135,20 +154,7 @@ void apply_override(toml::table& root, const std::string& text, Source& src) {
     }
     const std::string& last = parts.back();
     shown += (shown.empty() ? "" : ".") + last;
-    toml::node_view<toml::node> parsed;
-    toml::table doc;
-    try {
-        doc = toml::parse("v = " + value);
-    } catch (const toml::parse_error& e) {
-        // A bare word is a string (--set layer.0.kernel.type=gabor); something that starts
-        // like a number or a TOML value but does not parse is an error, not a string.
-        const char c = value.empty() ? ' ' : value[0];
-        if (std::isdigit(static_cast<unsigned char>(c)) || c == '-' || c == '+' || c == '.' ||
-            c == '[' || c == '{' || c == '"' || c == '\'')
-            throw SceneError("--set " + text + ": cannot parse the value: " + std::string(e.description()));
-        doc = toml::table{};
-        doc.insert("v", value);
-    }
+    const toml::table doc = override_value(text, value);
     t->insert_or_assign(last, *doc.get("v"));
     src.overrides[shown] = text;
 }
