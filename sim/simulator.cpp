@@ -158,6 +158,15 @@ struct LayerSimulator::State {
         return r;
     }
 
+    /// Marks a block of the next frame that is generated rather than carried over.
+    static constexpr size_t kGenerate = static_cast<size_t>(-1);
+    double age_s(const Particles& P, size_t i, int64_t target) const;
+    bool alive(const Particles& P, size_t i, int64_t target) const;
+    void plan_blocks(const detail::CellCover& cover, int64_t ct0, int64_t ct1, bool reuse);
+    void fill_blocks();
+    void advance(int64_t target);
+    std::vector<size_t> emit(const Region& view, int64_t target, Impulses& out) const;
+    void orient(int64_t target, const std::vector<size_t>& emitted, Impulses& out) const;
     void integrate(Particles& p, const std::vector<size_t>& order, int64_t target);
     void still_impulses(const detail::CellCover& cover, const Region& view, bool theta0,
                         Impulses& out);
@@ -336,6 +345,153 @@ void LayerSimulator::State::field_orientation(int64_t target, const std::vector<
     }
 }
 
+// Age in grid steps (exact integer part) so looped copies agree bit for bit.
+double LayerSimulator::State::age_s(const Particles& P, size_t i, int64_t target) const {
+    return (static_cast<double>(target - P.birth_step[i]) - P.birth_frac[i]) * dt;
+}
+
+bool LayerSimulator::State::alive(const Particles& P, size_t i, int64_t target) const {
+    const double a = age_s(P, i, target);
+    return a >= 0.0 && a < config.lifetime_s;
+}
+
+// The blocks of the birth region in canonical order (time cells [ct0, ct1]), each carried over
+// from the previous frame (block_source: its index in `blocks`) or to be generated (kGenerate).
+// Both block lists are in canonical order: merge instead of search.
+void LayerSimulator::State::plan_blocks(const detail::CellCover& cover, int64_t ct0, int64_t ct1,
+                                        bool reuse) {
+    size_t cursor = 0;
+    next_blocks.clear();
+    block_source.clear();
+    for (int64_t ct = ct0; ct <= ct1; ++ct)
+        for (int64_t cy = cover.cy0; cy <= cover.cy1; ++cy)
+            for (const auto& [cx0, cx1] : cover.rows[size_t(cy - cover.cy0)])
+                for (int64_t cx = cx0; cx <= cx1; ++cx) {
+                    const BlockKey key{ct, cy, cx};
+                    while (reuse && cursor < blocks.size() && blocks[cursor].key < key) ++cursor;
+                    const bool kept = reuse && cursor < blocks.size() && blocks[cursor].key == key;
+                    next_blocks.push_back({key, 0, kept ? blocks[cursor].count : 0});
+                    block_source.push_back(kept ? cursor : kGenerate);
+                }
+}
+
+// New cells are counted, then generated straight into their place in `next`, in parallel (an
+// impulse is a pure function of its cell and index): the layout is the canonical order whatever
+// the threads do.
+void LayerSimulator::State::fill_blocks() {
+    const ProcessConfig& c = config;
+    const Layout& L = layout;
+    const size_t n_blocks = next_blocks.size();
+    constexpr size_t kGrain = 64;  // blocks per task: cells hold a few impulses each
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n_blocks, kGrain), [&](const auto& r) {
+        for (size_t b = r.begin(); b != r.end(); ++b) {
+            if (block_source[b] != kGenerate) continue;
+            const BlockKey& k = next_blocks[b].key;
+            next_blocks[b].count = static_cast<size_t>(detail::cell_count(c, L, k.cx, k.cy, k.ct));
+        }
+    });
+    size_t total = 0;
+    for (Block& blk : next_blocks) blk.start = total, total += blk.count;
+    Particles& P = next;
+    P.resize(total);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, n_blocks, kGrain), [&](const auto& r) {
+        for (size_t b = r.begin(); b != r.end(); ++b) {
+            const Block& blk = next_blocks[b];
+            if (block_source[b] != kGenerate) {
+                P.copy_range(live, blocks[block_source[b]].start, blk.count, blk.start);
+                continue;
+            }
+            // The block's survivors of the thinning (all its candidates when nothing thins),
+            // in candidate order.
+            detail::CellBirth nb;
+            size_t i = blk.start;
+            for (int k = 0; i < blk.start + blk.count; ++k) {
+                if (!detail::cell_birth(c, L, blk.key.cx, blk.key.cy, blk.key.ct, k, nb)) continue;
+                const auto [bs, bf] = birth_grid(nb.time);
+                P.x[i] = nb.x;
+                P.y[i] = nb.y;
+                P.lnj[i] = 0.0;
+                P.th[i] = c.orientation == OrientationMode::Random ? nb.theta0 : 0.0;
+                P.birth_step[i] = bs;
+                P.birth_frac[i] = bf;
+                P.step[i] = bs;
+                P.stepped[i] = 0;
+                P.amp[i] = nb.amplitude;
+                P.th0[i] = nb.theta0;
+                ++i;
+            }
+        }
+    });
+}
+
+// The live particles of `next` behind `target`, ordered by the step they start from (then by
+// index): a counting sort, as those steps span about one lifetime. The order only groups
+// particles that move together; it changes no particle's arithmetic.
+void LayerSimulator::State::advance(int64_t target) {
+    Particles& P = next;
+    std::vector<size_t> todo;
+    int64_t lowest = target;
+    auto first_of = [&](size_t i) { return P.stepped[i] ? P.step[i] : P.birth_step[i]; };
+    for (size_t i = 0; i < P.size(); ++i) {
+        if (!alive(P, i, target)) continue;
+        const int64_t first = first_of(i);
+        if (first < target) todo.push_back(i), lowest = std::min(lowest, first);
+    }
+    std::vector<size_t> starts(static_cast<size_t>(target - lowest) + 1, 0);
+    for (size_t i : todo) ++starts[static_cast<size_t>(first_of(i) - lowest) + 1];
+    for (size_t k = 1; k < starts.size(); ++k) starts[k] += starts[k - 1];
+    std::vector<size_t> order(todo.size());
+    for (size_t i : todo) order[starts[static_cast<size_t>(first_of(i) - lowest)]++] = i;
+    integrate(P, order, target);
+}
+
+// Emits the live impulses of `next` whose support can touch the view, in canonical order, with
+// their weights a w(age) sqrt(J); returns their indices in `next`.
+std::vector<size_t> LayerSimulator::State::emit(const Region& view, int64_t target,
+                                                Impulses& out) const {
+    const ProcessConfig& c = config;
+    const Particles& P = next;
+    out.clear();
+    const detail::BoxIndex keep(view.expanded(support_radius));
+    std::vector<size_t> emitted;
+    for (size_t i = 0; i < P.size(); ++i) {
+        if (!alive(P, i, target)) continue;
+        if (!keep.contains(P.x[i], P.y[i])) continue;
+        double w = P.amp[i];
+        w *= envelope_weight(c.envelope, age_s(P, i, target), c.lifetime_s);
+        if (c.jacobian) w *= std::exp(0.5 * P.lnj[i]);  // s_k = sqrt(J_k)
+        out.x.push_back(P.x[i]);
+        out.y.push_back(P.y[i]);
+        out.weight.push_back(static_cast<float>(w));
+        out.theta.push_back(detail::theta_of(P.th[i]));
+        emitted.push_back(i);
+    }
+    return emitted;
+}
+
+// Kernel angles that depend on where the impulses are now: along the local flow, or from an
+// orientation field (with the birth angles of `emitted` for its jitter).
+void LayerSimulator::State::orient(int64_t target, const std::vector<size_t>& emitted,
+                                   Impulses& out) const {
+    const ProcessConfig& c = config;
+    if (c.orientation == OrientationMode::Flow && flow) {
+        const size_t n = out.size();
+        std::vector<double> vx(n, 0.0), vy(n, 0.0);
+        flow->add(time_of_step(target), n, out.x.data(), out.y.data(), vx.data(), vy.data(),
+                  nullptr, nullptr);
+        for (size_t j = 0; j < n; ++j) out.theta[j] = static_cast<float>(std::atan2(vy[j], vx[j]));
+    }
+    if (c.orientation == OrientationMode::Field && c.orientation_field) {
+        // Birth angles only for the jitter (field_orientation reads them only then).
+        std::vector<float> th0;
+        if (c.orientation_jitter.value(time_of_step(target)) != 0.0) {
+            th0.resize(emitted.size());
+            for (size_t j = 0; j < emitted.size(); ++j) th0[j] = next.th0[emitted[j]];
+        }
+        field_orientation(target, th0, out);
+    }
+}
+
 void LayerSimulator::impulses_at(int64_t frame, const Region& view, Impulses& out) {
     State& S = *m_state;
     const ProcessConfig& c = S.config;
@@ -352,15 +508,11 @@ void LayerSimulator::impulses_at(int64_t frame, const Region& view, Impulses& ou
     // cells that meet one of them are generated.
     const Region region = birth_region(view);
     if (S.flow && !still) S.flow->prepare(region.bounds().expanded(travel + 1.0));
-
-    // Reuse the previous frame's particles only when moving forward in time.
-    const bool reuse = S.valid && !still && S.last_step <= target;
-    size_t cursor = 0;  // both block lists are in canonical order: merge instead of search
     const detail::CellCover cover = detail::cell_cover(region, L);
-    const bool field = c.orientation == OrientationMode::Field && c.orientation_field;
     if (still) {
         // out.theta holds theta0 for a random orientation, and for the field's jitter until
         // field_orientation overwrites it (kept aside first).
+        const bool field = c.orientation == OrientationMode::Field && c.orientation_field;
         const bool jitter = field && c.orientation_jitter.value(S.time_of_step(target)) != 0.0;
         S.still_impulses(cover, view, c.orientation == OrientationMode::Random || jitter, out);
         if (field) {
@@ -370,144 +522,21 @@ void LayerSimulator::impulses_at(int64_t frame, const Region& view, Impulses& ou
         S.valid = false;
         return;
     }
-    int64_t ct0 = 0, ct1 = 0;
+    // Reuse the previous frame's particles only when moving forward in time.
+    const bool reuse = S.valid && S.last_step <= target;
     const double t_frame = static_cast<double>(target) * S.dt;
-    if (!still) {
-        ct0 = static_cast<int64_t>(std::floor((t_frame - c.lifetime_s) / L.time_cell_s)) - 1;
-        ct1 = static_cast<int64_t>(std::floor(t_frame / L.time_cell_s)) + 1;
-    }
-
-    // The blocks of the birth region in canonical order, each carried over from the previous
-    // frame or generated. New cells are counted, then generated straight into their place, in
-    // parallel (an impulse is a pure function of its cell and index): the layout is the
-    // canonical order whatever the threads do.
-    constexpr size_t kGenerate = static_cast<size_t>(-1);
-    S.next_blocks.clear();
-    std::vector<size_t>& source = S.block_source;  // per block: index in S.blocks, or kGenerate
-    source.clear();
-    for (int64_t ct = ct0; ct <= ct1; ++ct)
-        for (int64_t cy = cover.cy0; cy <= cover.cy1; ++cy)
-            for (const auto& [cx0, cx1] : cover.rows[size_t(cy - cover.cy0)])
-                for (int64_t cx = cx0; cx <= cx1; ++cx) {
-                    const BlockKey key{ct, cy, cx};
-                    while (reuse && cursor < S.blocks.size() && S.blocks[cursor].key < key)
-                        ++cursor;
-                    const bool kept =
-                        reuse && cursor < S.blocks.size() && S.blocks[cursor].key == key;
-                    S.next_blocks.push_back({key, 0, kept ? S.blocks[cursor].count : 0});
-                    source.push_back(kept ? cursor : kGenerate);
-                }
-    const size_t n_blocks = S.next_blocks.size();
-    constexpr size_t kGrain = 64;  // blocks per task: cells hold a few impulses each
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n_blocks, kGrain), [&](const auto& r) {
-        for (size_t b = r.begin(); b != r.end(); ++b) {
-            if (source[b] != kGenerate) continue;
-            const BlockKey& k = S.next_blocks[b].key;
-            S.next_blocks[b].count = static_cast<size_t>(detail::cell_count(c, L, k.cx, k.cy, k.ct));
-        }
-    });
-    size_t total = 0;
-    for (Block& blk : S.next_blocks) blk.start = total, total += blk.count;
-    Particles& P = S.next;
-    P.resize(total);
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, n_blocks, kGrain), [&](const auto& r) {
-        for (size_t b = r.begin(); b != r.end(); ++b) {
-            const Block& blk = S.next_blocks[b];
-            if (source[b] != kGenerate) {
-                P.copy_range(S.live, S.blocks[source[b]].start, blk.count, blk.start);
-                continue;
-            }
-            // The block's survivors of the thinning (all its candidates when nothing thins),
-            // in candidate order.
-            detail::CellBirth nb;
-            size_t i = blk.start;
-            for (int k = 0; i < blk.start + blk.count; ++k) {
-                if (!detail::cell_birth(c, L, blk.key.cx, blk.key.cy, blk.key.ct, k, nb)) continue;
-                const auto [bs, bf] = S.birth_grid(nb.time);
-                P.x[i] = nb.x;
-                P.y[i] = nb.y;
-                P.lnj[i] = 0.0;
-                P.th[i] = c.orientation == OrientationMode::Random ? nb.theta0 : 0.0;
-                P.birth_step[i] = bs;
-                P.birth_frac[i] = bf;
-                P.step[i] = bs;
-                P.stepped[i] = 0;
-                P.amp[i] = nb.amplitude;
-                P.th0[i] = nb.theta0;
-                ++i;
-            }
-        }
-    });
-
-    // Age in grid steps (exact integer part) so looped copies agree bit for bit.
-    auto age_s = [&](size_t i) {
-        return (static_cast<double>(target - P.birth_step[i]) - P.birth_frac[i]) * S.dt;
-    };
-    auto alive = [&](size_t i) {
-        if (still) return true;
-        const double a = age_s(i);
-        return a >= 0.0 && a < c.lifetime_s;
-    };
-
-    if (!still && S.flow) {
-        // The live particles behind `target`, ordered by the step they start from (then by
-        // index): a counting sort, as those steps span about one lifetime. The order only
-        // groups particles that move together; it changes no particle's arithmetic.
-        std::vector<size_t> todo;
-        int64_t lowest = target;
-        for (size_t i = 0; i < P.size(); ++i) {
-            if (!alive(i)) continue;
-            const int64_t first = P.stepped[i] ? P.step[i] : P.birth_step[i];
-            if (first < target) todo.push_back(i), lowest = std::min(lowest, first);
-        }
-        auto first_of = [&](size_t i) { return P.stepped[i] ? P.step[i] : P.birth_step[i]; };
-        std::vector<size_t> starts(static_cast<size_t>(target - lowest) + 1, 0);
-        for (size_t i : todo) ++starts[static_cast<size_t>(first_of(i) - lowest) + 1];
-        for (size_t k = 1; k < starts.size(); ++k) starts[k] += starts[k - 1];
-        std::vector<size_t> order(todo.size());
-        for (size_t i : todo) order[starts[static_cast<size_t>(first_of(i) - lowest)]++] = i;
-        S.integrate(P, order, target);
-    }
-
-    // Emit the live impulses whose support can touch the view, in canonical order.
-    out.clear();
-    const detail::BoxIndex keep(view.expanded(S.support_radius));
-    std::vector<size_t> emitted;
-    for (size_t i = 0; i < P.size(); ++i) {
-        if (!alive(i)) continue;
-        if (!keep.contains(P.x[i], P.y[i])) continue;
-        double w = P.amp[i];
-        if (!still) w *= envelope_weight(c.envelope, age_s(i), c.lifetime_s);
-        if (!still && c.jacobian) w *= std::exp(0.5 * P.lnj[i]);  // s_k = sqrt(J_k)
-        out.x.push_back(P.x[i]);
-        out.y.push_back(P.y[i]);
-        out.weight.push_back(static_cast<float>(w));
-        out.theta.push_back(detail::theta_of(P.th[i]));
-        emitted.push_back(i);
-    }
-    if (c.orientation == OrientationMode::Flow && S.flow && !still) {
-        // Kernels aligned with the local flow direction at the frame time.
-        const size_t n = out.size();
-        std::vector<double> vx(n, 0.0), vy(n, 0.0);
-        S.flow->add(S.time_of_step(target), n, out.x.data(), out.y.data(), vx.data(), vy.data(),
-                    nullptr, nullptr);
-        for (size_t j = 0; j < n; ++j)
-            out.theta[j] = static_cast<float>(std::atan2(vy[j], vx[j]));
-    }
-    if (field) {
-        // Birth angles only for the jitter (field_orientation reads them only then).
-        std::vector<float> th0;
-        if (c.orientation_jitter.value(S.time_of_step(target)) != 0.0) {
-            th0.resize(emitted.size());
-            for (size_t j = 0; j < emitted.size(); ++j) th0[j] = P.th0[emitted[j]];
-        }
-        S.field_orientation(target, th0, out);
-    }
+    const int64_t ct0 =
+        static_cast<int64_t>(std::floor((t_frame - c.lifetime_s) / L.time_cell_s)) - 1;
+    const int64_t ct1 = static_cast<int64_t>(std::floor(t_frame / L.time_cell_s)) + 1;
+    S.plan_blocks(cover, ct0, ct1, reuse);
+    S.fill_blocks();
+    if (S.flow) S.advance(target);
+    S.orient(target, S.emit(view, target, out), out);
 
     std::swap(S.live, S.next);
     std::swap(S.blocks, S.next_blocks);
     S.last_step = target;
-    S.valid = !still;
+    S.valid = true;
 }
 
 }  // namespace impulse::sim
