@@ -7,7 +7,9 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <memory>
 #include <sstream>
+#include <utility>
 
 #include "numeric/fft.h"
 #include "kernels/kernels.h"
@@ -36,8 +38,9 @@ std::vector<float> luminance(const float* pixels, int width, int height, int cha
     return y;
 }
 
-ExemplarKernel kernel_from_exemplar(const float* pixels, int width, int height,
-                                    const ExemplarOptions& o) {
+namespace {
+
+void check_options(int width, int height, const ExemplarOptions& o) {
     if (width < 8 || height < 8)
         throw ValueError("exemplar is " + std::to_string(width) + "x" + std::to_string(height) +
                          ": expected at least 8x8 pixels");
@@ -49,8 +52,10 @@ ExemplarKernel kernel_from_exemplar(const float* pixels, int width, int height,
     if (!(o.amplitude_second_moment > 0) || !std::isfinite(o.amplitude_second_moment))
         throw ValueError("E[a^2] = " + std::to_string(o.amplitude_second_moment) +
                          ": expected > 0");
+}
 
-    // Whole-image mean and variance: the variance is what the synthesis reproduces.
+/// Whole-image mean and variance: the variance is what the synthesis reproduces.
+std::pair<double, double> image_moments(const float* pixels, int width, int height) {
     const size_t npx = size_t(width) * height;
     double mean = 0.0;
     for (size_t i = 0; i < npx; ++i) {
@@ -64,60 +69,70 @@ ExemplarKernel kernel_from_exemplar(const float* pixels, int width, int height,
     for (size_t i = 0; i < npx; ++i) var += (pixels[i] - mean) * (pixels[i] - mean);
     var /= double(npx);
     if (!(var > 0.0)) throw ValueError("exemplar is constant: it has no spectrum to resynthesise");
+    return {mean, var};
+}
 
-    // The centred crop: P = 2m + 1 pixels, centre pixel m <-> kernel origin.
+/// Half-size m of the centred crop of P = 2m + 1 pixels (centre pixel m <-> kernel origin).
+int crop_half_size(int width, int height, double radius) {
     const int fit = (std::min(width, height) - 1) / 2;
     int m = fit;
-    if (o.radius > 0) {
-        m = static_cast<int>(std::ceil(o.radius - 1e-9));
+    if (radius > 0) {
+        m = static_cast<int>(std::ceil(radius - 1e-9));
         if (m > fit) {
             std::ostringstream s;
-            s << "exemplar is " << width << "x" << height << ": a kernel of radius " << o.radius
+            s << "exemplar is " << width << "x" << height << ": a kernel of radius " << radius
               << " needs a centred crop of " << 2 * m + 1 << "x" << 2 * m + 1
               << " pixels: expected radius <= " << fit;
             throw ValueError(s.str());
         }
     }
     if (m < 2)
-        throw ValueError("radius = " + std::to_string(o.radius) +
-                         ": expected a radius >= 2 pixels");
+        throw ValueError("radius = " + std::to_string(radius) + ": expected a radius >= 2 pixels");
+    return m;
+}
+
+/// The radial design window at r = distance / m (zero from r = 1 on).
+double window_at(DesignWindow window, double r) {
+    if (r >= 1.0) return 0.0;
+    switch (window) {
+        case DesignWindow::None:
+            return 1.0;
+        case DesignWindow::Hann:
+            return 0.5 + 0.5 * std::cos(kPi * r);
+        case DesignWindow::Gaussian:
+            return std::exp(-4.5 * r * r);  // sigma = R/3
+    }
+    return 0.0;
+}
+
+/// The mean-removed, windowed centred crop of P x P pixels, transformed (fwd holds its DFT).
+void transform_crop(const float* pixels, int width, int height, int m, DesignWindow window,
+                    numeric::RealFft2d& fwd) {
     const int P = 2 * m + 1;
     const int x0 = (width - P) / 2, y0 = (height - P) / 2;
-
-    // Mean-removed, windowed sample (radial window, zero beyond the radius m).
-    numeric::RealFft2d fwd(P, P, numeric::FftPlans::Forward);
     double crop_mean = 0.0;
     for (int y = 0; y < P; ++y)
         for (int x = 0; x < P; ++x) crop_mean += pixels[size_t(y0 + y) * width + (x0 + x)];
     crop_mean /= double(P) * P;
     for (int y = 0; y < P; ++y)
         for (int x = 0; x < P; ++x) {
-            const double r = std::hypot(x - m, y - m) / m;
-            double w = 0.0;
-            if (r < 1.0) {
-                switch (o.window) {
-                    case DesignWindow::None:
-                        w = 1.0;
-                        break;
-                    case DesignWindow::Hann:
-                        w = 0.5 + 0.5 * std::cos(kPi * r);
-                        break;
-                    case DesignWindow::Gaussian:
-                        w = std::exp(-4.5 * r * r);
-                        break;  // sigma = R/3
-                }
-            }
+            const double w = window_at(window, std::hypot(x - m, y - m) / m);
             fwd.real()[size_t(y) * P + x] =
                 w * (pixels[size_t(y0 + y) * width + (x0 + x)] - crop_mean);
         }
     fwd.forward();
+}
 
-    // Resample at half-pixel spacing by zero-padding the spectrum to 2P x 2P (band-limited
-    // interpolation: P is odd, so there is no Nyquist bin to split), dividing by the bilinear
-    // interpolant's transform sinc^2(kx/2) sinc^2(ky/2): the renderer's bilinear lookup of the
-    // half-pixel grid then has |H|^2 = |DFT of the sample|^2 for |k| < 1/2 cycle per pixel, and
-    // its images sit at |k| >= 3/2, where sinc^2 has fallen below 0.05.
-    const int Q = 2 * P, hp = P / 2 + 1, hq = Q / 2 + 1;
+/// Resample at half-pixel spacing by zero-padding the spectrum to 2P x 2P (band-limited
+/// interpolation: P is odd, so there is no Nyquist bin to split), dividing by the bilinear
+/// interpolant's transform sinc^2(kx/2) sinc^2(ky/2): the renderer's bilinear lookup of the
+/// half-pixel grid then has |H|^2 = |DFT of the sample|^2 for |k| < 1/2 cycle per pixel, and
+/// its images sit at |k| >= 3/2, where sinc^2 has fallen below 0.05. Half-pixel index I <-> x =
+/// I/2 pixels in the crop; the kernel sample I (0 .. 4m) sits at x = I/2 - m from the centre,
+/// i.e. at crop coordinate I/2: the same index. 1/P^2 undoes the unnormalised forward + inverse
+/// pair.
+std::shared_ptr<SampledKernel> half_pixel_kernel(numeric::RealFft2d& fwd, int m) {
+    const int P = 2 * m + 1, Q = 2 * P, hp = P / 2 + 1, hq = Q / 2 + 1;
     numeric::RealFft2d inv(Q, Q, numeric::FftPlans::Inverse);
     for (int j = 0; j < P; ++j) {
         const int sj = j <= m ? j : j - P;  // signed frequency index, |sj| <= m
@@ -129,9 +144,6 @@ ExemplarKernel kernel_from_exemplar(const float* pixels, int width, int height,
         }
     }
     inv.inverse();
-    // Half-pixel index I <-> x = I/2 pixels in the crop; the kernel sample I (0 .. 4m) sits at
-    // x = I/2 - m from the centre, i.e. at crop coordinate I/2: the same index. 1/P^2 undoes the
-    // unnormalised forward + inverse pair.
     const int n = 4 * m + 1;
     auto sk = std::make_shared<SampledKernel>();
     sk->radial = false;
@@ -143,6 +155,20 @@ ExemplarKernel kernel_from_exemplar(const float* pixels, int width, int height,
             const double r = std::hypot(0.5 * I - m, 0.5 * J - m);
             if (r < m) sk->values[size_t(J) * n + I] = inv.real()[size_t(J) * Q + I] * inv_p2;
         }
+    return sk;
+}
+
+}  // namespace
+
+ExemplarKernel kernel_from_exemplar(const float* pixels, int width, int height,
+                                    const ExemplarOptions& o) {
+    check_options(width, height, o);
+    const auto [mean, var] = image_moments(pixels, width, height);
+    const int m = crop_half_size(width, height, o.radius);
+    const int P = 2 * m + 1;
+    numeric::RealFft2d fwd(P, P, numeric::FftPlans::Forward);
+    transform_crop(pixels, width, height, m, o.window, fwd);
+    auto sk = half_pixel_kernel(fwd, m);
 
     // Normalise: lambda E[a^2] int h^2 = variance, lambda = density / (pi R^2) (Campbell). The
     // aspect squeeze changes lambda and int h^2 by inverse factors, so this holds for any aspect.
