@@ -176,25 +176,22 @@ void time_perspective(const kernels::KernelPyramid& pyr, sim::LayerSimulator& s,
     t.impulses = imp.size();
 }
 
-int run(const Options& o) {
-    const std::string load_start = loadavg();
-    tbb::task_arena arena(2);
-    Scene sc;
-    kernels::PyramidParams pp;
-    pp.min_sd_fraction =
-        0.0025;  // a quarter of the default cut-off, as the scene renderer builds it
-    const kernels::KernelPyramid pyr(sc.kernel, pp);
+struct Row {
+    std::string name;
+    render::AntiAlias aa;
+    bool moving = false;  ///< the camera moves 1 texture unit a frame (a fly-over)
+    FrameTimes t;
+};
 
-    struct Row {
-        std::string name;
-        render::AntiAlias aa;
-        bool moving = false;  ///< the camera moves 1 texture unit a frame (a fly-over)
-        FrameTimes t;
-    };
+render::PerspectiveCamera bench_camera(const Options& o) {
     render::PerspectiveCamera cam;
     cam.width = kWidth, cam.height = kHeight;
     cam.x = 0.5 * kWidth, cam.y = 0.5 * kHeight;
     cam.altitude = o.height, cam.pitch_deg = 15.0, cam.fov_deg = 50.0;
+    return cam;
+}
+
+std::vector<Row> bench_rows(const Options& o) {
     std::vector<Row> rows;
     auto add = [&](const std::string& name, auto&& tweak, bool moving = false) {
         Row r;
@@ -216,99 +213,107 @@ int run(const Options& o) {
         add("perspective, 1 %, major axis only",
             [](render::AntiAlias& a) { a.anisotropic = false; });
     }
-    FrameTimes ortho;
+    return rows;
+}
 
-    arena.execute([&] {
-        sim::LayerSimulator s(sc.process, nullptr, {}, sc.kernel.radius());
-        Buffers ortho_buf;
-        std::vector<std::unique_ptr<Buffers>> row_buf;
-        for (size_t i = 0; i < rows.size(); ++i) row_buf.push_back(std::make_unique<Buffers>());
-        auto camera = [&](const Row& r, int rep) {
-            render::PerspectiveCamera c = cam;
-            if (r.moving) c.x += 1.0 + rep;
-            return c;
-        };
-        // warm-up (untimed): every row once, so its buffers hold a frame already
-        {
-            FrameTimes w;
-            time_ortho(sc, s, ortho_buf, w);
-            for (size_t i = 0; i < rows.size(); ++i)
-                time_perspective(pyr, s, camera(rows[i], -1), rows[i].aa, *row_buf[i], w);
-        }
-        for (int rep = 0; rep < o.reps; ++rep) {
-            time_ortho(sc, s, ortho_buf, ortho);
-            for (size_t i = 0; i < rows.size(); ++i)
-                time_perspective(pyr, s, camera(rows[i], rep), rows[i].aa, *row_buf[i],
-                                 rows[i].t);
-        }
-    });
+/// Every row and the orthographic frame, `o.reps` times after an untimed warm-up, interleaved.
+void time_rows(const Options& o, const Scene& sc, const kernels::KernelPyramid& pyr,
+               const render::PerspectiveCamera& cam, std::vector<Row>& rows, FrameTimes& ortho) {
+    sim::LayerSimulator s(sc.process, nullptr, {}, sc.kernel.radius());
+    Buffers ortho_buf;
+    std::vector<std::unique_ptr<Buffers>> row_buf;
+    for (size_t i = 0; i < rows.size(); ++i) row_buf.push_back(std::make_unique<Buffers>());
+    auto camera = [&](const Row& r, int rep) {
+        render::PerspectiveCamera c = cam;
+        if (r.moving) c.x += 1.0 + rep;
+        return c;
+    };
+    // warm-up (untimed): every row once, so its buffers hold a frame already
+    {
+        FrameTimes w;
+        time_ortho(sc, s, ortho_buf, w);
+        for (size_t i = 0; i < rows.size(); ++i)
+            time_perspective(pyr, s, camera(rows[i], -1), rows[i].aa, *row_buf[i], w);
+    }
+    for (int rep = 0; rep < o.reps; ++rep) {
+        time_ortho(sc, s, ortho_buf, ortho);
+        for (size_t i = 0; i < rows.size(); ++i)
+            time_perspective(pyr, s, camera(rows[i], rep), rows[i].aa, *row_buf[i],
+                             rows[i].t);
+    }
+}
 
+void print_csv(const FrameTimes& ortho, const std::vector<Row>& rows) {
+    const double ortho_ms = ortho.total.median();
+    std::printf(
+        "row,impulses,setup_ms_median,generate_ms_median,evaluate_ms_median,total_ms_median,"
+        "total_ms_min,total_ms_max,ratio_to_ortho,cpu_ms_median,cpu_ratio_to_ortho,"
+        "pixel_evaluations,single,probes,line,far,far_setup_ms,prepare_ms,tiles_ms,far_ms\n");
+    std::printf("orthographic,%zu,0,%.3f,%.3f,%.3f,%.3f,%.3f,1,%.3f,1,%.0f,,,,,,,,\n",
+                ortho.impulses, ortho.generate.median(), ortho.evaluate.median(), ortho_ms,
+                ortho.total.min(), ortho.total.max(), ortho.cpu.median(),
+                double(kWidth) * kHeight * 16.0);
+    for (const auto& r : rows)
+        std::printf(
+            "\"%s\",%zu,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%zu,%zu,%zu,%zu,%zu,%.3f,"
+            "%.3f,%.3f,%.3f\n",
+            r.name.c_str(), r.t.impulses, r.t.setup.median(), r.t.generate.median(),
+            r.t.evaluate.median(), r.t.total.median(), r.t.total.min(), r.t.total.max(),
+            r.t.total.median() / ortho_ms, r.t.cpu.median(),
+            r.t.cpu.median() / ortho.cpu.median(), r.t.stats.pixels, r.t.stats.single,
+            r.t.stats.probes, r.t.stats.line, r.t.stats.far, r.t.far_setup.median(),
+            r.t.prepare.median(), r.t.tiles.median(), r.t.far.median());
+}
+
+void print_table(const Options& o, const render::PerspectiveCamera& cam, const FrameTimes& ortho,
+                 const std::vector<Row>& rows, const std::string& load_start,
+                 const std::string& load_end) {
     const render::PerspectiveView view(cam);
     const double ortho_ms = ortho.total.median();
-    const std::string load_end = loadavg();
-    if (o.csv) {
-        std::printf(
-            "row,impulses,setup_ms_median,generate_ms_median,evaluate_ms_median,total_ms_median,"
-            "total_ms_min,total_ms_max,ratio_to_ortho,cpu_ms_median,cpu_ratio_to_ortho,"
-            "pixel_evaluations,single,probes,line,far,far_setup_ms,prepare_ms,tiles_ms,far_ms\n");
-        std::printf("orthographic,%zu,0,%.3f,%.3f,%.3f,%.3f,%.3f,1,%.3f,1,%.0f,,,,,,,,\n",
-                    ortho.impulses, ortho.generate.median(), ortho.evaluate.median(), ortho_ms,
-                    ortho.total.min(), ortho.total.max(), ortho.cpu.median(),
-                    double(kWidth) * kHeight * 16.0);
-        for (const auto& r : rows)
+    std::printf(
+        "impulse_bench_perspective: %dx%d, cosine r = 16, density 16, still, 2 threads, "
+        "%d repetitions (ms: median [min-max])\n",
+        kWidth, kHeight, o.reps);
+    std::printf(
+        "perspective camera: height %g, pitch 15, fov 50, heading 0; horizon at row %.1f; "
+        "filter 0.5 px\n\n",
+        o.height, view.horizon_row());
+    std::printf("%-44s %8s %8s %22s %22s %24s %8s %9s %7s %11s\n", "row", "impulses", "far",
+                "generate", "evaluate", "total", "x ortho", "cpu ms", "x cpu", "pixel evals");
+    std::printf("%-44s %8zu %8s %22s %22s %24s %8s %9.1f %7s %11s\n", "orthographic, scale 1",
+                ortho.impulses, "-", cell(ortho.generate).c_str(), cell(ortho.evaluate).c_str(),
+                cell(ortho.total).c_str(), "1.00", ortho.cpu.median(), "1.00", "-");
+    for (const auto& r : rows)
+        std::printf("%-44s %8zu %8zu %22s %22s %24s %8.2f %9.1f %7.2f %11zu\n", r.name.c_str(),
+                    r.t.impulses, r.t.stats.far, cell(r.t.generate).c_str(),
+                    cell(r.t.evaluate).c_str(), cell(r.t.total).c_str(),
+                    r.t.total.median() / ortho_ms, r.t.cpu.median(),
+                    r.t.cpu.median() / ortho.cpu.median(), r.t.stats.pixels);
+    const auto& d = rows.front().t;
+    std::printf(
+        "\n(perspective totals include the visible region and the per-pixel texture "
+        "coordinates: median %.1f ms for the default row)\n"
+        "default row, evaluate in parts (ms, median): far-field set-up %.1f, impulse "
+        "preparation %.1f, tiles (near field) %.1f, far field %.1f\n",
+        d.setup.median(), d.far_setup.median(), d.prepare.median(), d.tiles.median(),
+        d.far.median());
+    for (const auto& r : rows)
+        if (r.moving)
             std::printf(
-                "\"%s\",%zu,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%zu,%zu,%zu,%zu,%zu,%.3f,"
-                "%.3f,%.3f,%.3f\n",
-                r.name.c_str(), r.t.impulses, r.t.setup.median(), r.t.generate.median(),
-                r.t.evaluate.median(), r.t.total.median(), r.t.total.min(), r.t.total.max(),
-                r.t.total.median() / ortho_ms, r.t.cpu.median(),
-                r.t.cpu.median() / ortho.cpu.median(), r.t.stats.pixels, r.t.stats.single,
-                r.t.stats.probes, r.t.stats.line, r.t.stats.far, r.t.far_setup.median(),
-                r.t.prepare.median(), r.t.tiles.median(), r.t.far.median());
-    } else {
-        std::printf(
-            "impulse_bench_perspective: %dx%d, cosine r = 16, density 16, still, 2 threads, "
-            "%d repetitions (ms: median [min-max])\n",
-            kWidth, kHeight, o.reps);
-        std::printf(
-            "perspective camera: height %g, pitch 15, fov 50, heading 0; horizon at row %.1f; "
-            "filter 0.5 px\n\n",
-            o.height, view.horizon_row());
-        std::printf("%-44s %8s %8s %22s %22s %24s %8s %9s %7s %11s\n", "row", "impulses", "far",
-                    "generate", "evaluate", "total", "x ortho", "cpu ms", "x cpu", "pixel evals");
-        std::printf("%-44s %8zu %8s %22s %22s %24s %8s %9.1f %7s %11s\n", "orthographic, scale 1",
-                    ortho.impulses, "-", cell(ortho.generate).c_str(), cell(ortho.evaluate).c_str(),
-                    cell(ortho.total).c_str(), "1.00", ortho.cpu.median(), "1.00", "-");
-        for (const auto& r : rows)
-            std::printf("%-44s %8zu %8zu %22s %22s %24s %8.2f %9.1f %7.2f %11zu\n", r.name.c_str(),
-                        r.t.impulses, r.t.stats.far, cell(r.t.generate).c_str(),
-                        cell(r.t.evaluate).c_str(), cell(r.t.total).c_str(),
-                        r.t.total.median() / ortho_ms, r.t.cpu.median(),
-                        r.t.cpu.median() / ortho.cpu.median(), r.t.stats.pixels);
-        const auto& d = rows.front().t;
-        std::printf(
-            "\n(perspective totals include the visible region and the per-pixel texture "
-            "coordinates: median %.1f ms for the default row)\n"
-            "default row, evaluate in parts (ms, median): far-field set-up %.1f, impulse "
-            "preparation %.1f, tiles (near field) %.1f, far field %.1f\n",
-            d.setup.median(), d.far_setup.median(), d.prepare.median(), d.tiles.median(),
-            d.far.median());
-        for (const auto& r : rows)
-            if (r.moving)
-                std::printf(
-                    "camera moving (1 texture unit a frame): total %.1f ms = %.2fx ortho, of "
-                    "which far-field set-up %.1f (a still camera keeps it)\n",
-                    r.t.total.median(), r.t.total.median() / ortho_ms, r.t.far_setup.median());
-        std::printf("load average at start %s, at end %s\n", load_start.c_str(), load_end.c_str());
-        const double ratio = rows.front().t.total.median() / ortho_ms;
-        std::printf(
-            "target: perspective frame <= %.0fx the orthographic frame: %.2fx at the default "
-            "cut-off -> %s\n\n",
-            kTargetRatio, ratio, ratio <= kTargetRatio ? "PASS" : "MISS");
-    }
+                "camera moving (1 texture unit a frame): total %.1f ms = %.2fx ortho, of "
+                "which far-field set-up %.1f (a still camera keeps it)\n",
+                r.t.total.median(), r.t.total.median() / ortho_ms, r.t.far_setup.median());
+    std::printf("load average at start %s, at end %s\n", load_start.c_str(), load_end.c_str());
+    const double ratio = rows.front().t.total.median() / ortho_ms;
+    std::printf(
+        "target: perspective frame <= %.0fx the orthographic frame: %.2fx at the default "
+        "cut-off -> %s\n\n",
+        kTargetRatio, ratio, ratio <= kTargetRatio ? "PASS" : "MISS");
+}
 
-    // Pyramid build: time per level (low_pass of the kernel at sigma_l, as a Sampled kernel with
-    // its statistics), and the whole pyramid with the evaluator's tables.
+/// Pyramid build: time per level (low_pass of the kernel at sigma_l, as a Sampled kernel with
+/// its statistics), and the whole pyramid with the evaluator's tables.
+void time_pyramids(const Options& o, tbb::task_arena& arena) {
     struct Kind {
         const char* name;
         kernels::KernelParams p;
@@ -365,6 +370,26 @@ int run(const Options& o) {
             std::printf("  %5d %10.3g %10.4g %10.3g %20s\n", l, p.sigma(l), p.radius(l),
                         std::sqrt(p.variance(l) / p.variance(0)), cell(per[size_t(l)]).c_str());
     }
+}
+
+int run(const Options& o) {
+    const std::string load_start = loadavg();
+    tbb::task_arena arena(2);
+    Scene sc;
+    kernels::PyramidParams pp;
+    pp.min_sd_fraction =
+        0.0025;  // a quarter of the default cut-off, as the scene renderer builds it
+    const kernels::KernelPyramid pyr(sc.kernel, pp);
+    const render::PerspectiveCamera cam = bench_camera(o);
+    std::vector<Row> rows = bench_rows(o);
+    FrameTimes ortho;
+    arena.execute([&] { time_rows(o, sc, pyr, cam, rows, ortho); });
+    const std::string load_end = loadavg();
+    if (o.csv)
+        print_csv(ortho, rows);
+    else
+        print_table(o, cam, ortho, rows, load_start, load_end);
+    time_pyramids(o, arena);
     return 0;
 }
 
