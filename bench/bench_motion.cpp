@@ -502,6 +502,167 @@ Memory measure_memory(const Options& o, const TempDir& tmp) {
 
 const char* verdict(bool ok) { return ok ? "PASS" : "MISS"; }
 
+/// [1] + [2]: sequential frames and random access, with the split into simulation and
+/// evaluation.
+FrameCosts report_frames(const Options& o, const Report& rep, const scenes::Scene& scene) {
+    FILE* info = rep.info();
+    const auto& out = scene.output;
+    // 1 + 2 -----------------------------------------------------------------------------
+    const FrameCosts fc = measure_frames(o);
+    const double ratio = fc.random.med / fc.seq.med;
+    std::fprintf(info, "\n[1] sequential frames %lld..%lld, one scenes::Renderer, float frame "
+                       "only (%d timed; the first is excluded)\n",
+                 static_cast<long long>(fc.seq_first), static_cast<long long>(kRandomFrame),
+                 o.seq_frames);
+    std::fprintf(info, "    per frame                 %s ms   (%.1f CPU-ms; first frame, from "
+                       "birth: %.1f ms)\n", cell(fc.seq).c_str(), fc.seq_cpu_ms, fc.first_ms);
+    std::fprintf(info, "    live impulses emitted     %zu  (expected generated in the birth "
+                       "region: %.0f)\n", fc.impulses, fc.generated);
+    std::fprintf(info, "\n[2] random access: frame %lld alone on a fresh Renderer (%d runs; "
+                       "output.frames = %lld, %s)\n",
+                 static_cast<long long>(kRandomFrame), o.random_reps,
+                 static_cast<long long>(out.frames),
+                 fc.range_override ? "Renderer refused it: rerun with output.frames=20000"
+                                   : "Renderer::render does not check the range");
+    std::fprintf(info, "    render(%lld)              %s ms   = %.2fx a sequential frame (%.1f CPU-ms "
+                       "= %.2fx)\n",
+                 static_cast<long long>(kRandomFrame), cell(fc.random).c_str(), ratio,
+                 fc.random_cpu.med, fc.random_cpu.med / fc.seq_cpu_ms);
+    std::fprintf(info, "    Renderer constructor      %s ms   (scene loading not timed)\n",
+                 cell(fc.construct).c_str());
+    std::fprintf(info, "    same bits as the sequential frame %lld: %s\n",
+                 static_cast<long long>(kRandomFrame), fc.identical ? "yes" : "NO");
+    rep.row("sequential_frame", "ms", fc.seq);
+    rep.row("random_access_frame_10000", "ms", fc.random);
+    rep.row("random_to_sequential", "ratio", {ratio, ratio, ratio, 1});
+
+    const Split sp = measure_split(o, fc.seq_first);
+    std::fprintf(info, "    split (same work as Renderer::render, timed in parts; frame "
+                       "clear excluded):\n");
+    std::fprintf(info, "      sequential  impulses_at %s   accumulate %s\n",
+                 cell(sp.seq_sim).c_str(), cell(sp.seq_eval).c_str());
+    std::fprintf(info, "      random      impulses_at %s   accumulate %s\n",
+                 cell(sp.random_sim).c_str(), cell(sp.random_eval).c_str());
+    rep.row("sequential_impulses_at", "ms", sp.seq_sim);
+    rep.row("sequential_accumulate", "ms", sp.seq_eval);
+    rep.row("random_impulses_at", "ms", sp.random_sim);
+    rep.row("random_accumulate", "ms", sp.random_eval);
+    return fc;
+}
+
+/// [3]: end to end, render only and two H.264 presets, interleaved run by run.
+std::vector<Variant> report_e2e(const Options& o, const Report& rep, const scenes::Scene& scene,
+                                TempDir& tmp) {
+    FILE* info = rep.info();
+    const auto& out = scene.output;
+    // 3 ---------------------------------------------------------------------------------
+    std::vector<Variant> variants = {{"render only", nullptr, {}, {}, {}, {}, {}, {}, {}},
+                                     {"h264 ultrafast", "ultrafast", {}, {}, {}, {}, {}, {}, {}},
+                                     {"h264 veryfast", "veryfast", {}, {}, {}, {}, {}, {}, {}}};
+    // Variants interleaved run by run, so drift in machine speed hits them alike.
+    for (int r = 0; r < o.e2e_reps; ++r)
+        for (auto& v : variants) run_e2e(v, o.e2e_frames, tmp.file("e2e.mp4"));
+    std::fprintf(info, "\n[3] end to end: frames 0..%d of %s, %dx%d at %g fps, fresh Renderer, "
+                       "crf %d, encoder threads auto (%d run%s each)\n",
+                 o.e2e_frames - 1, kScene, out.width, out.height, out.fps, out.crf,
+                 o.e2e_reps, o.e2e_reps == 1 ? "" : "s");
+    std::fprintf(info, "    %-15s %-20s %-8s  per frame, ms: %-19s %-17s %-19s %-17s  "
+                       "open+close ms\n",
+                 "", "fps", "CPU-ms/f", "render", "stage", "encode (overlaps)", "wait");
+    for (const auto& v : variants) {
+        std::fprintf(info, "    %-15s %-20s %-8.1f  %-19s %-17s %-19s %-17s  %s\n", v.name,
+                     cell(summarise(v.fps)).c_str(), summarise(v.cpu_ms).med,
+                     cell(summarise(v.render_ms)).c_str(),
+                     v.preset ? cell(summarise(v.stage_ms)).c_str() : "-",
+                     v.preset ? cell(summarise(v.encode_ms)).c_str() : "-",
+                     v.preset ? cell(summarise(v.wait_ms)).c_str() : "-",
+                     v.preset ? cell(summarise(v.open_close_ms)).c_str() : "-");
+    }
+    rep.row("e2e_render_only", "fps", summarise(variants[0].fps));
+    rep.row("e2e_h264_ultrafast", "fps", summarise(variants[1].fps));
+    rep.row("e2e_h264_veryfast", "fps", summarise(variants[2].fps));
+    return variants;
+}
+
+/// [4]: peak resident memory of the CLI (measured first, see measure_memory).
+void report_memory(const Options& o, const Report& rep, const Memory& mem) {
+    FILE* info = rep.info();
+    // 4 (measured first, see measure_memory) ---------------------------------------------
+    std::fprintf(info, "\n[4] peak resident memory of `impulse` at %dx%d (child ru_maxrss "
+                       "from wait4; %d run%s each; measured before [1])\n",
+                 kBigWidth, kBigHeight, o.rss_reps, o.rss_reps == 1 ? "" : "s");
+    const bool have_cli = mem.why_not.empty();
+    if (!have_cli) {
+        std::fprintf(info, "    not measured: %s\n", mem.why_not.c_str());
+    } else {
+        std::fprintf(info, "    binary: %s\n", mem.binary.c_str());
+        std::fprintf(info, "    floor: this process had %.0f MiB anonymous resident when it "
+                           "forked (a child's ru_maxrss cannot read lower)\n",
+                     mem.own_anon_mib);
+        std::fprintf(info, "    Renderer::estimated_memory_mib(): %.0f MiB\n",
+                     mem.estimate_mib);
+        for (const auto& m : mem.rows)
+            std::fprintf(info, "    %-16s %s MiB   (wall %s s)\n", m.name,
+                         cell(summarise(m.mib)).c_str(), cell(summarise(m.wall_s)).c_str());
+        rep.row("peak_rss_info_4k", "MiB", summarise(mem.rows[0].mib));
+        rep.row("peak_rss_exr_4k", "MiB", summarise(mem.rows[1].mib));
+        rep.row("peak_rss_mp4_4k", "MiB", summarise(mem.rows[2].mib));
+    }
+}
+
+/// The targets, met or missed.
+void report_targets(const Report& rep, const FrameCosts& fc, const std::vector<Variant>& variants,
+                    const Memory& mem) {
+    FILE* info = rep.info();
+    const double ratio = fc.random.med / fc.seq.med;
+    const bool have_cli = mem.why_not.empty();
+    // 5: targets --------------------------------------------------------------------------
+    std::fprintf(info, "\ntargets\n");
+    std::fprintf(info, "  random access of frame %lld <= %.0fx a sequential frame: %.2fx "
+                       "(%.1f / %.1f ms)  %s\n",
+                 static_cast<long long>(kRandomFrame), kTargetRatio, ratio, fc.random.med,
+                 fc.seq.med, verdict(ratio <= kTargetRatio));
+    const double uf = summarise(variants[1].fps).med, vf = summarise(variants[2].fps).med;
+    std::fprintf(info, "  1080p30 H.264 end to end >= %.0f fps with a fast preset: ultrafast "
+                       "%.1f, veryfast %.1f  %s\n",
+                 kTargetFps, uf, vf, verdict(std::max(uf, vf) >= kTargetFps));
+    if (have_cli) {
+        const double exr = summarise(mem.rows[1].mib).med,
+                     mp4 = summarise(mem.rows[2].mib).med;
+        std::fprintf(info, "  peak memory of a %dx%d frame <= %.0f MiB: exr %.0f, mp4 %.0f  "
+                           "%s\n",
+                     kBigWidth, kBigHeight, kTargetPeakMib, exr, mp4,
+                     verdict(std::max(exr, mp4) <= kTargetPeakMib));
+    } else {
+        std::fprintf(info, "  peak memory of a %dx%d frame <= %.0f MiB: NOT MEASURED\n",
+                     kBigWidth, kBigHeight, kTargetPeakMib);
+    }
+    if (!fc.identical)
+        std::fprintf(info, "  (random access and sequential frame %lld differ: design.md §3 "
+                           "frame independence is broken)\n",
+                     static_cast<long long>(kRandomFrame));
+}
+
+/// Wall and CPU time of the whole run, and what other processes took meanwhile.
+void report_machine(FILE* info, Clock::time_point wall0, double busy0, double own0) {
+    const double busy1 = machine_busy_s(), own1 = own_cpu_s();
+    std::fprintf(info, "\nload average at end: %s\n", loadavg().c_str());
+    if (busy0 >= 0 && busy1 >= 0) {
+        // Own CPU time excludes the CLI children; ru of children is added back.
+        rusage ch{};
+        getrusage(RUSAGE_CHILDREN, &ch);
+        const double child = double(ch.ru_utime.tv_sec) + 1e-6 * ch.ru_utime.tv_usec +
+                             double(ch.ru_stime.tv_sec) + 1e-6 * ch.ru_stime.tv_usec;
+        const double wall = ms_since(wall0) / 1e3;
+        const double other = std::max(0.0, (busy1 - busy0) - (own1 - own0) - child);
+        std::fprintf(info, "machine: %.1f s wall, %.1f CPU-s here (+%.1f in the CLI runs), "
+                           "%.1f CPU-s by other processes%s\n",
+                     wall, own1 - own0, child, other,
+                     other > 0.05 * wall ? " (over 5 % of a core: timings may be disturbed)"
+                                         : "");
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -529,139 +690,11 @@ int main(int argc, char** argv) {
                      __builtin_cpu_supports("avx2") ? "yes" : "no", o.quick ? "; --quick" : "");
         std::fprintf(info, "load average at start: %s\n", load0.c_str());
         if (o.csv) std::printf("metric,unit,median,min,max,runs\n");
-
-        // 1 + 2 -----------------------------------------------------------------------------
-        const FrameCosts fc = measure_frames(o);
-        const double ratio = fc.random.med / fc.seq.med;
-        std::fprintf(info, "\n[1] sequential frames %lld..%lld, one scenes::Renderer, float frame "
-                           "only (%d timed; the first is excluded)\n",
-                     static_cast<long long>(fc.seq_first), static_cast<long long>(kRandomFrame),
-                     o.seq_frames);
-        std::fprintf(info, "    per frame                 %s ms   (%.1f CPU-ms; first frame, from "
-                           "birth: %.1f ms)\n", cell(fc.seq).c_str(), fc.seq_cpu_ms, fc.first_ms);
-        std::fprintf(info, "    live impulses emitted     %zu  (expected generated in the birth "
-                           "region: %.0f)\n", fc.impulses, fc.generated);
-        std::fprintf(info, "\n[2] random access: frame %lld alone on a fresh Renderer (%d runs; "
-                           "output.frames = %lld, %s)\n",
-                     static_cast<long long>(kRandomFrame), o.random_reps,
-                     static_cast<long long>(out.frames),
-                     fc.range_override ? "Renderer refused it: rerun with output.frames=20000"
-                                       : "Renderer::render does not check the range");
-        std::fprintf(info, "    render(%lld)              %s ms   = %.2fx a sequential frame (%.1f CPU-ms "
-                           "= %.2fx)\n",
-                     static_cast<long long>(kRandomFrame), cell(fc.random).c_str(), ratio,
-                     fc.random_cpu.med, fc.random_cpu.med / fc.seq_cpu_ms);
-        std::fprintf(info, "    Renderer constructor      %s ms   (scene loading not timed)\n",
-                     cell(fc.construct).c_str());
-        std::fprintf(info, "    same bits as the sequential frame %lld: %s\n",
-                     static_cast<long long>(kRandomFrame), fc.identical ? "yes" : "NO");
-        rep.row("sequential_frame", "ms", fc.seq);
-        rep.row("random_access_frame_10000", "ms", fc.random);
-        rep.row("random_to_sequential", "ratio", {ratio, ratio, ratio, 1});
-
-        const Split sp = measure_split(o, fc.seq_first);
-        std::fprintf(info, "    split (same work as Renderer::render, timed in parts; frame "
-                           "clear excluded):\n");
-        std::fprintf(info, "      sequential  impulses_at %s   accumulate %s\n",
-                     cell(sp.seq_sim).c_str(), cell(sp.seq_eval).c_str());
-        std::fprintf(info, "      random      impulses_at %s   accumulate %s\n",
-                     cell(sp.random_sim).c_str(), cell(sp.random_eval).c_str());
-        rep.row("sequential_impulses_at", "ms", sp.seq_sim);
-        rep.row("sequential_accumulate", "ms", sp.seq_eval);
-        rep.row("random_impulses_at", "ms", sp.random_sim);
-        rep.row("random_accumulate", "ms", sp.random_eval);
-
-        // 3 ---------------------------------------------------------------------------------
-        std::vector<Variant> variants = {{"render only", nullptr, {}, {}, {}, {}, {}, {}, {}},
-                                         {"h264 ultrafast", "ultrafast", {}, {}, {}, {}, {}, {}, {}},
-                                         {"h264 veryfast", "veryfast", {}, {}, {}, {}, {}, {}, {}}};
-        // Variants interleaved run by run, so drift in machine speed hits them alike.
-        for (int r = 0; r < o.e2e_reps; ++r)
-            for (auto& v : variants) run_e2e(v, o.e2e_frames, tmp.file("e2e.mp4"));
-        std::fprintf(info, "\n[3] end to end: frames 0..%d of %s, %dx%d at %g fps, fresh Renderer, "
-                           "crf %d, encoder threads auto (%d run%s each)\n",
-                     o.e2e_frames - 1, kScene, out.width, out.height, out.fps, out.crf,
-                     o.e2e_reps, o.e2e_reps == 1 ? "" : "s");
-        std::fprintf(info, "    %-15s %-20s %-8s  per frame, ms: %-19s %-17s %-19s %-17s  "
-                           "open+close ms\n",
-                     "", "fps", "CPU-ms/f", "render", "stage", "encode (overlaps)", "wait");
-        for (const auto& v : variants) {
-            std::fprintf(info, "    %-15s %-20s %-8.1f  %-19s %-17s %-19s %-17s  %s\n", v.name,
-                         cell(summarise(v.fps)).c_str(), summarise(v.cpu_ms).med,
-                         cell(summarise(v.render_ms)).c_str(),
-                         v.preset ? cell(summarise(v.stage_ms)).c_str() : "-",
-                         v.preset ? cell(summarise(v.encode_ms)).c_str() : "-",
-                         v.preset ? cell(summarise(v.wait_ms)).c_str() : "-",
-                         v.preset ? cell(summarise(v.open_close_ms)).c_str() : "-");
-        }
-        rep.row("e2e_render_only", "fps", summarise(variants[0].fps));
-        rep.row("e2e_h264_ultrafast", "fps", summarise(variants[1].fps));
-        rep.row("e2e_h264_veryfast", "fps", summarise(variants[2].fps));
-
-        // 4 (measured first, see measure_memory) ---------------------------------------------
-        std::fprintf(info, "\n[4] peak resident memory of `impulse` at %dx%d (child ru_maxrss "
-                           "from wait4; %d run%s each; measured before [1])\n",
-                     kBigWidth, kBigHeight, o.rss_reps, o.rss_reps == 1 ? "" : "s");
-        const bool have_cli = mem.why_not.empty();
-        if (!have_cli) {
-            std::fprintf(info, "    not measured: %s\n", mem.why_not.c_str());
-        } else {
-            std::fprintf(info, "    binary: %s\n", mem.binary.c_str());
-            std::fprintf(info, "    floor: this process had %.0f MiB anonymous resident when it "
-                               "forked (a child's ru_maxrss cannot read lower)\n",
-                         mem.own_anon_mib);
-            std::fprintf(info, "    Renderer::estimated_memory_mib(): %.0f MiB\n",
-                         mem.estimate_mib);
-            for (const auto& m : mem.rows)
-                std::fprintf(info, "    %-16s %s MiB   (wall %s s)\n", m.name,
-                             cell(summarise(m.mib)).c_str(), cell(summarise(m.wall_s)).c_str());
-            rep.row("peak_rss_info_4k", "MiB", summarise(mem.rows[0].mib));
-            rep.row("peak_rss_exr_4k", "MiB", summarise(mem.rows[1].mib));
-            rep.row("peak_rss_mp4_4k", "MiB", summarise(mem.rows[2].mib));
-        }
-
-        // 5: targets --------------------------------------------------------------------------
-        std::fprintf(info, "\ntargets\n");
-        std::fprintf(info, "  random access of frame %lld <= %.0fx a sequential frame: %.2fx "
-                           "(%.1f / %.1f ms)  %s\n",
-                     static_cast<long long>(kRandomFrame), kTargetRatio, ratio, fc.random.med,
-                     fc.seq.med, verdict(ratio <= kTargetRatio));
-        const double uf = summarise(variants[1].fps).med, vf = summarise(variants[2].fps).med;
-        std::fprintf(info, "  1080p30 H.264 end to end >= %.0f fps with a fast preset: ultrafast "
-                           "%.1f, veryfast %.1f  %s\n",
-                     kTargetFps, uf, vf, verdict(std::max(uf, vf) >= kTargetFps));
-        if (have_cli) {
-            const double exr = summarise(mem.rows[1].mib).med,
-                         mp4 = summarise(mem.rows[2].mib).med;
-            std::fprintf(info, "  peak memory of a %dx%d frame <= %.0f MiB: exr %.0f, mp4 %.0f  "
-                               "%s\n",
-                         kBigWidth, kBigHeight, kTargetPeakMib, exr, mp4,
-                         verdict(std::max(exr, mp4) <= kTargetPeakMib));
-        } else {
-            std::fprintf(info, "  peak memory of a %dx%d frame <= %.0f MiB: NOT MEASURED\n",
-                         kBigWidth, kBigHeight, kTargetPeakMib);
-        }
-        if (!fc.identical)
-            std::fprintf(info, "  (random access and sequential frame %lld differ: design.md §3 "
-                               "frame independence is broken)\n",
-                         static_cast<long long>(kRandomFrame));
-
-        const double busy1 = machine_busy_s(), own1 = own_cpu_s();
-        std::fprintf(info, "\nload average at end: %s\n", loadavg().c_str());
-        if (busy0 >= 0 && busy1 >= 0) {
-            // Own CPU time excludes the CLI children; ru of children is added back.
-            rusage ch{};
-            getrusage(RUSAGE_CHILDREN, &ch);
-            const double child = double(ch.ru_utime.tv_sec) + 1e-6 * ch.ru_utime.tv_usec +
-                                 double(ch.ru_stime.tv_sec) + 1e-6 * ch.ru_stime.tv_usec;
-            const double wall = ms_since(wall0) / 1e3;
-            const double other = std::max(0.0, (busy1 - busy0) - (own1 - own0) - child);
-            std::fprintf(info, "machine: %.1f s wall, %.1f CPU-s here (+%.1f in the CLI runs), "
-                               "%.1f CPU-s by other processes%s\n",
-                         wall, own1 - own0, child, other,
-                         other > 0.05 * wall ? " (over 5 % of a core: timings may be disturbed)"
-                                             : "");
-        }
+        const FrameCosts fc = report_frames(o, rep, scene);
+        const std::vector<Variant> variants = report_e2e(o, rep, scene, tmp);
+        report_memory(o, rep, mem);
+        report_targets(rep, fc, variants, mem);
+        report_machine(info, wall0, busy0, own0);
         return 0;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "impulse_bench_motion: %s\n", e.what());
