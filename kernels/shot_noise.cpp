@@ -142,6 +142,24 @@ std::vector<double> jump_scales(double lambda, const KernelValueLaw& values,
     return rate;
 }
 
+/// The compound Poisson law on the lattice of a jump rate measure (symmetric, wrapped as in
+/// JumpLattice): P^ = exp(rate^ - Lambda) (Levy–Khintchine; the transform of a symmetric measure
+/// is real), unwrapped so index j holds position (j - N/2) dx; rounding below 0 is cut.
+std::vector<double> compound_poisson(const std::vector<double>& rate) {
+    const int N = static_cast<int>(rate.size());
+    numeric::RealFft2d fft(1, N, numeric::FftPlans::Both);
+    double total = 0.0;
+    for (int j = 0; j < N; ++j) total += rate[size_t(j)];
+    std::copy(rate.begin(), rate.end(), fft.real());
+    fft.forward();
+    for (int k = 0; k < fft.half_cols(); ++k)
+        fft.spectrum()[k] = std::exp(fft.spectrum()[k].real() - total);
+    fft.inverse();
+    std::vector<double> p(static_cast<size_t>(N));
+    for (int j = 0; j < N; ++j) p[size_t(j)] = std::max(fft.real()[(j + N / 2) % N] / N, 0.0);
+    return p;
+}
+
 }  // namespace
 
 ShotNoiseCdf::ShotNoiseCdf(double lambda, const KernelValueLaw& values, AmplitudeLaw amplitude,
@@ -185,20 +203,7 @@ ShotNoiseCdf::ShotNoiseCdf(double lambda, const KernelValueLaw& values, Amplitud
                 break;
         }
     }
-    // Compound Poisson on the lattice: P^ = exp(rate^ - Lambda) (Levy–Khintchine). The rate
-    // measure is symmetric, so its transform is real.
-    numeric::RealFft2d fft(1, N, numeric::FftPlans::Both);
-    const std::vector<double>& rate = lattice.rate();
-    double total = 0.0;
-    for (int j = 0; j < N; ++j) total += rate[size_t(j)];
-    std::copy(rate.begin(), rate.end(), fft.real());
-    fft.forward();
-    for (int k = 0; k < fft.half_cols(); ++k)
-        fft.spectrum()[k] = std::exp(fft.spectrum()[k].real() - total);
-    fft.inverse();
-    // Unwrap to positions (j - N/2) dx and sum each tail from its own end.
-    std::vector<double> p(static_cast<size_t>(N));
-    for (int j = 0; j < N; ++j) p[size_t(j)] = std::max(fft.real()[(j + N / 2) % N] / N, 0.0);
+    const std::vector<double> p = compound_poisson(lattice.rate());
     m_lower.resize(size_t(N));
     m_upper.resize(size_t(N));
     double below = 0.0, above = 0.0;

@@ -23,6 +23,37 @@ const std::vector<std::vector<std::string>> kTypeKeys = {
     {"a", "b"},         {"rate"}, {"mu", "scale"}, {"mu", "sigma"}, {"mu", "scale", "nu"},
     {"values", "image"}};
 
+/// `cdf`: the impulse layer's own shot-noise law by default; a source layer's is Gaussian.
+kernels::SourceCdf read_cdf(Reader& m, const LayerConfig& L) {
+    const size_t fallback = static_cast<size_t>(L.source ? kernels::SourceCdf::Gaussian
+                                                         : kernels::SourceCdf::ShotNoise);
+    const auto cdf =
+        static_cast<kernels::SourceCdf>(m.choice("cdf", kernels::kSourceCdfNames, fallback));
+    if (L.source && cdf == kernels::SourceCdf::ShotNoise)
+        m.fail(m.node("cdf"), "cdf",
+               "\"shot_noise\" needs an impulse layer; a " + std::string(L.source->kind()) +
+                   " layer's F_x is \"gaussian\" or \"empirical\"");
+    return cdf;
+}
+
+/// The transfer at t = 0 (an empirical F_x is replaced by the Renderer's calibration): F_x the
+/// unshaped layer's shot-noise law (its kernel's value law kept in L when the kernel is fixed),
+/// or its closed-form mean and variance (Campbell's theorem). Throws ValueError.
+std::shared_ptr<const kernels::MarginalTransform> build_transform(LayerConfig& L,
+                                                                  const kernels::MarginalParams& P) {
+    L.marginal.reset();
+    L.kernel_values.reset();
+    if (L.marginal_cdf == kernels::SourceCdf::ShotNoise) {
+        if (L.kernel_keys.empty())
+            L.kernel_values = std::make_shared<const kernels::KernelValueLaw>(
+                kernels::kernel_value_law(kernels::Kernel(L.kernel)));
+        return shot_noise_marginal(L, P, 0.0, L.kernel_values.get());
+    }
+    const Theory raw = layer_theory(L);
+    return std::make_shared<const kernels::MarginalTransform>(P, raw.mean,
+                                                              std::sqrt(raw.variance));
+}
+
 }  // namespace
 
 void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base) {
@@ -37,15 +68,7 @@ void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base)
     const std::string type_str(kernels::to_string(P.type));
     // Read first: they decide whether the target may vary in time.
     const bool precorrect = m->boolean("precorrect", false);
-    // Default: the impulse layer's own shot-noise law; a source layer's is Gaussian.
-    const size_t default_cdf = static_cast<size_t>(L.source ? kernels::SourceCdf::Gaussian
-                                                            : kernels::SourceCdf::ShotNoise);
-    L.marginal_cdf =
-        static_cast<kernels::SourceCdf>(m->choice("cdf", kernels::kSourceCdfNames, default_cdf));
-    if (L.source && L.marginal_cdf == kernels::SourceCdf::ShotNoise)
-        m->fail(m->node("cdf"), "cdf",
-                "\"shot_noise\" needs an impulse layer; a " + std::string(L.source->kind()) +
-                    " layer's F_x is \"gaussian\" or \"empirical\"");
+    L.marginal_cdf = read_cdf(*m, L);
     const std::string fixed_target =
         precorrect ? "the kernel is pre-corrected once for the target (precorrect = true)"
         : L.marginal_cdf == kernels::SourceCdf::Empirical
@@ -173,21 +196,7 @@ void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base)
                "only its sign matters on a layer with a marginal: the target distribution "
                "sets the scale");
 
-    // F_x: the unshaped layer's shot-noise law, or its closed-form mean and variance
-    // (Campbell's theorem).
-    auto build = [&]() -> std::shared_ptr<const kernels::MarginalTransform> {
-        L.marginal.reset();
-        L.kernel_values.reset();
-        if (L.marginal_cdf == kernels::SourceCdf::ShotNoise) {
-            if (L.kernel_keys.empty())
-                L.kernel_values = std::make_shared<const kernels::KernelValueLaw>(
-                    kernels::kernel_value_law(kernels::Kernel(L.kernel)));
-            return shot_noise_marginal(L, P, 0.0, L.kernel_values.get());
-        }
-        const Theory raw = layer_theory(L);
-        return std::make_shared<const kernels::MarginalTransform>(P, raw.mean,
-                                                                  std::sqrt(raw.variance));
-    };
+    auto build = [&]() { return build_transform(L, P); };
     try {
         L.marginal = build();
     } catch (const ValueError& e) {
