@@ -536,6 +536,10 @@ int run_info(const InfoOptions& opt) {
         std::printf("           overlap %.3g effective impulses, excess kurtosis %.3g%s\n",
                     lm.effective_impulses, lm.excess_kurtosis,
                     l.marginal ? " before shaping" : "");
+        if (l.marginal)
+            std::printf("           shaped to %s, F_x %s\n",
+                        std::string(kernels::to_string(l.marginal->target().params().type)).c_str(),
+                        std::string(kernels::kSourceCdfNames[size_t(l.marginal_cdf)]).c_str());
     }
     std::printf("impulses   ~%.3g per frame, ~%.0f MiB\n", r.estimated_impulses(), r.estimated_memory_mib());
     return 0;

@@ -313,6 +313,22 @@ MarginalTransform::MarginalTransform(const MarginalParams& target, double source
     build_table(source_mean - kHalfWidthSd * source_sd, source_mean + kHalfWidthSd * source_sd);
 }
 
+MarginalTransform::MarginalTransform(const MarginalParams& target, double source_mean,
+                                     std::shared_ptr<const ShotNoiseCdf> cdf)
+    : m_target(target),
+      m_source(SourceCdf::ShotNoise),
+      m_source_mean(source_mean),
+      m_source_sd(cdf ? cdf->sd() : 0.0),
+      m_shot_noise(std::move(cdf)) {
+    if (!std::isfinite(source_mean)) {
+        std::ostringstream s;
+        s << "marginal: layer mean = " << source_mean << ": must be a finite number";
+        throw ValueError(s.str());
+    }
+    if (!m_shot_noise) throw ValueError("marginal: no shot-noise law given");
+    build_table(source_mean - kHalfWidthSd * m_source_sd, source_mean + kHalfWidthSd * m_source_sd);
+}
+
 MarginalTransform::MarginalTransform(const MarginalParams& target,
                                      std::span<const float> calibration)
     : m_target(target), m_source(SourceCdf::Empirical) {
@@ -342,6 +358,7 @@ std::pair<double, double> MarginalTransform::source_cdf(double x) const {
         const double z = (x - m_source_mean) / m_source_sd;
         return {normal_cdf(z), normal_cdf(-z)};
     }
+    if (m_source == SourceCdf::ShotNoise) return (*m_shot_noise)(x - m_source_mean);
     // Mid-rank CDF: ties (an atom, e.g. pixels no impulse reaches) share the middle of their
     // step; floored at half a sample in each tail.
     const auto& s = *m_calibration;

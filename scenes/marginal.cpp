@@ -23,6 +23,37 @@ const std::vector<std::vector<std::string>> kTypeKeys = {
     {"a", "b"},         {"rate"}, {"mu", "scale"}, {"mu", "sigma"}, {"mu", "scale", "nu"},
     {"values", "image"}};
 
+/// `cdf`: the impulse layer's own shot-noise law by default; a source layer's is Gaussian.
+kernels::SourceCdf read_cdf(Reader& m, const LayerConfig& L) {
+    const size_t fallback = static_cast<size_t>(L.source ? kernels::SourceCdf::Gaussian
+                                                         : kernels::SourceCdf::ShotNoise);
+    const auto cdf =
+        static_cast<kernels::SourceCdf>(m.choice("cdf", kernels::kSourceCdfNames, fallback));
+    if (L.source && cdf == kernels::SourceCdf::ShotNoise)
+        m.fail(m.node("cdf"), "cdf",
+               "\"shot_noise\" needs an impulse layer; a " + std::string(L.source->kind()) +
+                   " layer's F_x is \"gaussian\" or \"empirical\"");
+    return cdf;
+}
+
+/// The transfer at t = 0 (an empirical F_x is replaced by the Renderer's calibration): F_x the
+/// unshaped layer's shot-noise law (its kernel's value law kept in L when the kernel is fixed),
+/// or its closed-form mean and variance (Campbell's theorem). Throws ValueError.
+std::shared_ptr<const kernels::MarginalTransform> build_transform(LayerConfig& L,
+                                                                  const kernels::MarginalParams& P) {
+    L.marginal.reset();
+    L.kernel_values.reset();
+    if (L.marginal_cdf == kernels::SourceCdf::ShotNoise) {
+        if (L.kernel_keys.empty())
+            L.kernel_values = std::make_shared<const kernels::KernelValueLaw>(
+                kernels::kernel_value_law(kernels::Kernel(L.kernel)));
+        return shot_noise_marginal(L, P, 0.0, L.kernel_values.get());
+    }
+    const Theory raw = layer_theory(L);
+    return std::make_shared<const kernels::MarginalTransform>(P, raw.mean,
+                                                              std::sqrt(raw.variance));
+}
+
 }  // namespace
 
 void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base) {
@@ -37,7 +68,7 @@ void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base)
     const std::string type_str(kernels::to_string(P.type));
     // Read first: they decide whether the target may vary in time.
     const bool precorrect = m->boolean("precorrect", false);
-    L.marginal_cdf = static_cast<kernels::SourceCdf>(m->choice("cdf", kernels::kSourceCdfNames, 0));
+    L.marginal_cdf = read_cdf(*m, L);
     const std::string fixed_target =
         precorrect ? "the kernel is pre-corrected once for the target (precorrect = true)"
         : L.marginal_cdf == kernels::SourceCdf::Empirical
@@ -165,13 +196,7 @@ void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base)
                "only its sign matters on a layer with a marginal: the target distribution "
                "sets the scale");
 
-    // F_x: the unshaped layer's closed-form mean and variance (Campbell's theorem).
-    auto build = [&]() {
-        L.marginal.reset();
-        const Theory raw = layer_theory(L);
-        return std::make_shared<const kernels::MarginalTransform>(P, raw.mean,
-                                                                  std::sqrt(raw.variance));
-    };
+    auto build = [&]() { return build_transform(L, P); };
     try {
         L.marginal = build();
     } catch (const ValueError& e) {
@@ -194,6 +219,54 @@ void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base)
     } catch (const ValueError& e) {
         m->fail(m->node("precorrect"), "precorrect", e.what());
     }
+}
+
+namespace {
+
+kernels::AmplitudeLaw amplitude_law(sim::Amplitude a) {
+    switch (a) {
+        case sim::Amplitude::Uniform: return kernels::AmplitudeLaw::Uniform;
+        case sim::Amplitude::Sign: return kernels::AmplitudeLaw::Sign;
+        case sim::Amplitude::Normal: break;
+    }
+    return kernels::AmplitudeLaw::Normal;
+}
+
+/// The impulse weights' multipliers at layer time t: gain x carrier weight, times the envelope
+/// w(a) at 256 ages a (midpoints) with the rate of births at t - a (thinned by density_scale,
+/// loop-reduced as birth_weight does) for an animated layer.
+std::vector<kernels::WeightNode> weight_nodes(const LayerConfig& L, double t) {
+    const auto& p = L.process;
+    const double g = L.gain.value(t) * L.carrier_weight(t);
+    if (!(p.lifetime_s > 0)) return {{g, 1.0}};
+    constexpr int kAges = 256;  // midpoints: exact for hann's E[w^2], E[w^4] (periodic, smooth)
+    const double T = p.lifetime_s;
+    std::vector<kernels::WeightNode> nodes;
+    for (int i = 0; i < kAges; ++i) {
+        const double a = (i + 0.5) * T / kAges;
+        double tb = t - a;
+        if (p.loop_s > 0) tb -= std::floor(tb / p.loop_s) * p.loop_s;
+        const double s = p.density_scale ? p.density_scale(tb) : 1.0;
+        nodes.push_back({g * sim::envelope_weight(p.envelope, a, T), s / kAges});
+    }
+    return nodes;
+}
+
+}  // namespace
+
+std::shared_ptr<const kernels::MarginalTransform> shot_noise_marginal(
+    const LayerConfig& layer, const kernels::MarginalParams& target, double t_s,
+    const kernels::KernelValueLaw* values) {
+    kernels::KernelValueLaw own;
+    if (!values) {
+        own = kernels::kernel_value_law(kernels::Kernel(layer.kernel_at(t_s)));
+        values = &own;
+    }
+    auto cdf = std::make_shared<const kernels::ShotNoiseCdf>(
+        layer.process.intensity, *values, amplitude_law(layer.process.amplitude),
+        weight_nodes(layer, t_s));
+    return std::make_shared<const kernels::MarginalTransform>(target, layer.mean.value(t_s),
+                                                              std::move(cdf));
 }
 
 namespace {

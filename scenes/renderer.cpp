@@ -603,7 +603,7 @@ void Renderer::State::update_marginal(size_t i, double tl) {
     const LayerConfig& layer = scene.layers[i];
     // An empirical F_x and a fixed layer keep the transfer built at load (or calibrated).
     const bool source_varies = !layer.density.is_constant() || !layer.kernel_keys.empty();
-    if (layer.marginal_cdf != kernels::SourceCdf::Gaussian ||
+    if (layer.marginal_cdf == kernels::SourceCdf::Empirical ||
         (layer.marginal_keys.empty() && !source_varies))
         return;
     const kernels::MarginalParams P = layer.marginal_at(tl);
@@ -611,8 +611,11 @@ void Renderer::State::update_marginal(size_t i, double tl) {
     std::vector<double> built = {P.a, P.b, P.rate, P.mu, P.scale, P.sigma, P.nu, raw.mean,
                                  raw.variance};
     if (built == marginal_built[i]) return;
-    marginals[i] = std::make_shared<const kernels::MarginalTransform>(P, raw.mean,
-                                                                        std::sqrt(raw.variance));
+    if (layer.marginal_cdf == kernels::SourceCdf::ShotNoise)
+        marginals[i] = detail::shot_noise_marginal(layer, P, tl, layer.kernel_values.get());
+    else
+        marginals[i] = std::make_shared<const kernels::MarginalTransform>(
+            P, raw.mean, std::sqrt(raw.variance));
     marginal_built[i] = std::move(built);
 }
 

@@ -136,14 +136,16 @@ struct LayerConfig {
     numeric::Keyframed gain = 1.0;      ///< amplitude scale
     std::shared_ptr<sim::Flow> flow;  ///< null: no motion
     /// Distribution shaping g = F_y^-1(F_x(.)) of the layer's values (Lewis 1986 §4); null:
-    /// none. Built with the Gaussian F_x of the unshaped layer's closed-form mean and variance
-    /// (at t = 0; the Renderer rebuilds it per frame when marginal_keys or the unshaped
-    /// layer's moments vary in time).
+    /// none. Built with F_x per marginal_cdf at t = 0; the Renderer rebuilds it per frame when
+    /// marginal_keys or the unshaped layer's law vary in time.
     std::shared_ptr<const kernels::MarginalTransform> marginal;
     std::vector<MarginalKey> marginal_keys;  ///< keyframed parameters of the target
-    /// F_x of the marginal: Gaussian, or empirical (the Renderer measures it on a calibration
-    /// render of the layer at frame 0).
-    kernels::SourceCdf marginal_cdf = kernels::SourceCdf::Gaussian;
+    /// F_x of the marginal: the shot-noise law (impulse layers' default), Gaussian (source
+    /// layers' default), or empirical (the Renderer measures it on a calibration render of the
+    /// layer at frame 0).
+    kernels::SourceCdf marginal_cdf = kernels::SourceCdf::ShotNoise;
+    /// Shot-noise F_x with a fixed kernel: the kernel's value law, computed once at load.
+    std::shared_ptr<const kernels::KernelValueLaw> kernel_values;
     /// Set when `precorrect = true` replaced `kernel` by the ITAM-corrected kernel (so the shaped
     /// layer has the original kernel's spectrum): what it achieved. process.intensity and
     /// cell_size still refer to the original kernel.
