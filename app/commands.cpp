@@ -310,7 +310,13 @@ int run_render(const RenderOptions& opt) {
         fs::create_directories("out", ec);
         std::cerr << "output: " << output << " (-o to choose)\n";
     }
-    if (scene.volume) return run_volume_render(scene, {output, first, last, opt.quiet, opt.resume});
+    if (scene.volume) {  // impulses in 3-D: OpenVDB frames or a ray-marched preview
+        std::unique_ptr<tbb::global_control> cap;  // --threads, as below
+        if (opt.threads > 0)
+            cap = std::make_unique<tbb::global_control>(
+                tbb::global_control::max_allowed_parallelism, opt.threads);
+        return run_volume_render(scene, {output, first, last, opt.quiet, opt.resume});
+    }
     const bool video = output::is_video_path(output);
     const bool sequence = !video && !expand_pattern(output, 0).empty();
     if (!video && !sequence) {

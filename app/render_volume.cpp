@@ -43,7 +43,8 @@ Target classify(const VolumeJob& job) {
                          "pattern or a video (.mp4 .mov .mkv .webm)");
     if (!t.video && !t.sequence && job.last != job.first)
         throw ValueError(job.output + ": one file but " + std::to_string(job.last - job.first + 1) +
-                         " frames requested: use a pattern like cloud_####.vdb, or --frames N");
+                         " frames requested: use a pattern like " +
+                         (t.vdb ? "cloud_####.vdb" : "frame_####.png") + ", a video, or --frames N");
     if (t.video && job.resume)
         throw ValueError("--resume: applies to sequences; a video is always written whole");
     const fs::path dir = fs::path(t.sequence ? expand_pattern(job.output, job.first) : job.output).parent_path();
