@@ -95,6 +95,15 @@ struct Simulator3::State {
         return view.expanded(radius + travel(view));
     }
     void integrate(Particles& P, const std::vector<size_t>& order, int64_t target) const;
+    /// Fills `next` and `next_blocks` with the particles of `keys` (canonical order).
+    void gather(const std::vector<CellKey>& keys, int64_t target);
+    /// Age of particle i of `next` at grid step `target`, seconds (whole steps exact).
+    double age_s(size_t i, int64_t target) const {
+        return (double(target - next.birth_step[i]) - next.frac[i]) * dt;
+    }
+    /// The live particles of `next` that can touch `view`, weighted a w(age) sqrt(J).
+    void emit(const std::vector<uint8_t>& alive, int64_t target, const Box3& view,
+              Impulses3& out) const;
 };
 
 void Simulator3::State::generate(const CellKey& k, Particles& P, size_t i, size_t n) const {
@@ -213,61 +222,74 @@ std::vector<size_t> integration_order(const Particles& P, const std::vector<uint
 
 }  // namespace
 
-void Simulator3::impulses_at(int64_t frame, const Box3& view, Impulses3& out) {
-    State& S = *m_state;
-    const int64_t target = frame * S.p.substeps;
-    const Box3 region = S.birth_region(view);
-    if (S.flow) S.flow->prepare(region.expanded(S.p.cell_size));
-    const double t = double(target) * S.dt;
-    const int64_t ct0 = int64_t(std::floor((t - S.p.lifetime_s) / S.time_cell_s)) - 1;
-    const int64_t ct1 = int64_t(std::floor(t / S.time_cell_s)) + 1;
-    const std::vector<CellKey> keys = cover(region, S.p.cell_size, ct0, ct1);
-    // Blocks carried over from the previous frame (moving forward in time) or generated.
-    const bool reuse = S.valid && S.last_step <= target;
+void Simulator3::State::gather(const std::vector<CellKey>& keys, int64_t target) {
+    // Blocks carried over from the previous frame (moving forward in time) or generated; new
+    // cells are counted, then generated straight into their place, in parallel (a particle is a
+    // pure function of its cell and index): the layout is the canonical order for any threads.
+    const bool reuse = valid && last_step <= target;
     constexpr size_t kNew = size_t(-1);
     std::vector<size_t> source(keys.size(), kNew);
-    S.next_blocks.assign(keys.size(), {});
+    next_blocks.assign(keys.size(), {});
     size_t cursor = 0;
     for (size_t b = 0; b < keys.size(); ++b) {
-        S.next_blocks[b].key = keys[b];
-        while (reuse && cursor < S.blocks.size() && S.blocks[cursor].key < keys[b]) ++cursor;
-        if (reuse && cursor < S.blocks.size() && S.blocks[cursor].key == keys[b])
-            source[b] = cursor, S.next_blocks[b].count = S.blocks[cursor].count;
+        next_blocks[b].key = keys[b];
+        while (reuse && cursor < blocks.size() && blocks[cursor].key < keys[b]) ++cursor;
+        if (reuse && cursor < blocks.size() && blocks[cursor].key == keys[b])
+            source[b] = cursor, next_blocks[b].count = blocks[cursor].count;
     }
     tbb::parallel_for(tbb::blocked_range<size_t>(0, keys.size(), 256), [&](const auto& r) {
         for (size_t b = r.begin(); b != r.end(); ++b)
-            if (source[b] == kNew) S.next_blocks[b].count = size_t(S.count(keys[b]));
+            if (source[b] == kNew) next_blocks[b].count = size_t(count(keys[b]));
     });
     size_t total = 0;
-    for (Block& blk : S.next_blocks) blk.start = total, total += blk.count;
-    Particles& P = S.next;
-    P.resize(total);
+    for (Block& blk : next_blocks) blk.start = total, total += blk.count;
+    next.resize(total);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, keys.size(), 256), [&](const auto& r) {
         for (size_t b = r.begin(); b != r.end(); ++b) {
-            const Block& blk = S.next_blocks[b];
-            if (source[b] == kNew) S.generate(blk.key, P, blk.start, blk.count);
-            else P.copy(S.live, S.blocks[source[b]].start, blk.count, blk.start);
+            const Block& blk = next_blocks[b];
+            if (source[b] == kNew) generate(blk.key, next, blk.start, blk.count);
+            else next.copy(live, blocks[source[b]].start, blk.count, blk.start);
         }
     });
-    auto age_s = [&](size_t i) { return (double(target - P.birth_step[i]) - P.frac[i]) * S.dt; };
-    std::vector<uint8_t> alive(total);
-    for (size_t i = 0; i < total; ++i) alive[i] = age_s(i) >= 0.0 && age_s(i) < S.p.lifetime_s;
-    if (S.flow) S.integrate(P, integration_order(P, alive, target), target);
+}
 
+void Simulator3::State::emit(const std::vector<uint8_t>& alive, int64_t target, const Box3& view,
+                             Impulses3& out) const {
+    const Particles& P = next;
     out.x.clear(), out.y.clear(), out.z.clear(), out.weight.clear();
-    const Box3 keep = view.expanded(S.radius);
-    for (size_t i = 0; i < total; ++i) {
+    const Box3 keep = view.expanded(radius);
+    for (size_t i = 0; i < P.x.size(); ++i) {
         if (!alive[i]) continue;
         if (P.x[i] < keep.x0 || P.x[i] > keep.x1 || P.y[i] < keep.y0 || P.y[i] > keep.y1 ||
             P.z[i] < keep.z0 || P.z[i] > keep.z1)
             continue;
-        double w = P.amp[i] * sim::envelope_weight(S.p.envelope, age_s(i), S.p.lifetime_s);
-        if (S.p.jacobian) w *= std::exp(0.5 * P.lnj[i]);  // s_k = sqrt(J_k)
+        double w = P.amp[i] * sim::envelope_weight(p.envelope, age_s(i, target), p.lifetime_s);
+        if (p.jacobian) w *= std::exp(0.5 * P.lnj[i]);  // s_k = sqrt(J_k)
         out.x.push_back(P.x[i]);
         out.y.push_back(P.y[i]);
         out.z.push_back(P.z[i]);
         out.weight.push_back(float(w));
     }
+}
+
+void Simulator3::impulses_at(int64_t frame, const Box3& view, Impulses3& out) {
+    State& S = *m_state;
+    const int64_t target = frame * S.p.substeps;
+    const Box3 region = S.birth_region(view);
+    if (S.flow) S.flow->prepare(region.expanded(S.p.cell_size));
+    // Births up to one lifetime (and a time cell of margin) before the frame may be alive.
+    const double t = double(target) * S.dt;
+    const int64_t ct0 = int64_t(std::floor((t - S.p.lifetime_s) / S.time_cell_s)) - 1;
+    const int64_t ct1 = int64_t(std::floor(t / S.time_cell_s)) + 1;
+    S.gather(cover(region, S.p.cell_size, ct0, ct1), target);
+    const size_t total = S.next.x.size();
+    std::vector<uint8_t> alive(total);
+    for (size_t i = 0; i < total; ++i) {
+        const double a = S.age_s(i, target);
+        alive[i] = a >= 0.0 && a < S.p.lifetime_s;
+    }
+    if (S.flow) S.integrate(S.next, integration_order(S.next, alive, target), target);
+    S.emit(alive, target, view, out);
     std::swap(S.live, S.next);
     std::swap(S.blocks, S.next_blocks);
     S.last_step = target;
