@@ -2,6 +2,7 @@
 // `impulse render`, `impulse scenes`, `impulse info`.
 
 #include "app/commands.h"
+#include "app/render_volume.h"
 
 #include <tbb/global_control.h>
 #include <signal.h>
@@ -26,6 +27,7 @@
 #include "output/output.h"
 #include "render/render.h"
 #include "scenes/scenes.h"
+#include "scenes/volume_scene.h"
 #include "numeric/errors.h"
 
 namespace impulse::app {
@@ -308,6 +310,13 @@ int run_render(const RenderOptions& opt) {
         fs::create_directories("out", ec);
         std::cerr << "output: " << output << " (-o to choose)\n";
     }
+    if (scene.volume) {  // impulses in 3-D: OpenVDB frames or a ray-marched preview
+        std::unique_ptr<tbb::global_control> cap;  // --threads, as below
+        if (opt.threads > 0)
+            cap = std::make_unique<tbb::global_control>(
+                tbb::global_control::max_allowed_parallelism, opt.threads);
+        return run_volume_render(scene, {output, first, last, opt.quiet, opt.resume});
+    }
     const bool video = output::is_video_path(output);
     const bool sequence = !video && !expand_pattern(output, 0).empty();
     if (!video && !sequence) {
@@ -472,7 +481,12 @@ int run_scenes() {
             std::equal(stem.begin(), stem.end(), text.begin(),
                        [](char a, char b) { return std::tolower(a) == std::tolower(b); }))
             text = text.substr(text.find_first_not_of(' ', stem.size() + 1));
-        std::printf("%-10s %s\n", stem.c_str(), text.c_str());
+        // A volume scene ([volume]: impulses in 3-D, OpenVDB out) says so on its line.
+        in.clear();
+        in.seekg(0);
+        bool is_volume = false;
+        while (std::getline(in, line)) is_volume = is_volume || line.rfind("[volume]", 0) == 0;
+        std::printf("%-10s %s%s\n", stem.c_str(), is_volume ? "(volume) " : "", text.c_str());
     }
     return 0;
 }
@@ -499,11 +513,38 @@ std::string composition_text(const scenes::LayerConfig& l) {
 
 }  // namespace
 
+namespace {
+
+/// `impulse info` of a volume scene: sizes, the Campbell variance of the unshaped field per
+/// octave, the impulse estimate.
+int print_volume_info(const scenes::Scene& scene) {
+    const scenes::VolumeSceneConfig& v = *scene.volume;
+    const volume::CloudVolume cloud(v.cloud);
+    const volume::CloudTheory t = cloud.theory();
+    const long long nframes = scene.output.frames;
+    std::printf("scene      %s (hash %s)\n", scene.path.c_str(), scene.hash.c_str());
+    std::printf("output     %dx%d, %lld frame%s at %g fps (preview; volume %dx%dx%d voxels)\n",
+                scene.output.width, scene.output.height, nframes, nframes == 1 ? "" : "s",
+                scene.output.fps, v.cloud.size[0], v.cloud.size[1], v.cloud.size[2]);
+    std::printf("volume     %d octave%s from r=%g, density=%g per kernel volume, lifetime %g s, "
+                "sqrt(J) %s\n", v.cloud.octaves, v.cloud.octaves == 1 ? "" : "s",
+                v.cloud.kernel.radius, v.cloud.density, v.cloud.lifetime_s,
+                v.cloud.jacobian ? "on" : "off");
+    std::printf("variance   %.6g (Campbell's theorem, the field before shaping)\n", t.variance);
+    for (size_t o = 0; o < t.octave_variance.size(); ++o)
+        std::printf("octave[%zu]  variance=%.6g\n", o, t.octave_variance[o]);
+    std::printf("impulses   ~%.3g per frame\n", cloud.expected_impulses());
+    return 0;
+}
+
+}  // namespace
+
 int run_info(const InfoOptions& opt) {
     const std::string path = scenes::resolve_scene(opt.scene);
     scenes::Scene scene = scenes::load_scene(path, overrides_for(opt.sets, opt.crop, ""),
                                              parse_size("--size", opt.size));
     for (const auto& w : scene.warnings) std::cerr << w << "\n";
+    if (scene.volume) return print_volume_info(scene);
     scenes::Renderer r(scene);
     const auto t = scenes::scene_theory(scene);
     std::printf("scene      %s (hash %s)\n", path.c_str(), scene.hash.c_str());

@@ -224,6 +224,15 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base, Out
         l->finish();
     }
 
+    if (top.has("volume")) {  // impulses in 3-D (docs/volume.md): no [[layer]], no 2-D view
+        if (top.has("layer"))
+            top.fail(top.node("layer"), "layer", "a volume scene ([volume]) has no [[layer]]");
+        for (const char* k : {"camera", "shading"})
+            if (top.has(k)) top.fail(top.node(k), k, "a volume scene is lit and framed by [preview]");
+        s.volume = detail::read_volume_scene(top, global_seed, s.output);
+        top.finish();
+        return s;
+    }
     auto layers = top.tables("layer");
     if (layers.empty()) {
         top.finish();  // an unknown key (a misspelt [[layer]]) explains more than the absence

@@ -41,6 +41,10 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
 /// A [[layer]] drawn by another synthesizer (source = "fbm", "subdivision", "solid").
 void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const std::filesystem::path& base,
                        const Limits& limits, CompositionReader& compose, LayerConfig& L);
+/// A volume scene's [volume] and [preview] tables (scenes/volume_config.cpp); `fps` and the
+/// preview size come from [output].
+std::shared_ptr<const VolumeSceneConfig> read_volume_scene(Reader& top, uint64_t global_seed,
+                                                          const OutputConfig& output);
 /// The [camera] table (absent: the orthographic default framing a width x height output).
 CameraConfig read_camera(std::optional<Reader> r, int width, int height);
 

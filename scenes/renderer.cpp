@@ -227,6 +227,9 @@ struct Renderer::State {
 Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
     State& S = *m_state;
     S.scene = std::move(scene);
+    if (S.scene.volume)
+        throw ValueError(S.scene.path + ": a volume scene ([volume]): render it with impulse render "
+                         "(OpenVDB frames or a ray-marched preview), not the 2-D renderer");
     const auto& out = S.scene.output;
     sim::Timing timing{out.fps, std::llround(out.start_s * out.fps)};
     const size_t count = S.scene.layers.size();

@@ -179,6 +179,9 @@ struct ShadingKeys {
     numeric::Keyframed relief = 0.0, light_azimuth = 135.0, light_elevation = 35.0, ambient = 0.25;
 };
 
+/// A volume scene's content (scenes/volume_scene.h).
+struct VolumeSceneConfig;
+
 struct Scene {
     std::string path;  ///< file it came from ("" for a string)
     uint64_t seed = 0; ///< the scene-wide seed (top-level `seed`, `--seed`)
@@ -186,6 +189,8 @@ struct Scene {
     CameraConfig camera;
     Limits limits;
     std::vector<LayerConfig> layers;
+    /// Set for a volume scene (then `layers` is empty and the Renderer refuses it).
+    std::shared_ptr<const VolumeSceneConfig> volume;
     output::Shading shading;  ///< [shading]: how the field becomes display colour (at t = 0)
     ShadingKeys shading_keys;  ///< its keyframed numbers (shading_at evaluates them)
     /// [shading.transform]: marble or wood, applied to the summed field by Renderer::render

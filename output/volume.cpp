@@ -1,0 +1,145 @@
+// SPDX-License-Identifier: Apache-2.0
+// Volumes out: multi-layer EXR stacks (OpenImageIO) and OpenVDB float grids, written atomically.
+
+#include "output/volume.h"
+
+#include <OpenImageIO/imageio.h>
+#include <openvdb/openvdb.h>
+#include <unistd.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+
+#include "numeric/errors.h"
+
+namespace impulse::output {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// A hidden, pid-tagged temporary beside the target (same directory: the rename is atomic) that
+/// keeps the extension (the libraries pick the format from it).
+std::string temp_name(const std::string& path) {
+    const fs::path p(path);
+    return (p.parent_path() / ("." + p.stem().string() + ".partial-" + std::to_string(::getpid()) +
+                               p.extension().string()))
+        .string();
+}
+
+/// Renames the finished temporary into place (nothing half-written under `path`).
+void commit(const std::string& tmp, const std::string& path) {
+    std::error_code ec;
+    fs::rename(tmp, path, ec);
+    if (ec) {
+        fs::remove(tmp, ec);
+        throw IoError(path + ": cannot rename temporary file into place: " + ec.message());
+    }
+}
+
+void check_grid(const std::string& path, const VolumeGrid& g) {
+    const auto& n = g.size;
+    if (n[0] <= 0 || n[1] <= 0 || n[2] <= 0 ||
+        g.values.size() != size_t(n[0]) * size_t(n[1]) * size_t(n[2]))
+        throw ValueError(path + ": volume of " + std::to_string(g.values.size()) +
+                         " samples does not match its size");
+}
+
+void initialize_vdb() {
+    static std::once_flag once;
+    std::call_once(once, [] { openvdb::initialize(); });
+}
+
+}  // namespace
+
+void write_exr_stack(const std::string& path, const VolumeGrid& grid,
+                     const std::string& description) {
+    check_grid(path, grid);
+    const int W = grid.size[0], H = grid.size[1], D = grid.size[2];
+    OIIO::ImageSpec spec(W, H, D, OIIO::TypeDesc::FLOAT);
+    spec.depth = 1;
+    spec.channelnames.clear();
+    for (int k = 0; k < D; ++k) {
+        char name[32];
+        std::snprintf(name, sizeof name, "z%04d.Y", k);
+        spec.channelnames.push_back(name);
+    }
+    spec.attribute("compression", "zip");
+    spec.attribute("ImageDescription", description);
+    spec.attribute("DateTime", "1970:01:01 00:00:00");  // a pure function of the options
+    // Interleave: pixel (i, j) holds the D layers' values.
+    std::vector<float> px(size_t(W) * H * D);
+    for (int k = 0; k < D; ++k)
+        for (size_t p = 0; p < size_t(W) * H; ++p) px[p * D + k] = grid.values[size_t(k) * W * H + p];
+    const std::string tmp = temp_name(path);
+    auto out = OIIO::ImageOutput::create(tmp);
+    const bool ok = out && out->open(tmp, spec) && out->write_image(OIIO::TypeDesc::FLOAT, px.data());
+    std::string err = out ? out->geterror() : OIIO::geterror();
+    if (out && !out->close() && err.empty()) err = out->geterror();
+    if (!ok || !err.empty()) {
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        throw IoError(path + ": cannot write: " + (err.empty() ? std::string("unknown error") : err));
+    }
+    commit(tmp, path);
+}
+
+void write_vdb(const std::string& path, const VolumeGrid& g, const std::string& description,
+               const VdbOptions& options) {
+    check_grid(path, g);
+    initialize_vdb();
+    auto grid = openvdb::FloatGrid::create(0.0f);
+    grid->setName(options.name);
+    grid->setGridClass(openvdb::GRID_FOG_VOLUME);
+    grid->insertMeta("description", openvdb::StringMetadata(description));
+    if (options.voxel_size != 1.0)
+        grid->setTransform(openvdb::math::Transform::createLinearTransform(options.voxel_size));
+    auto acc = grid->getAccessor();
+    const auto& n = g.size;
+    for (int k = 0; k < n[2]; ++k)
+        for (int j = 0; j < n[1]; ++j)
+            for (int i = 0; i < n[0]; ++i) {
+                const float v = g.values[(size_t(k) * n[1] + j) * n[0] + i];
+                if (!options.sparse || v != 0.0f) acc.setValue({i, j, k}, v);
+            }
+    const std::string tmp = temp_name(path);
+    try {
+        openvdb::io::File file(tmp);
+        file.write({grid});
+        file.close();
+    } catch (const std::exception& e) {
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        throw IoError(path + ": cannot write: " + e.what());
+    }
+    commit(tmp, path);
+}
+
+VolumeGrid read_vdb(const std::string& path, const std::string& name) {
+    initialize_vdb();
+    openvdb::GridBase::Ptr base;
+    try {
+        openvdb::io::File file(path);
+        file.open();
+        base = file.readGrid(name);
+        file.close();
+    } catch (const std::exception& e) {
+        throw IoError(path + ": cannot read grid \"" + name + "\": " + e.what());
+    }
+    auto grid = openvdb::gridPtrCast<openvdb::FloatGrid>(base);
+    if (!grid) throw IoError(path + ": grid \"" + name + "\" is not a float grid");
+    const openvdb::CoordBBox box = grid->evalActiveVoxelBoundingBox();
+    VolumeGrid out;
+    if (box.empty()) return out;
+    const openvdb::Coord hi = box.max();
+    out.size = {hi.x() + 1, hi.y() + 1, hi.z() + 1};
+    out.values.assign(size_t(out.size[0]) * out.size[1] * out.size[2], 0.0f);
+    auto acc = grid->getConstAccessor();
+    for (int k = 0; k < out.size[2]; ++k)
+        for (int j = 0; j < out.size[1]; ++j)
+            for (int i = 0; i < out.size[0]; ++i)
+                out.values[(size_t(k) * out.size[1] + j) * out.size[0] + i] = acc.getValue({i, j, k});
+    return out;
+}
+
+}  // namespace impulse::output

@@ -1,0 +1,44 @@
+// SPDX-License-Identifier: Apache-2.0
+#pragma once
+// Volumes out (part of impulse::output): a dense float grid as a multi-layer OpenEXR stack or an
+// OpenVDB float grid, written atomically (a temporary file beside the target, renamed into
+// place: an interrupted run never leaves half a volume, design.md §4).
+
+#include <array>
+#include <string>
+#include <vector>
+
+namespace impulse::output {
+
+/// A dense W x H x D float grid, sample (i, j, k) at values[(k * H + j) * W + i] (x fastest).
+struct VolumeGrid {
+    std::array<int, 3> size{};  ///< W, H, D (each > 0)
+    std::vector<float> values;  ///< W * H * D samples
+};
+
+/// How write_vdb stores a grid.
+struct VdbOptions {
+    std::string name = "density";  ///< grid name (Blender and Houdini look for "density")
+    double voxel_size = 1.0;       ///< world units per voxel (the grid's uniform scale), > 0
+    /// false: every sample becomes an active voxel (synth solid: values of both signs); true:
+    /// samples equal to the background 0 stay inactive, so a cloud is stored sparsely.
+    bool sparse = false;
+};
+
+/// Writes the grid as one OpenEXR image of W x H pixels with D float channels named z0000.Y,
+/// z0001.Y ... (layer k = slice z = k), zip-compressed, `description` as ImageDescription and a
+/// fixed DateTime so the bytes are a pure function of the values. Throws IoError with OIIO's
+/// message.
+void write_exr_stack(const std::string& path, const VolumeGrid& grid,
+                     const std::string& description);
+/// Writes the grid as an OpenVDB file holding one fog-volume float grid (background 0, index
+/// (i, j, k) = sample (i, j, k)), `description` in its "description" metadata. Throws IoError
+/// with OpenVDB's message.
+void write_vdb(const std::string& path, const VolumeGrid& grid, const std::string& description,
+               const VdbOptions& options = {});
+/// Reads the float grid `name` of an OpenVDB file into a dense grid over its active voxels'
+/// bounding box starting at index (0, 0, 0) (inactive voxels read as the background). For
+/// tests and tools. Throws IoError naming the file.
+VolumeGrid read_vdb(const std::string& path, const std::string& name = "density");
+
+}  // namespace impulse::output

@@ -1,0 +1,299 @@
+// SPDX-License-Identifier: Apache-2.0
+// One 3-D process as a particle system: cell-seeded Poisson births in space and time (Lewis 1986
+// §3.1 "numbered cells", design.md §3), Heun integration on a global time grid, ln J carried
+// along the path (d ln J / dt = div v), weights a w(age) sqrt(J) (design.md §1).
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <tuple>
+
+#include "numeric/rng.h"
+#include "sim/layout.h"
+#include "sim/normal.h"
+#include "volume/process.h"
+
+namespace impulse::volume {
+namespace {
+
+struct CellKey {
+    int64_t ct, cz, cy, cx;
+    auto operator<=>(const CellKey&) const = default;
+};
+
+/// A seeding cell's particles in the flat arrays: [start, start + count).
+struct Block {
+    CellKey key;
+    size_t start = 0, count = 0;
+};
+
+/// Particle state (structure of arrays). (x, y, z, lnj) hold at grid step `step` when `stepped`,
+/// else at the birth time, which lies `frac` of a step after grid step `step`.
+struct Particles {
+    std::vector<double> x, y, z, lnj, frac;
+    std::vector<int64_t> step, birth_step;
+    std::vector<uint8_t> stepped;
+    std::vector<float> amp;
+    void resize(size_t n) {
+        x.resize(n), y.resize(n), z.resize(n), lnj.resize(n), frac.resize(n), step.resize(n);
+        birth_step.resize(n), stepped.resize(n), amp.resize(n);
+    }
+    void copy(const Particles& o, size_t from, size_t n, size_t to) {
+        for (size_t k = 0; k < n; ++k) {
+            const size_t i = from + k, j = to + k;
+            x[j] = o.x[i], y[j] = o.y[i], z[j] = o.z[i], lnj[j] = o.lnj[i], frac[j] = o.frac[i];
+            step[j] = o.step[i], birth_step[j] = o.birth_step[i], stepped[j] = o.stepped[i];
+            amp[j] = o.amp[i];
+        }
+    }
+};
+
+constexpr uint32_t kCountIndex = 0xFFFFFFFFu;
+
+float amplitude_of(sim::Amplitude a, double u, double v) {
+    switch (a) {
+        case sim::Amplitude::Normal: return static_cast<float>(sim::detail::normal_from_uniforms(u, v));
+        case sim::Amplitude::Uniform: return static_cast<float>(2.0 * u - 1.0);
+        case sim::Amplitude::Sign: return u < 0.5 ? -1.0f : 1.0f;
+    }
+    return 0.0f;
+}
+
+}  // namespace
+
+struct Simulator3::State {
+    Process3 p;
+    std::shared_ptr<Flow3> flow;
+    double radius;
+    double dt, time_cell_s, mean_per_cell;
+    Particles live, next;
+    std::vector<Block> blocks, next_blocks;
+    int64_t last_step = 0;
+    bool valid = false;
+
+    State(Process3 pr, std::shared_ptr<Flow3> f, double r)
+        : p(pr), flow(std::move(f)), radius(r) {
+        dt = 1.0 / (p.fps * p.substeps);
+        // Four time cells per lifetime (as the 2-D layout): births per unit volume per second
+        // beta = lambda / T, so a space-time cell expects lambda s^3 (T/4) / T.
+        time_cell_s = p.lifetime_s / 4.0;
+        mean_per_cell = p.intensity * p.cell_size * p.cell_size * p.cell_size / 4.0;
+    }
+
+    numeric::CounterRng rng(int64_t ct) const {
+        return numeric::CounterRng(p.seed, p.layer).keyed(ct);
+    }
+    int count(const CellKey& k) const {
+        const auto u = rng(k.ct).uniforms(k.cx, k.cy, k.cz, kCountIndex)[0];
+        return sim::detail::poisson_inverse(mean_per_cell, u);
+    }
+    void generate(const CellKey& k, Particles& P, size_t i, size_t n) const;
+    double travel(const Box3& view) const;
+    Box3 birth_region(const Box3& view) const {
+        return view.expanded(radius + travel(view));
+    }
+    void integrate(Particles& P, const std::vector<size_t>& order, int64_t target) const;
+    /// Fills `next` and `next_blocks` with the particles of `keys` (canonical order).
+    void gather(const std::vector<CellKey>& keys, int64_t target);
+    /// Age of particle i of `next` at grid step `target`, seconds (whole steps exact).
+    double age_s(size_t i, int64_t target) const {
+        return (double(target - next.birth_step[i]) - next.frac[i]) * dt;
+    }
+    /// The live particles of `next` that can touch `view`, weighted a w(age) sqrt(J).
+    void emit(const std::vector<uint8_t>& alive, int64_t target, const Box3& view,
+              Impulses3& out) const;
+};
+
+void Simulator3::State::generate(const CellKey& k, Particles& P, size_t i, size_t n) const {
+    const numeric::CounterRng r = rng(k.ct);
+    const double s = p.cell_size;
+    for (size_t q = 0; q < n; ++q, ++i) {
+        // r0 = (x, y, z, birth time), r1 = (amplitude, normal's angle, unused, unused).
+        const auto r0 = r.uniforms(k.cx, k.cy, k.cz, 2u * uint32_t(q));
+        const auto r1 = r.uniforms(k.cx, k.cy, k.cz, 2u * uint32_t(q) + 1u);
+        P.x[i] = (double(k.cx) + r0[0]) * s;
+        P.y[i] = (double(k.cy) + r0[1]) * s;
+        P.z[i] = (double(k.cz) + r0[2]) * s;
+        const double g = (double(k.ct) + r0[3]) * time_cell_s / dt;  // birth in grid steps
+        const double fl = std::floor(g);
+        P.birth_step[i] = P.step[i] = int64_t(fl);
+        P.frac[i] = g - fl;
+        P.stepped[i] = 0;
+        P.lnj[i] = 0.0;
+        P.amp[i] = amplitude_of(p.amplitude, r1[0], r1[1]);
+    }
+}
+
+double Simulator3::State::travel(const Box3& view) const {
+    if (!flow) return 0.0;
+    double t = 0.0;
+    for (int it = 0; it < 4; ++it) t = flow->max_speed(view.expanded(radius + t)) * p.lifetime_s;
+    return t;
+}
+
+void Simulator3::State::integrate(Particles& P, const std::vector<size_t>& order,
+                                  int64_t target) const {
+    // `order` is sorted by each particle's first step, so the particles moving at any step are a
+    // prefix of a chunk; a particle's arithmetic does not depend on its chunk or thread.
+    constexpr size_t kChunk = 256;
+    const size_t n = order.size(), chunks = (n + kChunk - 1) / kChunk;
+    const bool want_div = p.jacobian && !flow->divergence_free();
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+        const size_t i0 = c * kChunk, m = std::min(n, i0 + kChunk) - i0;
+        std::vector<double> x[2], h(m), lj(m), k0[4], k1[4];
+        for (int a = 0; a < 3; ++a) x[0].resize(3 * m), x[1].resize(3 * m);
+        for (auto* k : {k0, k1})
+            for (int a = 0; a < 4; ++a) k[a].resize(m);
+        std::vector<int64_t> first(m);
+        std::vector<uint8_t> stepped(m);
+        std::vector<double> frac(m);
+        double* X = x[0].data();  // x, y, z blocks of m
+        double* T = x[1].data();
+        for (size_t j = 0; j < m; ++j) {
+            const size_t i = order[i0 + j];
+            X[j] = P.x[i], X[m + j] = P.y[i], X[2 * m + j] = P.z[i], lj[j] = P.lnj[i];
+            stepped[j] = P.stepped[i], first[j] = P.step[i], frac[j] = P.frac[i];
+        }
+        auto eval = [&](double t, size_t na, const double* px, std::vector<double>* k) {
+            for (int a = 0; a < 4; ++a) std::fill(k[a].begin(), k[a].begin() + na, 0.0);
+            flow->add(t, na, px, px + m, px + 2 * m, k[0].data(), k[1].data(), k[2].data(),
+                      want_div ? k[3].data() : nullptr);
+        };
+        size_t active = 0;
+        for (int64_t g = m ? first[0] : target; g < target; ++g) {
+            while (active < m && first[active] <= g) ++active;
+            for (size_t j = 0; j < active; ++j) {  // the first step runs from the birth
+                h[j] = stepped[j] ? dt : (1.0 - frac[j]) * dt;
+                stepped[j] = 1;
+            }
+            const double t0 = double(g) * dt, t1 = double(g + 1) * dt;
+            eval(t0, active, X, k0);  // Heun's RK2
+            for (int a = 0; a < 3; ++a)
+                for (size_t j = 0; j < active; ++j) T[a * m + j] = X[a * m + j] + h[j] * k0[a][j];
+            eval(t1, active, T, k1);
+            for (int a = 0; a < 3; ++a)
+                for (size_t j = 0; j < active; ++j) X[a * m + j] += 0.5 * h[j] * (k0[a][j] + k1[a][j]);
+            if (want_div)  // d ln J / dt = div v
+                for (size_t j = 0; j < active; ++j) lj[j] += 0.5 * h[j] * (k0[3][j] + k1[3][j]);
+        }
+        for (size_t j = 0; j < m; ++j) {
+            const size_t i = order[i0 + j];
+            P.x[i] = X[j], P.y[i] = X[m + j], P.z[i] = X[2 * m + j], P.lnj[i] = lj[j];
+            if (first[j] < target) P.stepped[i] = 1, P.step[i] = target;
+        }
+    });
+}
+
+Simulator3::Simulator3(Process3 process, std::shared_ptr<Flow3> flow, double support_radius)
+    : m_state(std::make_unique<State>(process, std::move(flow), support_radius)) {}
+Simulator3::~Simulator3() = default;
+Simulator3::Simulator3(Simulator3&&) noexcept = default;
+const Process3& Simulator3::process() const { return m_state->p; }
+Box3 Simulator3::birth_region(const Box3& view) const { return m_state->birth_region(view); }
+
+namespace {
+
+/// The cells of `region` in canonical order (ct, cz, cy, cx).
+std::vector<CellKey> cover(const Box3& r, double s, int64_t ct0, int64_t ct1) {
+    auto lo = [s](double v) { return int64_t(std::floor(v / s)); };
+    std::vector<CellKey> keys;
+    for (int64_t ct = ct0; ct <= ct1; ++ct)
+        for (int64_t cz = lo(r.z0); cz <= lo(r.z1); ++cz)
+            for (int64_t cy = lo(r.y0); cy <= lo(r.y1); ++cy)
+                for (int64_t cx = lo(r.x0); cx <= lo(r.x1); ++cx) keys.push_back({ct, cz, cy, cx});
+    return keys;
+}
+
+/// The particles not yet at `target`, sorted by the step they start from (a counting sort).
+std::vector<size_t> integration_order(const Particles& P, const std::vector<uint8_t>& alive,
+                                      int64_t target) {
+    std::vector<size_t> todo;
+    int64_t lowest = target;
+    for (size_t i = 0; i < P.x.size(); ++i)
+        if (alive[i] && P.step[i] < target) todo.push_back(i), lowest = std::min(lowest, P.step[i]);
+    std::vector<size_t> starts(size_t(target - lowest) + 1, 0), order(todo.size());
+    for (size_t i : todo) ++starts[size_t(P.step[i] - lowest) + 1];
+    for (size_t k = 1; k < starts.size(); ++k) starts[k] += starts[k - 1];
+    for (size_t i : todo) order[starts[size_t(P.step[i] - lowest)]++] = i;
+    return order;
+}
+
+}  // namespace
+
+void Simulator3::State::gather(const std::vector<CellKey>& keys, int64_t target) {
+    // Blocks carried over from the previous frame (moving forward in time) or generated; new
+    // cells are counted, then generated straight into their place, in parallel (a particle is a
+    // pure function of its cell and index): the layout is the canonical order for any threads.
+    const bool reuse = valid && last_step <= target;
+    constexpr size_t kNew = size_t(-1);
+    std::vector<size_t> source(keys.size(), kNew);
+    next_blocks.assign(keys.size(), {});
+    size_t cursor = 0;
+    for (size_t b = 0; b < keys.size(); ++b) {
+        next_blocks[b].key = keys[b];
+        while (reuse && cursor < blocks.size() && blocks[cursor].key < keys[b]) ++cursor;
+        if (reuse && cursor < blocks.size() && blocks[cursor].key == keys[b])
+            source[b] = cursor, next_blocks[b].count = blocks[cursor].count;
+    }
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, keys.size(), 256), [&](const auto& r) {
+        for (size_t b = r.begin(); b != r.end(); ++b)
+            if (source[b] == kNew) next_blocks[b].count = size_t(count(keys[b]));
+    });
+    size_t total = 0;
+    for (Block& blk : next_blocks) blk.start = total, total += blk.count;
+    next.resize(total);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, keys.size(), 256), [&](const auto& r) {
+        for (size_t b = r.begin(); b != r.end(); ++b) {
+            const Block& blk = next_blocks[b];
+            if (source[b] == kNew) generate(blk.key, next, blk.start, blk.count);
+            else next.copy(live, blocks[source[b]].start, blk.count, blk.start);
+        }
+    });
+}
+
+void Simulator3::State::emit(const std::vector<uint8_t>& alive, int64_t target, const Box3& view,
+                             Impulses3& out) const {
+    const Particles& P = next;
+    out.x.clear(), out.y.clear(), out.z.clear(), out.weight.clear();
+    const Box3 keep = view.expanded(radius);
+    for (size_t i = 0; i < P.x.size(); ++i) {
+        if (!alive[i]) continue;
+        if (P.x[i] < keep.x0 || P.x[i] > keep.x1 || P.y[i] < keep.y0 || P.y[i] > keep.y1 ||
+            P.z[i] < keep.z0 || P.z[i] > keep.z1)
+            continue;
+        double w = P.amp[i] * sim::envelope_weight(p.envelope, age_s(i, target), p.lifetime_s);
+        if (p.jacobian) w *= std::exp(0.5 * P.lnj[i]);  // s_k = sqrt(J_k)
+        out.x.push_back(P.x[i]);
+        out.y.push_back(P.y[i]);
+        out.z.push_back(P.z[i]);
+        out.weight.push_back(float(w));
+    }
+}
+
+void Simulator3::impulses_at(int64_t frame, const Box3& view, Impulses3& out) {
+    State& S = *m_state;
+    const int64_t target = frame * S.p.substeps;
+    const Box3 region = S.birth_region(view);
+    if (S.flow) S.flow->prepare(region.expanded(S.p.cell_size));
+    // Births up to one lifetime (and a time cell of margin) before the frame may be alive.
+    const double t = double(target) * S.dt;
+    const int64_t ct0 = int64_t(std::floor((t - S.p.lifetime_s) / S.time_cell_s)) - 1;
+    const int64_t ct1 = int64_t(std::floor(t / S.time_cell_s)) + 1;
+    S.gather(cover(region, S.p.cell_size, ct0, ct1), target);
+    const size_t total = S.next.x.size();
+    std::vector<uint8_t> alive(total);
+    for (size_t i = 0; i < total; ++i) {
+        const double a = S.age_s(i, target);
+        alive[i] = a >= 0.0 && a < S.p.lifetime_s;
+    }
+    if (S.flow) S.integrate(S.next, integration_order(S.next, alive, target), target);
+    S.emit(alive, target, view, out);
+    std::swap(S.live, S.next);
+    std::swap(S.blocks, S.next_blocks);
+    S.last_step = target;
+    S.valid = true;
+}
+
+}  // namespace impulse::volume
