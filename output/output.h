@@ -9,3 +9,4 @@
 #include "output/transform.h"  // marble and wood (Lewis 1989 §5.1)
 #include "output/video.h"      // H.264, ProRes, FFV1, VP9
 #include "output/display.h"    // the display mapping as text in a frame's metadata
+#include "output/files.h"      // whole files written atomically
