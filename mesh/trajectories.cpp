@@ -69,9 +69,9 @@ Mesh trajectories(const TrajectoryParams& p) {
         for (int s = 0; s < p.steps; ++s) m.add_face({uint32_t(i * stride + s), uint32_t(i * stride + s + 1)});
     m.colors.resize(m.positions.size());
     const Vec3 first(0.08f, 0.16f, 0.45f), last(0.95f, 0.55f, 0.15f);
-    for (size_t v = 0; v < m.colors.size(); ++v) {
-        const float f = float(v % stride) / float(p.steps);  // how far along its path
-        m.colors[v] = (1 - f) * first + f * last;
+    for (size_t k = 0; k < m.colors.size(); ++k) {
+        const float along = float(k % stride) / float(p.steps);  // how far along its path
+        m.colors[k] = (1 - along) * first + along * last;
     }
     return m;
 }

@@ -5,6 +5,8 @@
 // position only.
 
 #include <catch2/catch.hpp>
+#include <tbb/task_arena.h>
+
 #include <algorithm>
 #include <cmath>
 #include <map>
@@ -81,6 +83,16 @@ TEST_CASE("porous iso-surfaces are watertight and finite when read back", "[mesh
         for (const auto& [edge, uses] : edge_uses(holed)) bad += uses != 2;
         CHECK(bad >= 3);
     }
+}
+
+TEST_CASE("porous meshes and textures are the same on one thread and on all", "[mesh][determinism]") {
+    const mesh::PorousParams p = porous_params();
+    const mesh::Mesh all = mesh::porous_mesh(mesh::porous_field(p), p.iso);
+    mesh::Mesh one;
+    tbb::task_arena(1).execute([&] { one = mesh::porous_mesh(mesh::porous_field(p), p.iso); });
+    CHECK(one.positions == all.positions);
+    CHECK(one.indices == all.indices);
+    CHECK(one.face_sizes == all.face_sizes);
 }
 
 TEST_CASE("porous refuses an iso value outside the field's range", "[mesh][errors]") {
