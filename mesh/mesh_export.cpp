@@ -85,9 +85,7 @@ std::unique_ptr<aiScene> to_scene(const Mesh& mesh, bool ply) {
 
 void write_mesh(const std::string& path, const Mesh& mesh) {
     check_mesh_output(path);
-    std::string e = std::filesystem::path(path).extension().string();
-    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
-    const bool ply = e == ".ply";
+    const bool ply = output::lower_extension(path) == ".ply";
     const std::unique_ptr<aiScene> scene = to_scene(mesh, ply);
     Assimp::Exporter exporter;
     // ASCII PLY: assimp 5.2 cannot read back its own binary PLY with colours (0 vertices);

@@ -22,12 +22,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string lower_extension(const std::string& path) {
-    std::string e = fs::path(path).extension().string();
-    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
-    return e;
-}
-
 /// The first non-finite position of the file's meshes, as assimp read it (before joining).
 void check_finite(const aiScene& scene, const std::string& path) {
     for (unsigned m = 0, base = 0; m < scene.mNumMeshes; base += scene.mMeshes[m]->mNumVertices, ++m) {
@@ -93,7 +87,7 @@ Mesh read_mesh(const std::string& path) {
 }
 
 void check_mesh_output(const std::string& path) {
-    const std::string e = lower_extension(path);
+    const std::string e = output::lower_extension(path);
     if (e != ".obj" && e != ".ply")
         throw ValueError(path + ": expected an output ending in .obj or .ply (the mesh writer's formats)");
     const fs::path dir = fs::path(path).parent_path();

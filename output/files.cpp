@@ -6,6 +6,8 @@
 #include <fcntl.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -41,11 +43,21 @@ std::string write_bytes(const std::string& path, const unsigned char* bytes, siz
 
 }  // namespace
 
+std::string lower_extension(const std::string& path) {
+    std::string e = fs::path(path).extension().string();
+    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
+    return e;
+}
+
 std::string partial_path(const std::string& path) {
     const fs::path p(path);
-    return (p.parent_path() / ("." + p.stem().string() + ".partial-" + std::to_string(::getpid()) +
-                               p.extension().string()))
-        .string();
+    // Appended piece by piece: GCC 12 warns falsely (-Wrestrict) on a chain of string operator+.
+    std::string name = ".";
+    name += p.stem().string();
+    name += ".partial-";
+    name += std::to_string(::getpid());
+    name += p.extension().string();
+    return (p.parent_path() / name).string();
 }
 
 void write_file_atomic(const std::string& path, const void* data, size_t size) {

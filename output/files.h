@@ -9,6 +9,9 @@
 
 namespace impulse::output {
 
+/// The extension of `path` in lower case, with its dot (".png"), or "".
+std::string lower_extension(const std::string& path);
+
 /// Temporary name beside `path` that keeps its extension: DIR/.STEM.partial-PID.EXT.
 std::string partial_path(const std::string& path);
 

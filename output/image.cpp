@@ -25,12 +25,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string lower_extension(const std::string& path) {
-    std::string e = fs::path(path).extension().string();
-    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
-    return e;
-}
-
 /// A library message on one line (libjpeg's and libpng's can span several).
 std::string one_line(std::string text) {
     std::replace(text.begin(), text.end(), '\n', ' ');
