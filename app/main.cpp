@@ -10,6 +10,7 @@
 #include "app/commands.h"
 #include "app/encode.h"
 #include "app/farm.h"
+#include "app/mesh.h"
 #include "app/preview.h"
 #include "app/synth_fbm.h"
 #include "app/synth_gss.h"
@@ -121,6 +122,11 @@ int main(int argc, char** argv) {
     impulse::app::SynthSolidOptions so;
     CLI::App* synth_solid = impulse::app::add_synth_solid(*synth, so);
 
+    impulse::app::MeshOptions mo;
+    CLI::App* mesh = impulse::app::add_mesh(app, mo);
+    impulse::app::MeshOptions to;
+    CLI::App* trajectories = impulse::app::add_trajectories(app, to);
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::RuntimeError& e) {
@@ -143,6 +149,8 @@ int main(int argc, char** argv) {
         if (*synth_fbm) return impulse::app::run_synth_fbm(fo);
         if (*synth_solid) return impulse::app::run_synth_solid(so);
         if (*synth) return 0;  // gss ran in its callback
+        if (*mesh) return impulse::app::run_mesh(*mesh, mo);
+        if (*trajectories) return impulse::app::run_trajectories(to);
     } catch (const impulse::Error& e) {
         std::cerr << "error: " << e.what() << "\n";
         return 1;

@@ -5,7 +5,7 @@
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-set(IMPULSE_LIBRARIES numeric kernels sim synth analysis render output volume scenes app)
+set(IMPULSE_LIBRARIES numeric kernels sim synth analysis render output volume mesh scenes app)
 set(IMPULSE_INSTALL_INCLUDEDIR ${CMAKE_INSTALL_INCLUDEDIR}/impulse)
 
 # In the build tree a library's headers are found from the source root ("scenes/scenes.h");

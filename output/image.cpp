@@ -15,6 +15,7 @@
 #include <sstream>
 #include <system_error>
 
+#include "output/files.h"
 #include "output/image_input.h"
 #include "output/output.h"
 #include "numeric/errors.h"
@@ -23,20 +24,6 @@ namespace impulse::output {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string lower_extension(const std::string& path) {
-    std::string e = fs::path(path).extension().string();
-    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
-    return e;
-}
-
-/// Temporary name beside the target that keeps the extension (OIIO picks the format from it).
-std::string temp_name(const std::string& path) {
-    const fs::path p(path);
-    return (p.parent_path() / ("." + p.stem().string() + ".partial-" + std::to_string(::getpid()) +
-                               p.extension().string()))
-        .string();
-}
 
 /// A library message on one line (libjpeg's and libpng's can span several).
 std::string one_line(std::string text) {
@@ -67,27 +54,6 @@ void check_directory(const std::string& path) {
     std::error_code ec;
     if (!dir.empty() && !fs::is_directory(dir, ec))
         throw IoError(path + ": cannot write: directory " + dir.string() + " does not exist");
-}
-
-/// Writes `bytes` to a new file `path` with every write and the close checked: a full disk or
-/// a file size limit is an error here, never a short file. Returns "" or the system's message.
-std::string write_bytes(const std::string& path, const std::vector<unsigned char>& bytes) {
-    const int fd = ::open(path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
-    if (fd < 0) return std::strerror(errno);
-    size_t done = 0;
-    while (done < bytes.size()) {
-        const ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-        if (n < 0 && errno == EINTR) continue;
-        if (n <= 0) {
-            const int e = n < 0 ? errno : ENOSPC;
-            ::close(fd);
-            return std::strerror(e);
-        }
-        done += size_t(n);
-    }
-    // close reports deferred errors (NFS, quotas).
-    if (::close(fd) != 0) return std::strerror(errno);
-    return "";
 }
 
 /// The sample type asked of OIIO for an extension: float EXR, 16-bit TIFF (and others with
@@ -128,18 +94,7 @@ void write_pixels(const std::string& path, int width, int height, int channels,
     if (!ok || !err.empty() || memory.buffer().empty())
         throw IoError(path + ": cannot encode: " + one_line(err.empty() ? OIIO::geterror() : err));
     // A temporary beside the target, renamed into place: never a half-written frame.
-    const std::string tmp = temp_name(path);
-    if (const std::string e = write_bytes(tmp, memory.buffer()); !e.empty()) {
-        std::error_code ec;
-        fs::remove(tmp, ec);
-        throw IoError(path + ": write failed: " + e);
-    }
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) {
-        fs::remove(tmp, ec);
-        throw IoError(path + ": cannot rename temporary file into place: " + ec.message());
-    }
+    write_file_atomic(path, memory.buffer().data(), memory.buffer().size());
 }
 
 }  // namespace

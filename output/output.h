@@ -8,5 +8,6 @@
 #include "output/shading.h"    // colour ramps, relief, alpha over a sky
 #include "output/transform.h"  // marble and wood (Lewis 1989 §5.1)
 #include "output/video.h"      // H.264, ProRes, FFV1, VP9
-#include "output/display.h"
-#include "output/volume.h"     // EXR stacks and OpenVDB grids    // the display mapping as text in a frame's metadata
+#include "output/display.h"    // the display mapping as text in a frame's metadata
+#include "output/files.h"      // whole files written atomically
+#include "output/volume.h"     // EXR stacks and OpenVDB grids

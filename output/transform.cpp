@@ -75,22 +75,48 @@ double wood_xtab(double s, double a, double inv_peak) {
 
 double wood_profile(double s, double a) { return wood_xtab(s, a, wood_inverse_peak(a)); }
 
+PointTransform::PointTransform(const FieldTransform& t, double r_max)
+    : m_t(t),
+      m_radii(t.type == FieldTransform::Type::Wood && t.growth > 0 ? ring_radii(t, r_max)
+                                                                    : std::vector<double>{}),
+      m_inv_width(1.0 / t.ring_width),
+      m_inv_peak(wood_inverse_peak(t.sharpness)) {}
+
+double PointTransform::marble(double u, double z) const {
+    // Perlin 1985, Lewis 1989 §5.1: the stripes' phase perturbed by the noise.
+    return std::sin(kTwoPi * m_t.frequency * u + m_t.phase + m_t.turbulence * z);
+}
+
+double PointTransform::rings(double r) const {
+    if (m_radii.empty()) return r * m_inv_width;
+    // Ring k = the last boundary <= r; D = k + the fraction of ring k crossed.
+    const size_t k = std::min<size_t>(
+        m_radii.size() - 2, std::upper_bound(m_radii.begin(), m_radii.end(), r) - m_radii.begin() - 1);
+    return static_cast<double>(k) + (r - m_radii[k]) / (m_radii[k + 1] - m_radii[k]);
+}
+
+double PointTransform::wood(double r, double z) const { return wood_shifted(r, m_t.turbulence * z); }
+
+double PointTransform::wood_shifted(double r, double shift) const {
+    // Lewis 1989 §5.1: wood = xtab[r + eta], r through the ring count D(r).
+    const double d = rings(r) + shift;
+    return wood_xtab(d - std::floor(d), m_t.sharpness, m_inv_peak);
+}
+
 void apply_transform(const FieldTransform& t, const View& view, double mean, double sd,
                      Frame& field) {
     if (t.type == FieldTransform::Type::None) return;
     const int w = field.width, h = field.height;
     const double inv_sd = 1.0 / sd;
     if (t.type == FieldTransform::Type::Marble) {
-        // v = sin(2 pi f u + phase + k z): the phase of each row is linear in the column.
+        const PointTransform marble(t, 0.0);
         const double cx = std::cos(t.angle_rad), cy = std::sin(t.angle_rad);
         tbb::parallel_for(0, h, [&](int j) {
             float* row = field.data.data() + size_t(j) * w;
             const double y = view.y0 + (j + 0.5) * view.scale;
             for (int i = 0; i < w; ++i) {
                 const double x = view.x0 + (i + 0.5) * view.scale;
-                const double z = (row[i] - mean) * inv_sd;
-                row[i] = static_cast<float>(
-                    std::sin(kTwoPi * t.frequency * (x * cx + y * cy) + t.phase + t.turbulence * z));
+                row[i] = static_cast<float>(marble.marble(x * cx + y * cy, (row[i] - mean) * inv_sd));
             }
         });
         return;
@@ -99,26 +125,14 @@ void apply_transform(const FieldTransform& t, const View& view, double mean, dou
     const double dx0 = view.x0 - t.center_x, dx1 = view.x0 + w * view.scale - t.center_x;
     const double dy0 = view.y0 - t.center_y, dy1 = view.y0 + h * view.scale - t.center_y;
     const double r_max = std::sqrt(std::max(dx0 * dx0, dx1 * dx1) + std::max(dy0 * dy0, dy1 * dy1));
-    const std::vector<double> radii = t.growth > 0 ? ring_radii(t, r_max) : std::vector<double>{};
-    const double inv_width = 1.0 / t.ring_width;
-    const double inv_peak = wood_inverse_peak(t.sharpness);
+    const PointTransform wood(t, r_max);
     tbb::parallel_for(0, h, [&](int j) {
         float* row = field.data.data() + size_t(j) * w;
         const double y = view.y0 + (j + 0.5) * view.scale - t.center_y;
         for (int i = 0; i < w; ++i) {
             const double x = view.x0 + (i + 0.5) * view.scale - t.center_x;
-            const double r = std::sqrt(x * x + y * y);
-            double rings;
-            if (radii.empty()) {
-                rings = r * inv_width;
-            } else {  // ring k = the last boundary <= r; D = k + the fraction of ring k crossed
-                const size_t k = std::min<size_t>(
-                    radii.size() - 2,
-                    std::upper_bound(radii.begin(), radii.end(), r) - radii.begin() - 1);
-                rings = static_cast<double>(k) + (r - radii[k]) / (radii[k + 1] - radii[k]);
-            }
-            const double d = rings + t.turbulence * (row[i] - mean) * inv_sd;
-            row[i] = static_cast<float>(wood_xtab(d - std::floor(d), t.sharpness, inv_peak));
+            const double shift = t.turbulence * (row[i] - mean) * inv_sd;  // rings
+            row[i] = static_cast<float>(wood.wood_shifted(std::sqrt(x * x + y * y), shift));
         }
     });
 }

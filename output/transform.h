@@ -6,6 +6,7 @@
 // output/output.h.
 
 #include <cstdint>
+#include <vector>
 
 #include "numeric/frame.h"
 
@@ -51,6 +52,34 @@ ValueMapping transform_range(const FieldTransform& transform);
 
 /// xtab(s) of the wood transform for s in [0, 1) (exposed for tests).
 double wood_profile(double s, double sharpness);
+
+/// The transform at one point for callers with their own geometry (solid textures on 3-D meshes,
+/// mesh/solid_texture.h): marble(u, z) = sin(2 pi frequency u + phase + turbulence z) with u the
+/// coordinate along the stripes' direction; wood(r, z) = xtab(frac(D(r) + turbulence z)) with r
+/// the distance from the trunk's axis (the 2-D geometry fields of FieldTransform are unused).
+/// `r_max` bounds the distances wood is asked about (the ring table with growth > 0 reaches it;
+/// farther distances use the last ring's width). apply_transform goes through the same code, so
+/// a pixel and a point with the same (u or r, z) get the same bits. Immutable, thread-safe.
+class PointTransform {
+public:
+    /// Throws ValueError as apply_transform (rings over 1e7 out to r_max).
+    PointTransform(const FieldTransform& transform, double r_max);
+    /// Marble: u along the stripes' direction; wood: r >= 0 from the axis. z in sd.
+    double operator()(double u_or_r, double z) const {
+        return m_t.type == FieldTransform::Type::Marble ? marble(u_or_r, z) : wood(u_or_r, z);
+    }
+    double marble(double u, double z) const;
+    double wood(double r, double z) const;
+    /// xtab(frac(D(r) + shift)), the shift in rings (wood(r, z) = wood_shifted(r, turbulence z)).
+    double wood_shifted(double r, double shift) const;
+    /// D(r): rings crossed from the axis out to r (r / ring_width when growth = 0).
+    double rings(double r) const;
+
+private:
+    FieldTransform m_t;
+    std::vector<double> m_radii;  ///< ring boundaries when growth > 0
+    double m_inv_width = 1.0, m_inv_peak = 1.0;
+};
 
 /// Replaces every pixel's value f of `field` by the transform at the pixel's centre in texture
 /// space under the orthographic `view` (same size as the field), with z = (f - mean) / sd,

@@ -36,6 +36,7 @@ extern "C" {
 #include <libswscale/swscale.h>
 }
 
+#include "output/files.h"
 #include "output/video.h"
 #include "numeric/errors.h"
 
@@ -185,12 +186,6 @@ const CodecSpec& codec_spec(VideoCodec codec) {
         if (spec.codec == codec) return spec;
     }
     throw ValueError("video codec: no encoder for this codec value");
-}
-
-std::string lower_extension(const std::string& path) {
-    std::string ext = fs::path(path).extension().string();
-    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return ext;
 }
 
 const ContainerSpec* find_container(const std::string& path) {

@@ -48,6 +48,80 @@ size_at() {
     echo "${w}x$(( (w * sh / sw + 1) / 2 * 2 ))"
 }
 
+# A mesh made by `impulse mesh ...` as a picture: impulse mesh view, then WebP.
+mesh_picture() {
+    local mesh=$1 name=$2
+    "$impulse" mesh view "$mesh" --pixels "$mesh_px" -o "$tmp/$name.png"
+    cwebp -quiet -q 80 "$tmp/$name.png" -o "$out/gallery/$name.webp"
+}
+
+# The solid-noise applications on meshes (Lewis 1989 §5; docs/mesh.md): the commands, as a
+# user would type them, and what they make.
+mesh_gallery() {
+    local m="$tmp/mesh" f
+    mkdir -p "$m"
+    echo "gallery: meshes"
+    if [ $fast = 1 ]; then mesh_px=64 grid=24 levels=3 frames=3 paths="--particles 10 --steps 40"
+    else mesh_px=400 grid=128 levels=6 frames=24 paths="--particles 120 --steps 500"; fi
+    "$impulse" mesh porous --iso 0.5 --scale 0.3 --size $grid -o "$m/coral.obj"
+    "$impulse" mesh texture "$m/coral.obj" --transform wood -o "$m/coral_wood.ply"
+    mesh_picture "$m/coral_wood.ply" mesh_wood
+    "$impulse" mesh texture "$m/coral.obj" --transform wood --section z=0 --pixels "$mesh_px" -o "$tmp/section.png"
+    cwebp -quiet -q 80 "$tmp/section.png" -o "$out/gallery/mesh_wood_section.webp"
+    "$impulse" mesh sphere --levels $levels -o "$m/sphere.obj"
+    "$impulse" mesh deform "$m/sphere.obj" --amount 0.05 --scale 0.6 --seed 4 -o "$m/pebble.obj"
+    "$impulse" mesh texture "$m/pebble.obj" --transform marble --axis 1,0.4,0.2 -o "$m/pebble_marble.ply"
+    mesh_picture "$m/pebble_marble.ply" mesh_marble
+    "$impulse" mesh porous --iso 0.3 --envelope box --scale 0.15 --size $grid -o "$m/sponge.obj"
+    mesh_picture "$m/sponge.obj" mesh_porous
+    "$impulse" mesh deform "$m/sphere.obj" --amount 0.12 --scale 0.5 --frames $frames -o "$m/blob_####.obj"
+    for f in "$m"/blob_*.obj; do "$impulse" mesh view "$f" --pixels $((mesh_px / 2)) --azimuth 35 -o "${f%.obj}.png"; done
+    img2webp -loop 0 -lossy -q 50 -m 4 -d 67 "$m"/blob_*.png -o "$out/gallery/mesh_deform_loop.webp" >/dev/null 2>&1
+    "$impulse" trajectories $paths -o "$m/paths.ply"
+    mesh_picture "$m/paths.ply" mesh_trajectories
+    cat >> "$page" <<'MD'
+## Meshes: solid noise applications (Lewis 1989 §5)
+
+`docs/mesh.md` explains the commands; `impulse mesh view` made the pictures (an orthographic
+software render). **Solid wood** (§5.1), carved from a block: a porous object coloured at its
+vertices, and the section z = 0 through the same block:
+
+    impulse mesh porous --iso 0.5 --scale 0.3 --size 128 -o coral.obj
+    impulse mesh texture coral.obj --transform wood -o coral_wood.ply
+    impulse mesh texture coral.obj --transform wood --section z=0 -o section.png
+
+![solid wood on a porous object](gallery/mesh_wood.webp) ![the section z = 0](gallery/mesh_wood_section.webp)
+
+**Solid marble** on a sphere slightly deformed (an "individual", §5.3):
+
+    impulse mesh sphere --levels 6 -o sphere.obj
+    impulse mesh deform sphere.obj --amount 0.05 --scale 0.6 --seed 4 -o pebble.obj
+    impulse mesh texture pebble.obj --transform marble --axis 1,0.4,0.2 -o pebble_marble.ply
+
+![solid marble](gallery/mesh_marble.webp)
+
+**Porous object** (§5.2): the iso-surface of noise times a box envelope, meshed by OpenVDB:
+
+    impulse mesh porous --iso 0.3 --envelope box --scale 0.15 --size 128 -o sponge.obj
+
+![a porous box](gallery/mesh_porous.webp)
+
+**Stochastic deformation** (§5.3), animated by moving through 4-D noise (24 OBJ frames):
+
+    impulse mesh deform sphere.obj --amount 0.12 --scale 0.5 --frames 24 -o blob_####.obj
+
+![a deforming sphere](gallery/mesh_deform_loop.webp)
+
+**Trajectories** (Figs. 12-13) of 120 particles forced by vector solid noise, blue at the
+start, orange at the end:
+
+    impulse trajectories --particles 120 --steps 500 -o paths.ply
+
+![trajectories](gallery/mesh_trajectories.webp)
+
+MD
+}
+
 page="$tmp/gallery.md"
 cat > "$page" <<'MD'
 # Gallery
@@ -80,6 +154,7 @@ for name in $("$impulse" scenes | awk '{print $1}'); do
     fi
     printf '\n\n' >> "$page"
 done
+mesh_gallery
 mv "$page" "$out/gallery.md"
 
 total=$(du -cb "$out/gallery.md" "$out"/gallery/*.webp | tail -1 | cut -f1)

@@ -8,7 +8,7 @@ cd "$(dirname "$0")/.."
 packages=(build-essential cmake pkg-config libeigen3-dev libtbb-dev libopenimageio-dev
           libavformat-dev libavcodec-dev libavutil-dev libswscale-dev catch2
           libtomlplusplus-dev libcli11-dev librandom123-dev libfftw3-dev nlohmann-json3-dev parallel
-          openimageio-tools slurm-wlm munge libopenvdb-dev libboost-dev webp
+          openimageio-tools slurm-wlm munge libopenvdb-dev libboost-dev webp libassimp-dev
           # rebuilds of an unchanged tree (a fresh clone, the sanitized build) from the cache
           ccache
           # the Python module (build/python/) and its tests; the preview server and its
