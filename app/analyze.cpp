@@ -160,31 +160,11 @@ Loaded load_input(const AnalyzeOptions& opt) {
 
 
 void write_atomically(const std::string& path, const std::string& text) {
-    const fs::path p(path);
-    const fs::path dir = p.parent_path();
+    const fs::path dir = fs::path(path).parent_path();
     std::error_code ec;
     if (!dir.empty() && !fs::is_directory(dir, ec))
         throw IoError(path + ": cannot write: directory " + dir.string() + " does not exist");
-    const fs::path tmp =
-        dir / ("." + p.filename().string() + ".partial-" + std::to_string(::getpid()));
-    {
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        if (!out) throw IoError(path + ": cannot write " + tmp.string());
-        errno = 0;
-        out << text;
-        out.close();  // close reports what a buffered write deferred
-        if (!out) {
-            const std::string why = errno ? std::strerror(errno) : "unknown error";
-            fs::remove(tmp, ec);
-            throw IoError(path + ": write failed: " + why);
-        }
-    }
-    fs::rename(tmp, p, ec);
-    if (ec) {
-        std::error_code ec2;
-        fs::remove(tmp, ec2);
-        throw IoError(path + ": cannot rename temporary file into place: " + ec.message());
-    }
+    output::write_file_atomic(path, text.data(), text.size());
 }
 
 

@@ -60,6 +60,15 @@ std::string partial_path(const std::string& path) {
     return (p.parent_path() / name).string();
 }
 
+void commit_partial(const std::string& tmp, const std::string& path) {
+    std::error_code ec;
+    fs::rename(tmp, path, ec);
+    if (ec) {
+        fs::remove(tmp, ec);
+        throw IoError(path + ": cannot rename temporary file into place: " + ec.message());
+    }
+}
+
 void write_file_atomic(const std::string& path, const void* data, size_t size) {
     const std::string tmp = partial_path(path);
     if (const std::string e = write_bytes(tmp, static_cast<const unsigned char*>(data), size);
@@ -68,12 +77,7 @@ void write_file_atomic(const std::string& path, const void* data, size_t size) {
         fs::remove(tmp, ec);
         throw IoError(path + ": write failed: " + e);
     }
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) {
-        fs::remove(tmp, ec);
-        throw IoError(path + ": cannot rename temporary file into place: " + ec.message());
-    }
+    commit_partial(tmp, path);
 }
 
 }  // namespace impulse::output

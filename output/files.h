@@ -15,6 +15,10 @@ std::string lower_extension(const std::string& path);
 /// Temporary name beside `path` that keeps its extension: DIR/.STEM.partial-PID.EXT.
 std::string partial_path(const std::string& path);
 
+/// Renames a finished temporary (partial_path(path)) into place; on failure removes it and
+/// throws IoError naming `path`.
+void commit_partial(const std::string& tmp, const std::string& path);
+
 /// Writes `size` bytes to `path` atomically (temporary + rename). Throws IoError naming `path`
 /// with the system's message (a missing directory, a full disk, a file size limit); nothing is
 /// left behind then.

@@ -5,37 +5,18 @@
 
 #include <OpenImageIO/imageio.h>
 #include <openvdb/openvdb.h>
-#include <unistd.h>
 
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
 
 #include "numeric/errors.h"
+#include "output/files.h"
 
 namespace impulse::output {
 namespace {
 
 namespace fs = std::filesystem;
-
-/// A hidden, pid-tagged temporary beside the target (same directory: the rename is atomic) that
-/// keeps the extension (the libraries pick the format from it).
-std::string temp_name(const std::string& path) {
-    const fs::path p(path);
-    return (p.parent_path() / ("." + p.stem().string() + ".partial-" + std::to_string(::getpid()) +
-                               p.extension().string()))
-        .string();
-}
-
-/// Renames the finished temporary into place (nothing half-written under `path`).
-void commit(const std::string& tmp, const std::string& path) {
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) {
-        fs::remove(tmp, ec);
-        throw IoError(path + ": cannot rename temporary file into place: " + ec.message());
-    }
-}
 
 void check_grid(const std::string& path, const VolumeGrid& g) {
     const auto& n = g.size;
@@ -71,7 +52,7 @@ void write_exr_stack(const std::string& path, const VolumeGrid& grid,
     std::vector<float> px(size_t(W) * H * D);
     for (int k = 0; k < D; ++k)
         for (size_t p = 0; p < size_t(W) * H; ++p) px[p * D + k] = grid.values[size_t(k) * W * H + p];
-    const std::string tmp = temp_name(path);
+    const std::string tmp = partial_path(path);
     auto out = OIIO::ImageOutput::create(tmp);
     const bool ok = out && out->open(tmp, spec) && out->write_image(OIIO::TypeDesc::FLOAT, px.data());
     std::string err = out ? out->geterror() : OIIO::geterror();
@@ -81,7 +62,7 @@ void write_exr_stack(const std::string& path, const VolumeGrid& grid,
         fs::remove(tmp, ec);
         throw IoError(path + ": cannot write: " + (err.empty() ? std::string("unknown error") : err));
     }
-    commit(tmp, path);
+    commit_partial(tmp, path);
 }
 
 void write_vdb(const std::string& path, const VolumeGrid& g, const std::string& description,
@@ -102,7 +83,7 @@ void write_vdb(const std::string& path, const VolumeGrid& g, const std::string& 
                 const float v = g.values[(size_t(k) * n[1] + j) * n[0] + i];
                 if (!options.sparse || v != 0.0f) acc.setValue({i, j, k}, v);
             }
-    const std::string tmp = temp_name(path);
+    const std::string tmp = partial_path(path);
     try {
         openvdb::io::File file(tmp);
         file.write({grid});
@@ -112,7 +93,7 @@ void write_vdb(const std::string& path, const VolumeGrid& g, const std::string& 
         fs::remove(tmp, ec);
         throw IoError(path + ": cannot write: " + e.what());
     }
-    commit(tmp, path);
+    commit_partial(tmp, path);
 }
 
 VolumeGrid read_vdb(const std::string& path, const std::string& name) {
