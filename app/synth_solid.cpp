@@ -2,12 +2,11 @@
 #include "app/synth_solid.h"
 
 #include <CLI/CLI.hpp>
-#include <OpenImageIO/imageio.h>
-#include <openvdb/openvdb.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <charconv>
+#include <cstring>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -15,6 +14,7 @@
 #include <sstream>
 
 #include "numeric/errors.h"
+#include "output/io_module.h"
 #include "synth/synth.h"
 
 namespace impulse::app {
@@ -97,62 +97,6 @@ void commit(const std::string& tmp, const std::string& path) {
         fs::remove(tmp, ec);
         throw IoError(path + ": cannot rename temporary file into place: " + ec.message());
     }
-}
-
-void write_exr_stack(const std::string& path, const std::vector<float>& v, const std::array<int, 3>& n,
-                     const std::string& description) {
-    const int W = n[0], H = n[1], D = n[2];
-    OIIO::ImageSpec spec(W, H, D, OIIO::TypeDesc::FLOAT);
-    spec.depth = 1;
-    spec.channelnames.clear();
-    for (int k = 0; k < D; ++k) {
-        char name[32];
-        std::snprintf(name, sizeof name, "z%04d.Y", k);
-        spec.channelnames.push_back(name);
-    }
-    spec.attribute("compression", "zip");
-    spec.attribute("ImageDescription", description);
-    spec.attribute("DateTime", "1970:01:01 00:00:00");  // a pure function of the options
-    // Interleave: pixel (i, j) holds the D layers' values.
-    std::vector<float> px(size_t(W) * H * D);
-    for (int k = 0; k < D; ++k)
-        for (size_t p = 0; p < size_t(W) * H; ++p) px[p * D + k] = v[size_t(k) * W * H + p];
-    const std::string tmp = temp_name(path);
-    auto out = OIIO::ImageOutput::create(tmp);
-    const bool ok = out && out->open(tmp, spec) && out->write_image(OIIO::TypeDesc::FLOAT, px.data());
-    std::string err = out ? out->geterror() : OIIO::geterror();
-    if (out && !out->close() && err.empty()) err = out->geterror();
-    if (!ok || !err.empty()) {
-        std::error_code ec;
-        fs::remove(tmp, ec);
-        throw IoError(path + ": cannot write: " + (err.empty() ? std::string("unknown error") : err));
-    }
-    commit(tmp, path);
-}
-
-void write_vdb(const std::string& path, const std::vector<float>& v, const std::array<int, 3>& n,
-               const std::string& description) {
-    openvdb::initialize();
-    auto grid = openvdb::FloatGrid::create(0.0f);
-    grid->setName("density");
-    grid->setGridClass(openvdb::GRID_FOG_VOLUME);
-    grid->insertMeta("description", openvdb::StringMetadata(description));
-    auto acc = grid->getAccessor();
-    for (int k = 0; k < n[2]; ++k)
-        for (int j = 0; j < n[1]; ++j)
-            for (int i = 0; i < n[0]; ++i)
-                acc.setValue({i, j, k}, v[(size_t(k) * n[1] + j) * n[0] + i]);
-    const std::string tmp = temp_name(path);
-    try {
-        openvdb::io::File file(tmp);
-        file.write({grid});
-        file.close();
-    } catch (const std::exception& e) {
-        std::error_code ec;
-        fs::remove(tmp, ec);
-        throw IoError(path + ": cannot write: " + e.what());
-    }
-    commit(tmp, path);
 }
 
 void write_csv(const std::string& path, const std::vector<synth::SolidPoint>& p, const std::vector<float>& v) {
@@ -269,8 +213,8 @@ int run_synth_solid(const SynthSolidOptions& o) {
         else values = noise.grid(n[0], n[1], n[2], {});
     }
     if (points) write_csv(o.output, pts, values);
-    else if (e == ".exr") write_exr_stack(o.output, values, n, desc.str());
-    else write_vdb(o.output, values, n, desc.str());
+    else if (e == ".exr") output::write_exr_layers(o.output, values, n, desc.str());
+    else output::write_vdb(o.output, values, n, desc.str());
     return 0;
 }
 
