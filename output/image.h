@@ -24,7 +24,7 @@ struct ValueMapping {
 using Metadata = std::vector<std::pair<std::string, std::string>>;
 
 /// EXR compression when none is chosen (output.compression): see kExrCompressions.
-inline constexpr const char* kDefaultExrCompression = "zip";
+inline constexpr const char* kDefaultExrCompression = "none";
 /// The EXR compressions output.compression accepts, as OpenImageIO names OpenEXR's: lossless
 /// none, rle, zips (one scanline a block), zip (16), piz (wavelet); pxr24 (float to 24 bits),
 /// b44, b44a, dwaa, dwab (lossy).
