@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// Image output and input through OpenImageIO; every write goes to a temporary file that is
+// Image output and input through OpenImageIO (part of libimpulse_io.so, output/io_module.h);
 // renamed into place (design.md §4: no half-written frames).
 
 #include <OpenImageIO/filesystem.h>
