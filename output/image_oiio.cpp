@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// Image output and input through OpenImageIO (part of libimpulse_io.so, output/io_module.h);
+// Image output and input through OpenImageIO (part of libimpulse_io.so, output/io_module.h):
+// every write goes to a temporary file that is
 // renamed into place (design.md §4: no half-written frames).
 
 #include <OpenImageIO/filesystem.h>
