@@ -399,7 +399,7 @@ int run_render(const RenderOptions& opt) {
             output::shade(frame, mapping, shading, rgb);
             output::write_rgb_image(target, out.width, out.height, rgb, m, out.bits == 16);
         } else {
-            output::write_image(target, frame, mapping, m, out.bits == 16);
+            output::write_image(target, frame, mapping, m, out.bits == 16, out.compression);
         }
     };
     std::future<void> pending;  // the previous frame's output

@@ -52,7 +52,7 @@ std::string toml_line(const Exposed& e);
 
 /// A JSON string literal of `s`.
 std::string json_quote(const std::string& s);
-/// An 8-bit RGB PNG in memory (OpenImageIO). Throws IoError.
+/// An 8-bit RGB PNG in memory (output::encode_png). Throws IoError.
 std::string encode_png(int width, int height, const std::vector<float>& rgb);
 
 /// One rendered preview frame.

@@ -2,8 +2,6 @@
 // `impulse preview`: the worker that loads the scene, follows its files and renders preview
 // frames into a bounded cache, off the server's threads.
 
-#include <OpenImageIO/filesystem.h>
-#include <OpenImageIO/imageio.h>
 
 #include <chrono>
 #include <cmath>
@@ -11,6 +9,7 @@
 
 #include "app/preview_detail.h"
 #include "numeric/errors.h"
+#include "output/io_module.h"
 
 namespace impulse::app::preview {
 namespace {
@@ -38,15 +37,7 @@ std::pair<double, double> moments(const std::vector<float>& v) {
 }  // namespace
 
 std::string encode_png(int width, int height, const std::vector<float>& rgb) {
-    OIIO::Filesystem::IOVecOutput memory;
-    auto out = OIIO::ImageOutput::create("preview.png", &memory);
-    if (!out) throw IoError("preview: cannot encode PNG: " + OIIO::geterror());
-    OIIO::ImageSpec spec(width, height, 3, OIIO::TypeDesc::UINT8);
-    spec.attribute("png:compressionLevel", 3);  // fast: a preview, not a master
-    const bool ok = out->open("preview.png", spec) &&
-                    out->write_image(OIIO::TypeDesc::FLOAT, rgb.data()) && out->close();
-    if (!ok) throw IoError("preview: cannot encode PNG: " + out->geterror());
-    return std::string(memory.buffer().begin(), memory.buffer().end());
+    return output::encode_png(width, height, rgb);
 }
 
 Previewer::Previewer(PreviewConfig config) : m_config(std::move(config)) {

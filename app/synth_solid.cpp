@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cerrno>
+#include <cstring>
 #include <cmath>
 #include <cstring>
 #include <filesystem>

@@ -29,6 +29,9 @@ list(TRANSFORM IMPULSE_LIBRARIES PREPEND impulse_ OUTPUT_VARIABLE targets)
 install(TARGETS impulse impulse_options ${targets} EXPORT impulseTargets
         RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
         ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
+# The image and video module the tool (and any program using impulse::output's files) loads on
+# first use: lib/impulse/ is where io_loader.cpp looks from bin/ and at the install prefix.
+install(TARGETS impulse_io LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/impulse)
 install(EXPORT impulseTargets NAMESPACE impulse:: DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/impulse)
 file(GLOB scene_files ${PROJECT_SOURCE_DIR}/scenes/*.toml)
 install(FILES ${scene_files} DESTINATION ${CMAKE_INSTALL_DATADIR}/impulse/scenes)

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// Images through OpenImageIO (part of impulse::output): frames written atomically (a
+// Images through OpenImageIO (part of impulse::output; loaded when first used: io_module.h): frames written atomically (a
 // temporary file renamed into place), read as single-channel float, probed from headers.
 
 #include <cstddef>
@@ -23,12 +23,22 @@ struct ValueMapping {
 /// Metadata written into images and videos.
 using Metadata = std::vector<std::pair<std::string, std::string>>;
 
+/// EXR compression when none is chosen (output.compression): see kExrCompressions.
+inline constexpr const char* kDefaultExrCompression = "none";
+/// The EXR compressions output.compression accepts, as OpenImageIO names OpenEXR's: lossless
+/// none, rle, zips (one scanline a block), zip (16), piz (wavelet); pxr24 (float to 24 bits),
+/// b44, b44a, dwaa, dwab (lossy).
+inline constexpr const char* kExrCompressions[] = {"none", "rle",  "zips", "zip",  "piz",
+                                                   "pxr24", "b44", "b44a", "dwaa", "dwab"};
+
 /// Writes a frame with OpenImageIO, format from the extension (.exr float; .png 8-bit, or
 /// 16-bit when `bits16`; .tif/.tiff 16-bit). The file is written to a temporary name in the
-/// same directory and renamed, so a partial file never appears under `path`. Throws IoError
-/// with OIIO's message.
+/// same directory and renamed, so a partial file never appears under `path`. `compression`
+/// is an EXR's (one of kExrCompressions; "" for kDefaultExrCompression), ignored by other
+/// formats. Throws IoError with OIIO's message.
 void write_image(const std::string& path, const Frame& frame, const ValueMapping& mapping,
-                 const Metadata& metadata, bool bits16 = false);
+                 const Metadata& metadata, bool bits16 = false,
+                 const std::string& compression = "");
 /// Same for an RGB float frame (3 floats per pixel, display values in [0, 1] already mapped).
 void write_rgb_image(const std::string& path, int width, int height, const std::vector<float>& rgb,
                      const Metadata& metadata, bool bits16 = false);

@@ -36,6 +36,7 @@ extern "C" {
 #include <libswscale/swscale.h>
 }
 
+#include "output/io_impl.h"
 #include "output/files.h"
 #include "output/video.h"
 #include "numeric/errors.h"
@@ -295,23 +296,9 @@ inline float clamp01(float v) { return v > 0.0f ? (v < 1.0f ? v : 1.0f) : 0.0f; 
 
 }  // namespace
 
-// --- public helpers ----------------------------------------------------------------------------
-
-/// Parse a codec name; exact lower-case names only, so scene files stay greppable.
-VideoCodec video_codec_from_string(const std::string& name) {
-    if (name == "auto") return VideoCodec::Auto;
-    for (const CodecSpec& spec : kCodecs) {
-        if (name == spec.name) return spec.codec;
-    }
-    throw ValueError("codec = \"" + name + "\": expected one of auto, h264, prores, ffv1, vp9");
-}
-
-/// True for .mp4 .mov .mkv .webm in any letter case.
-bool is_video_path(const std::string& path) { return find_container(path) != nullptr; }
-
 // --- VideoWriter -------------------------------------------------------------------------------
 
-struct VideoWriter::Impl {
+struct Encoder {
     std::string path;    ///< final path as given (used in messages)
     fs::path temp_path;  ///< where the muxer writes until close()
     bool temp_created = false;
@@ -398,7 +385,7 @@ struct VideoWriter::Impl {
     void setup(const std::string& final_path, const VideoOptions& o, const CodecSpec& spec);
 };
 
-void VideoWriter::Impl::setup(const std::string& final_path, const VideoOptions& o,
+void Encoder::setup(const std::string& final_path, const VideoOptions& o,
                               const CodecSpec& spec) {
     path = final_path;
     width = o.width;
@@ -519,15 +506,28 @@ void VideoWriter::Impl::setup(const std::string& final_path, const VideoOptions&
     open = true;
 }
 
-VideoWriter::VideoWriter() = default;
+/// The libav encoder behind output::VideoWriter.
+class LibavSink final : public VideoSink {
+public:
+    ~LibavSink() override { abort(); }
+    void open(const std::string& path, const VideoOptions& options) override;
+    void write_frame(const float* rgb) override;
+    void stage_frame(const VideoWriter::RowSource& rows) override;
+    void encode_staged() override;
+    void close() override;
+    void abort() override;
+    int frames_written() const override;
+    bool is_open() const override;
 
-VideoWriter::~VideoWriter() { abort(); }
+private:
+    std::unique_ptr<Encoder> m_impl;
+};
 
 /// Validate, create the temporary file and write the container header.
-void VideoWriter::open(const std::string& path, const VideoOptions& options) {
+void LibavSink::open(const std::string& path, const VideoOptions& options) {
     if (is_open()) throw ValueError(path + ": video writer is already open on " + m_impl->path);
     const CodecSpec& spec = validate(path, options);
-    auto impl = std::make_unique<Impl>();
+    auto impl = std::make_unique<Encoder>();
     try {
         impl->setup(path, options, spec);
     } catch (...) {
@@ -542,7 +542,7 @@ void VideoWriter::open(const std::string& path, const VideoOptions& options) {
 /// quantised in parallel; converted by swscale in order. At most kBandSlots bands are in flight
 /// and they leave the pipeline in order, so band b + kBandSlots reuses the slot of band b only
 /// after band b has been converted.
-void VideoWriter::Impl::stage(const VideoWriter::RowSource& rows) {
+void Encoder::stage(const VideoWriter::RowSource& rows) {
     // The encoder may still hold a reference to the previous frame's buffers: make_writable
     // copies only in that case.
     const int err = av_frame_make_writable(frame.get());
@@ -579,7 +579,7 @@ void VideoWriter::Impl::stage(const VideoWriter::RowSource& rows) {
 }
 
 /// Quantise (clamp, round to nearest), convert with swscale and encode one frame.
-void VideoWriter::write_frame(const float* rgb) {
+void LibavSink::write_frame(const float* rgb) {
     if (!is_open()) throw ValueError("write_frame: video writer is not open");
     const size_t row_values = static_cast<size_t>(m_impl->width) * 3;
     m_impl->stage([&](int y0, int y1, float* band) {
@@ -588,15 +588,15 @@ void VideoWriter::write_frame(const float* rgb) {
     encode_staged();
 }
 
-void VideoWriter::stage_frame(const RowSource& rows) {
+void LibavSink::stage_frame(const VideoWriter::RowSource& rows) {
     if (!is_open()) throw ValueError("stage_frame: video writer is not open");
     m_impl->stage(rows);
 }
 
 /// Encode the staged frame.
-void VideoWriter::encode_staged() {
+void LibavSink::encode_staged() {
     if (!is_open()) throw ValueError("encode_staged: video writer is not open");
-    Impl& m = *m_impl;
+    Encoder& m = *m_impl;
     if (!m.staged) throw ValueError(m.path + ": encode_staged: no frame was staged");
     m.staged = false;
     m.frame->pts = m.frames;
@@ -608,9 +608,9 @@ void VideoWriter::encode_staged() {
 
 /// Flush the encoder, write the trailer and rename; on any failure the temporary file is
 /// removed and the error rethrown.
-void VideoWriter::close() {
+void LibavSink::close() {
     if (!is_open()) return;
-    Impl& m = *m_impl;
+    Encoder& m = *m_impl;
     if (m.frames == 0) {
         // A container with an empty stream does not even probe (mkv/webm: "End of file"), so
         // no file beats a broken one under the final name.
@@ -639,7 +639,7 @@ void VideoWriter::close() {
 }
 
 /// Drop everything written so far; a no-op when not open.
-void VideoWriter::abort() {
+void LibavSink::abort() {
     if (!m_impl) return;
     m_impl->release();
     m_impl->remove_temp();
@@ -647,10 +647,10 @@ void VideoWriter::abort() {
 }
 
 /// Frames encoded since the last open() (still valid after close()).
-int VideoWriter::frames_written() const { return m_impl ? m_impl->frames : 0; }
+int LibavSink::frames_written() const { return m_impl ? m_impl->frames : 0; }
 
 /// True between a successful open() and close()/abort().
-bool VideoWriter::is_open() const { return m_impl && m_impl->open; }
+bool LibavSink::is_open() const { return m_impl && m_impl->open; }
 
 // --- reading -----------------------------------------------------------------------------------
 
@@ -719,6 +719,10 @@ struct Decoder {
 };
 
 }  // namespace
+
+namespace io {
+
+std::unique_ptr<VideoSink> make_video_sink() { return std::make_unique<LibavSink>(); }
 
 /// Decodes the whole file: frame_count is what a player would show, not the header's claim.
 VideoInfo probe_video(const std::string& path) {
@@ -794,4 +798,5 @@ std::vector<std::vector<float>> decode_video_luma(const std::string& path, int& 
 
 void quiet_video_logs() { av_log_set_level(AV_LOG_QUIET); }
 
+}  // namespace io
 }  // namespace impulse::output

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Video output through FFmpeg's libav*: H.264/MP4 (default), ProRes 4444/MOV, FFV1/MKV, VP9/WebM.
-// Part of impulse::output; included by output/output.h.
+// Part of impulse::output; included by output/output.h. The encoder lives in the image and video
+// module, loaded when the first video is opened (io_module.h).
 
 #include <cstdint>
 #include <functional>
@@ -33,6 +34,8 @@ struct VideoOptions {
 VideoCodec video_codec_from_string(const std::string& name);
 /// True when `path` ends in a video container extension (.mp4 .mov .mkv .webm), case-insensitive.
 bool is_video_path(const std::string& path);
+
+class VideoSink;
 
 /// Writes frames of RGB float data (linear [0,1] values, 3 floats per pixel, row-major, top row
 /// first) to a video file. The file is written to a temporary name beside `path` and renamed
@@ -75,8 +78,7 @@ public:
     bool is_open() const;
 
 private:
-    struct Impl;
-    std::unique_ptr<Impl> m_impl;
+    std::unique_ptr<VideoSink> m_sink;  ///< the module's encoder (io_module.h)
 };
 
 /// Silence libav's console logging (x264 and the muxers are chatty at info level, and its own

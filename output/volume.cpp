@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
-// Volumes out: multi-layer EXR stacks (OpenImageIO) and OpenVDB float grids, written atomically.
+// Volumes out: multi-layer EXR stacks (OpenImageIO) and OpenVDB float grids, written atomically
+// (part of libimpulse_io.so, output/io_module.h; volume.h documents the calls).
 
-#include "output/volume.h"
+#include "output/io_impl.h"
 
 #include <OpenImageIO/imageio.h>
 #include <openvdb/openvdb.h>
@@ -13,7 +14,7 @@
 #include "numeric/errors.h"
 #include "output/files.h"
 
-namespace impulse::output {
+namespace impulse::output::io {
 namespace {
 
 namespace fs = std::filesystem;
@@ -123,4 +124,4 @@ VolumeGrid read_vdb(const std::string& path, const std::string& name) {
     return out;
 }
 
-}  // namespace impulse::output
+}  // namespace impulse::output::io

@@ -8,7 +8,7 @@
 #include <set>
 #include <sstream>
 
-#include "output/image_input.h"
+#include "output/io_module.h"
 #include "scenes/camera_detail.h"
 #include "scenes/loader_detail.h"
 #include "numeric/errors.h"
@@ -196,29 +196,20 @@ std::shared_ptr<sim::OrientationField> read_sine_orientation(Reader& f) {
 sim::OrientationGrid read_orientation_pixels(Reader& f, const toml::node* pn,
                                              const fs::path& path) {
     std::string error;
-    auto in = output::open_image_input(path.string(), error);
-    if (!in) f.fail(pn, "path", error);
-    const auto& spec = in->spec();
-    if (const std::string bad =
-            output::image_size_problem(spec.width, spec.height, spec.depth, spec.nchannels);
-        !bad.empty())
-        f.fail(pn, "path", bad);
-    if (spec.nchannels != 1 && spec.nchannels != 2)
-        f.fail(pn, "path",
-               "expected an image with 1 channel (angle in radians) or 2 "
-               "(direction x, y), found " +
-                   std::to_string(spec.nchannels));
+    output::Pixels px;
+    const auto one_or_two = [](int channels) {
+        return channels == 1 || channels == 2 ? std::string()
+                                : "expected an image with 1 channel (angle in radians) or "
+                                  "2 (direction x, y), found " +
+                                      std::to_string(channels);
+    };
+    if (!output::read_pixels(path.string(), px, error, one_or_two)) f.fail(pn, "path", error);
     sim::OrientationGrid g;
-    g.width = spec.width, g.height = spec.height, g.channels = spec.nchannels;
-    g.values.resize(size_t(g.width) * g.height * g.channels);
-    if (!in->read_image(0, 0, 0, g.channels, OIIO::TypeDesc::FLOAT, g.values.data())) {
-        std::string e = in->geterror();
-        std::replace(e.begin(), e.end(), '\n', ' ');
-        f.fail(pn, "path", "cannot read: " + e);
-    }
+    g.width = px.width, g.height = px.height, g.channels = px.channels;
+    g.values = std::move(px.values);
     // Integer images store [0, 1]: an angle channel spans [0, pi] (an orientation), a
     // direction map [-1, 1] (grey is no direction, as for the image flow).
-    if (spec.format != OIIO::TypeDesc::FLOAT && spec.format != OIIO::TypeDesc::HALF)
+    if (!px.is_float)
         for (float& v : g.values) v = g.channels == 1 ? v * 3.14159265f : 2.0f * v - 1.0f;
     return g;
 }

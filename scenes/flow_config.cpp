@@ -9,7 +9,7 @@
 #include <optional>
 #include <sstream>
 
-#include "output/image_input.h"
+#include "output/io_module.h"
 #include "scenes/loader_detail.h"
 #include "numeric/errors.h"
 
@@ -103,27 +103,20 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
                 if (rel.empty()) f.fail(pn, "path", "expected the path of a 2-channel velocity image");
                 const fs::path p = detail::resolve_path(pn, rel, base);
                 std::string error;
-                auto in = output::open_image_input(p.string(), error);
-                if (!in) f.fail(pn, "path", error);
-                const auto& spec = in->spec();
-                if (const std::string bad = output::image_size_problem(
-                        spec.width, spec.height, spec.depth, spec.nchannels);
-                    !bad.empty())
-                    f.fail(pn, "path", bad);
-                if (spec.nchannels < 2)
-                    f.fail(pn, "path", "expected an image with 2 or more channels (vx, vy), found " +
-                                           std::to_string(spec.nchannels));
-                std::vector<float> px(size_t(spec.width) * spec.height * spec.nchannels);
-                if (!in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, px.data()))
-                    f.fail(pn, "path", "cannot read: " + in->geterror());
+                output::Pixels px;
+                const auto need_two = [](int n) {
+                    return n >= 2 ? std::string()
+                                  : "expected an image with 2 or more channels (vx, vy), found " +
+                                        std::to_string(n);
+                };
+                if (!output::read_pixels(p.string(), px, error, need_two)) f.fail(pn, "path", error);
                 sim::VectorGrid g;
-                g.width = spec.width, g.height = spec.height;
+                g.width = px.width, g.height = px.height;
                 // Integer images store [0, 1]: map to [-1, 1] so grey means still.
-                const bool unsigned_data = spec.format != OIIO::TypeDesc::FLOAT &&
-                                           spec.format != OIIO::TypeDesc::HALF;
+                const size_t nc = size_t(px.channels);
                 for (size_t i = 0; i < size_t(g.width) * g.height; ++i) {
-                    float vx = px[i * spec.nchannels], vy = px[i * spec.nchannels + 1];
-                    if (unsigned_data) vx = 2 * vx - 1, vy = 2 * vy - 1;
+                    float vx = px.values[i * nc], vy = px.values[i * nc + 1];
+                    if (!px.is_float) vx = 2 * vx - 1, vy = 2 * vy - 1;
                     g.vx.push_back(vx), g.vy.push_back(vy);
                 }
                 g.spacing = f.number("spacing", 1.0, kPositive, "texture units per image pixel, > 0");

@@ -84,6 +84,17 @@ using detail::read_flows;
 using detail::read_kernel;
 using detail::read_source_layer;
 
+/// output.compression: one of OpenEXR's compressions as OpenImageIO names them.
+std::string exr_compression(detail::Reader& o) {
+    std::array<std::string_view, std::size(output::kExrCompressions)> names;
+    size_t fallback = 0;
+    for (size_t i = 0; i < names.size(); ++i) {
+        names[i] = output::kExrCompressions[i];
+        if (names[i] == output::kDefaultExrCompression) fallback = i;
+    }
+    return std::string(names[o.choice("compression", names, fallback)]);
+}
+
 bool whole_frames(double seconds, double fps) {
     const double f = seconds * fps;
     return std::abs(f - std::round(f)) < 1e-6;
@@ -200,6 +211,7 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base, Out
             o->fail(o->node("range"), "range", "expected low < high");
         s.output.bits = static_cast<int>(o->integer("bits", 8, 8, 16));
         if (s.output.bits != 8 && s.output.bits != 16) o->fail(o->node("bits"), "bits", "expected 8 or 16");
+        s.output.compression = exr_compression(*o);
         o->finish();
     }
     // Defaults that depend on the frame size (centres) come from the scene's own size; --size

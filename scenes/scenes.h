@@ -31,6 +31,7 @@ struct OutputConfig {
     std::string preset = "medium";   ///< x264 preset
     std::optional<std::array<double, 2>> range;  ///< value -> display mapping; default mean +- 3 sd
     int bits = 8;                    ///< 8 or 16 bits per channel for PNG/TIFF
+    std::string compression;         ///< EXR compression, one of output::kExrCompressions
 };
 
 /// [camera]: an orthographic (default) or perspective view of the texture plane, and the

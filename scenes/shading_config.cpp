@@ -7,7 +7,7 @@
 #include <filesystem>
 #include <map>
 
-#include "output/image_input.h"
+#include "output/io_module.h"
 #include "numeric/gaussian.h"
 #include "scenes/reader.h"
 #include "scenes/scenes.h"
@@ -38,18 +38,11 @@ const std::map<std::string, Ramp>& named_ramps() {
 
 /// Reads an image's pixels as floats (all channels); false with a message on failure.
 bool read_rgb_pixels(const std::string& path, std::vector<float>& px, int& channels, std::string& error) {
-    auto in = output::open_image_input(path, error);
-    if (!in) return false;
-    const auto& spec = in->spec();
-    channels = spec.nchannels;
-    error = output::image_size_problem(spec.width, spec.height, spec.depth, channels);
-    if (!error.empty()) return false;
-    px.resize(size_t(spec.width) * spec.height * channels);
-    if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, px.data())) {
-        error = "cannot read: " + in->geterror();
-        return false;
-    }
-    error = output::nonfinite_pixel(px.data(), px.size(), spec.width, channels);
+    output::Pixels image;
+    if (!output::read_pixels(path, image, error)) return false;
+    channels = image.channels;
+    px = std::move(image.values);
+    error = output::nonfinite_pixel(px.data(), px.size(), image.width, channels);
     return error.empty();  // a NaN would break the sort by luminance
 }
 

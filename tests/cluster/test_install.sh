@@ -11,7 +11,7 @@ work=$(mktemp -d "${TMPDIR:-/tmp}/impulse-install-XXXXXX")
 trap 'rm -rf "$work"' EXIT
 prefix="$work/prefix"
 cmake --install "$build" --prefix "$prefix" >"$work/install.log" || { cat "$work/install.log"; exit 1; }
-for f in bin/impulse include/impulse/scenes/scenes.h lib/libimpulse_scenes.a \
+for f in bin/impulse lib/impulse/libimpulse_io.so include/impulse/scenes/scenes.h lib/libimpulse_scenes.a \
          lib/cmake/impulse/impulseConfig.cmake lib/pkgconfig/impulse.pc share/impulse/scenes/still.toml; do
     [ -e "$prefix/$f" ] || { echo "FAILED: $f not installed"; exit 1; }
 done
