@@ -3,21 +3,51 @@
 // exceptions; here they become one line on stderr and a non-zero exit (style.md "Errors").
 
 #include <CLI/CLI.hpp>
+#include <unistd.h>
+
+#include <cerrno>
 #include <csignal>
+#include <cstring>
+#include <filesystem>
 #include <iostream>
+#include <string_view>
 
 #include "app/analyze.h"
 #include "app/commands.h"
 #include "app/encode.h"
 #include "app/farm.h"
-#include "app/mesh.h"
 #include "app/preview.h"
 #include "app/synth_fbm.h"
 #include "app/synth_gss.h"
 #include "app/synth_solid.h"
 #include "numeric/errors.h"
 
+namespace {
+
+/// `impulse mesh ...` and `impulse trajectories ...` run in the companion tool impulse-mesh
+/// installed beside this one (app/mesh_main.cpp): they need assimp and OpenVDB, which would
+/// otherwise load with every command. Returns only when it cannot be started.
+int run_mesh_companion(char** argv) {
+    std::error_code ec;
+    const auto self = std::filesystem::read_symlink("/proc/self/exe", ec);
+    const std::string tool = (self.parent_path() / "impulse-mesh").string();
+    argv[0] = const_cast<char*>(tool.c_str());
+    ::execv(tool.c_str(), argv);
+    std::cerr << "error: impulse " << argv[1] << " runs " << tool << ": " << std::strerror(errno)
+              << " (it is built and installed beside impulse)\n";
+    return 1;
+}
+
+bool is_mesh_command(int argc, char** argv) {
+    if (argc < 2) return false;
+    const std::string_view c = argv[1];
+    return c == "mesh" || c == "trajectories";
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
+    if (is_mesh_command(argc, argv)) return run_mesh_companion(argv);
     CLI::App app{
         "impulse: animated, anti-aliased procedural textures from Lewis's shaped Poisson point\n"
         "process (sparse convolution noise) treated as a particle system."};
@@ -122,10 +152,11 @@ int main(int argc, char** argv) {
     impulse::app::SynthSolidOptions so;
     CLI::App* synth_solid = impulse::app::add_synth_solid(*synth, so);
 
-    impulse::app::MeshOptions mo;
-    CLI::App* mesh = impulse::app::add_mesh(app, mo);
-    impulse::app::MeshOptions to;
-    CLI::App* trajectories = impulse::app::add_trajectories(app, to);
+    // Listed here for --help; run by the companion tool (run_mesh_companion).
+    app.add_subcommand("mesh", "Solid noise on meshes: texture, porous, deform, sphere, view "
+                               "(impulse mesh --help; docs/mesh.md)");
+    app.add_subcommand("trajectories", "Paths of particles forced by vector solid noise, as "
+                                       "polylines (impulse trajectories --help)");
 
     try {
         app.parse(argc, argv);
@@ -149,8 +180,6 @@ int main(int argc, char** argv) {
         if (*synth_fbm) return impulse::app::run_synth_fbm(fo);
         if (*synth_solid) return impulse::app::run_synth_solid(so);
         if (*synth) return 0;  // gss ran in its callback
-        if (*mesh) return impulse::app::run_mesh(*mesh, mo);
-        if (*trajectories) return impulse::app::run_trajectories(to);
     } catch (const impulse::Error& e) {
         std::cerr << "error: " << e.what() << "\n";
         return 1;

@@ -32,6 +32,8 @@ install(TARGETS impulse impulse_options ${targets} EXPORT impulseTargets
 # The image and video module the tool (and any program using impulse::output's files) loads on
 # first use: lib/impulse/ is where io_loader.cpp looks from bin/ and at the install prefix.
 install(TARGETS impulse_io LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}/impulse)
+# `impulse mesh` and `impulse trajectories` run this companion beside the tool (app/mesh_main.cpp).
+install(TARGETS impulse-mesh RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
 install(EXPORT impulseTargets NAMESPACE impulse:: DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/impulse)
 file(GLOB scene_files ${PROJECT_SOURCE_DIR}/scenes/*.toml)
 install(FILES ${scene_files} DESTINATION ${CMAKE_INSTALL_DATADIR}/impulse/scenes)
