@@ -81,6 +81,23 @@ double window_weight(DesignWindow w, double r, double R, double a) {
 
 double sinc(double x) { return x == 0.0 ? 1.0 : std::sin(kPi * x) / (kPi * x); }
 
+/// The radial transform of an isotropic function in the plane or in space (both directions,
+/// with H(k) = int h e^{-2 pi i k.x}): G(k) = int g(r) basis(2 pi k r) shell(r) dr, the shell
+/// 2 pi r and basis J0 in 2-D (Hankel), the shell 4 pi r^2 and basis sin x / x in 3-D (the
+/// Hankel transform of order 1/2: G(k) = (2 / k) int g(r) sin(2 pi k r) r dr).
+struct Radial {
+    int dims = 2;
+    /// Quadrature weight w times the shell measure at x (2-D: the expression order of the
+    /// original 2-D code, so 2-D designs keep their bits).
+    double shell(double w, double x) const {
+        return dims == 2 ? 2 * kPi * w * x : 4 * kPi * w * x * x;
+    }
+    double basis(double x) const {
+        if (dims == 2) return detail::bessel_j0(x);
+        return x == 0.0 ? 1.0 : std::sin(x) / x;
+    }
+};
+
 /// A sample of a spectrum, for the negativity report.
 struct SpectrumSample {
     double k, theta, s;
@@ -209,6 +226,7 @@ bool parse_number(std::string_view field, double& out) {
 
 DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
     const double K = o.nyquist, kp = (1.0 - o.rolloff) * K;
+    const Radial rad{o.dims};
     auto S = [&](double k) { return sp.density(k, 0.0); };
 
     // Check S on a fine grid: finite, not negative beyond noise, not all zero.
@@ -244,15 +262,15 @@ DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
         for (size_t j = 0; j < a.n.x.size(); ++j) {
             const double k = a.n.x[j];
             const double amp = std::sqrt(std::max(S(k), 0.0)) * rolloff(k, K, kp);
-            a.wa.push_back(2 * kPi * a.n.w[j] * k * amp);
-            a.energy += 2 * kPi * a.n.w[j] * k * amp * amp;
+            a.wa.push_back(rad.shell(a.n.w[j], k) * amp);
+            a.energy += rad.shell(a.n.w[j], k) * amp * amp;
         }
         return a;
     };
-    auto h_at = [](const Amplitude& a, double r) {
+    auto h_at = [&rad](const Amplitude& a, double r) {
         double s = 0.0;
         for (size_t j = 0; j < a.wa.size(); ++j)
-            s += a.wa[j] * detail::bessel_j0(2 * kPi * a.n.x[j] * r);
+            s += a.wa[j] * rad.basis(2 * kPi * a.n.x[j] * r);
         return s;
     };
     const double total = amplitude(0.0).energy;
@@ -277,7 +295,7 @@ DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
                 double add = 0.0;
                 for (size_t j = 0; j < pn.x.size(); ++j) {
                     const double h = h_at(a, pn.x[j]);
-                    add += pn.w[j] * 2 * kPi * pn.x[j] * h * h;
+                    add += rad.shell(pn.w[j], pn.x[j]) * h * h;
                 }
                 if (cum + add >= target) {
                     rf = r + pw * (target - cum) / add;
@@ -323,13 +341,22 @@ DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
     rep.radius = R;
     rep.samples = n;
     rep.passband = kp;
-    rep.energy_fraction = kern.integral_sq() / a.energy;
-    rep.effective_area = kern.integral_sq() * kern.integral_sq() / kern.integral_4();
     Nodes rn;
     rn.add(0.0, R, std::max({64, (n - 1) / 2, 32 + static_cast<int>(std::ceil(2.0 * K * R))}));
     std::vector<double> hr(rn.x.size());
-    for (size_t j = 0; j < rn.x.size(); ++j)
-        hr[j] = 2 * kPi * rn.w[j] * rn.x[j] * kern.envelope(rn.x[j] * rn.x[j] / (R * R));
+    double i2 = 0.0, i4 = 0.0;  // int h^2, int h^4 over space (3-D)
+    for (size_t j = 0; j < rn.x.size(); ++j) {
+        const double e = kern.envelope(rn.x[j] * rn.x[j] / (R * R));
+        hr[j] = rad.shell(rn.w[j], rn.x[j]) * e;
+        i2 += hr[j] * e;
+        i4 += hr[j] * e * e * e;
+    }
+    if (o.dims == 2) {  // the kernel's own integrals, as before 3-D designs existed
+        i2 = kern.integral_sq();
+        i4 = kern.integral_4();
+    }
+    rep.energy_fraction = i2 / a.energy;
+    rep.effective_area = i2 * i2 / i4;
     const int M = 256;
     double num2 = 0.0, den2 = 0.0, pmax = 0.0;
     std::vector<double> hk2(M + 1), sm(M + 1);
@@ -337,11 +364,11 @@ DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
         const double k = K * m / M;
         double H = 0.0;
         for (size_t j = 0; j < rn.x.size(); ++j)
-            H += hr[j] * detail::bessel_j0(2 * kPi * k * rn.x[j]);
+            H += hr[j] * rad.basis(2 * kPi * k * rn.x[j]);
         hk2[m] = H * H;
         sm[m] = std::max(S(k), 0.0);
         pmax = std::max(pmax, sm[m]);
-        const double wt = (m == 0 || m == M ? 0.5 : 1.0) * k;
+        const double wt = (m == 0 || m == M ? 0.5 : 1.0) * (o.dims == 2 ? k : k * k);
         num2 += wt * (hk2[m] - sm[m]) * (hk2[m] - sm[m]);
         den2 += wt * sm[m] * sm[m];
     }
@@ -600,8 +627,57 @@ void validate(const ModelParams& p) {
     }
 }
 
-Spectrum model_spectrum(const ModelParams& params, double k_max) {
+namespace {
+
+/// The 3-D spectra of the models defined by an autocorrelation (int S d^3k = R(0)).
+Spectrum model_spectrum_3d(const ModelParams& p, double k_max) {
+    const double v = p.variance, l = p.length;
+    Spectrum s;
+    s.name = std::string(kSpectralModelNames[static_cast<int>(p.model)]);
+    switch (p.model) {
+        case SpectralModel::Markov:  // the 3-D transform of e^{-r/l}
+            s.density = [v, l](double k, double) {
+                const double u = 1 + std::pow(2 * kPi * l * k, 2);
+                return v * 8 * kPi * l * l * l / (u * u);
+            };
+            break;
+        case SpectralModel::Gaussian:  // of e^{-r^2/l^2}
+            s.density = [v, l](double k, double) {
+                return v * std::pow(kPi, 1.5) * l * l * l * std::exp(-std::pow(kPi * l * k, 2));
+            };
+            break;
+        case SpectralModel::Matern: {
+            // Rasmussen & Williams 2006 eq. 4.15 in D dimensions: (4 pi / a)^(D/2)
+            // Gamma(nu + D/2) / Gamma(nu) (1 + 4 pi^2 k^2 / a)^-(nu + D/2), a = 2 nu / l^2.
+            const double a = 2 * p.nu / (l * l), nu = p.nu;
+            const double c = v * std::pow(4 * kPi / a, 1.5) * std::tgamma(nu + 1.5) / std::tgamma(nu);
+            s.density = [a, c, nu](double k, double) {
+                return c * std::pow(1 + 4 * kPi * kPi * k * k / a, -(nu + 1.5));
+            };
+            break;
+        }
+        case SpectralModel::Markaussian:
+        case SpectralModel::OscillatoryMarkov:
+        case SpectralModel::OscillatoryGaussian:
+            s.density = spectrum_of_autocorrelation(model_autocorrelation(p), k_max, 3).density;
+            break;
+        default:
+            throw ValueError("model = \"" + s.name +
+                             "\": its spectrum is defined in 2-D; for a 3-D kernel give an "
+                             "expression or a table of the 3-D spectrum S(k), or a model defined by "
+                             "its autocorrelation (markov, gaussian, markaussian, matern, "
+                             "oscillatory_markov, oscillatory_gaussian)");
+    }
+    return s;
+}
+
+}  // namespace
+
+Spectrum model_spectrum(const ModelParams& params, double k_max, int dims) {
     validate(params);
+    if (dims != 2 && dims != 3)
+        throw ValueError("dims = " + std::to_string(dims) + ": expected 2 or 3");
+    if (dims == 3) return model_spectrum_3d(params, k_max);
     const ModelParams p = params;
     const double v = p.variance;
     Spectrum s;
@@ -819,14 +895,17 @@ Spectrum table_spectrum(const std::string& path) {
     return table_spectrum_text(read_text_file(path, "spectrum table"), path);
 }
 
-Spectrum spectrum_of_autocorrelation(const Autocorrelation& acf, double k_max) {
+Spectrum spectrum_of_autocorrelation(const Autocorrelation& acf, double k_max, int dims) {
     require(k_max > 0, "nyquist", k_max, "a frequency > 0 (cycles per unit)");
+    if (dims != 2 && dims != 3)
+        throw ValueError("dims = " + std::to_string(dims) + ": expected 2 or 3");
+    const Radial rad{dims};
     const double r0 = acf.function(0.0);
     if (!(r0 > 0) || !std::isfinite(r0))
         throw ValueError(acf.name + ": R(0) = " + num(r0) + ": expected a finite variance > 0");
     // Support: scan at 1/(16 k_max) for the last r with |R| >= kAcfTail R(0).
     const double dr = 1.0 / (16.0 * k_max);
-    double last = 0.0;
+    double last = 0.0, lowest = r0, lowest_r = 0.0;
     for (double r = dr; r <= kAcfMaxRadius; r += dr) {
         const double v = acf.function(r);
         if (!std::isfinite(v))
@@ -836,6 +915,7 @@ Spectrum spectrum_of_autocorrelation(const Autocorrelation& acf, double k_max) {
             throw ValueError("autocorrelation " + acf.name + " is not non-negative definite: |R(" +
                              num(r) + ")| = " + num(std::abs(v)) + " > R(0) = " + num(r0));
         if (std::abs(v) >= kAcfTail * r0) last = r;
+        if (v < lowest) lowest = v, lowest_r = r;
     }
     if (last > kAcfMaxRadius - 1.0)
         throw ValueError(acf.name + ": R(" + num(kAcfMaxRadius) +
@@ -850,7 +930,7 @@ Spectrum spectrum_of_autocorrelation(const Autocorrelation& acf, double k_max) {
     rn.add(0.0, rs, std::max(64, 32 + static_cast<int>(std::ceil(2.0 * k_max * rs))));
     std::vector<double> wr(rn.x.size());
     for (size_t j = 0; j < rn.x.size(); ++j)
-        wr[j] = 2 * kPi * rn.w[j] * rn.x[j] * acf.function(rn.x[j]);
+        wr[j] = rad.shell(rn.w[j], rn.x[j]) * acf.function(rn.x[j]);
     const int nk = std::max(4096, static_cast<int>(std::ceil(8.0 * rs * k_max)));
     auto table = std::make_shared<std::vector<double>>(nk + 1);
     std::vector<SpectrumSample> samples(nk + 1);
@@ -859,13 +939,17 @@ Spectrum spectrum_of_autocorrelation(const Autocorrelation& acf, double k_max) {
         const double k = k_max * i / nk;
         double s = 0.0;
         for (size_t j = 0; j < wr.size(); ++j)
-            s += wr[j] * detail::bessel_j0(2 * kPi * k * rn.x[j]);
+            s += wr[j] * rad.basis(2 * kPi * k * rn.x[j]);
         (*table)[i] = s;
         samples[i] = {k, 0.0, s};
         smax = std::max(smax, s);
     }
-    refuse_negative(samples, smax, true, 0.0,
-                    "autocorrelation " + acf.name + " is not non-negative definite", false);
+    std::string what = "autocorrelation " + acf.name + " is not non-negative definite";
+    if (dims == 3)  // the minimum of sin x / x: Yaglom 1987, the 3-D isotropic bound
+        what += " in 3-D (an isotropic 3-D correlation may dip to about -0.218 R(0), the "
+                "minimum of sin x / x, not below; this one reaches " + num(lowest / r0) +
+                " R(0) at r = " + num(lowest_r) + ")";
+    refuse_negative(samples, smax, true, 0.0, what, false);
     for (double& s : *table) s = std::max(s, 0.0);
     Spectrum out;
     out.name = "spectrum of autocorrelation " + acf.name;
@@ -938,6 +1022,8 @@ void validate(const DesignOptions& o) {
     require(o.energy > 0 && o.energy < 1, "energy", o.energy, "a fraction in (0, 1), e.g. 0.99");
     require(o.radius >= 0, "radius", o.radius, "a radius > 0 (texture units)");
     require(o.max_radius > 0, "max_radius", o.max_radius, "a radius > 0");
+    if (o.dims != 2 && o.dims != 3)
+        throw ValueError("dims = " + std::to_string(o.dims) + ": expected 2 or 3");
     if (o.radius > o.max_radius)
         throw ValueError("radius = " + num(o.radius) +
                          ": expected <= max_radius = " + num(o.max_radius));
@@ -946,13 +1032,17 @@ void validate(const DesignOptions& o) {
 DesignedKernel kernel_from_spectrum(const Spectrum& spectrum, const DesignOptions& options) {
     validate(options);
     if (!spectrum.density) throw ValueError("spectrum " + spectrum.name + ": no density function");
+    if (options.dims == 3 && !spectrum.isotropic)
+        throw ValueError(spectrum.name + ": a 3-D kernel is designed from an isotropic spectrum "
+                                         "S(k) only (no theta; solid noise takes anisotropy as a metric)");
     return spectrum.isotropic ? design_radial(spectrum, options) : design_grid(spectrum, options);
 }
 
 DesignedKernel kernel_from_autocorrelation(const Autocorrelation& acf,
                                            const DesignOptions& options) {
     validate(options);
-    return kernel_from_spectrum(spectrum_of_autocorrelation(acf, options.nyquist), options);
+    return kernel_from_spectrum(spectrum_of_autocorrelation(acf, options.nyquist, options.dims),
+                                options);
 }
 
 }  // namespace impulse::kernels

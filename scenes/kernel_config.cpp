@@ -25,12 +25,15 @@ namespace {
 const std::array<std::string_view, 6> kSceneKernelTypes = {
     "cosine", "gaussian", "gabor", "spectrum", "autocorrelation", "exemplar"};
 
-/// A designed kernel: `spectrum`, `autocorrelation` or `exemplar` (kernels/spectral.h). Library
-/// errors (ValueError, IoError) are reported at the key whose value caused them.
-kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Reader& layer,
-                                           const fs::path& base, std::vector<KernelKey>& keys) {
+}  // namespace
+
+/// The design keys of a `spectrum` or `autocorrelation` kernel in table `r` (energy, nyquist,
+/// rolloff, max_radius; one of model, expression, table and the model's parameters) and the
+/// design in o.dims dimensions; o.radius and o.window are the caller's (radius read from `r`).
+/// Library errors are reported at the key whose value caused them.
+kernels::DesignedKernel read_design(Reader& r, bool acf, const fs::path& base,
+                                    kernels::DesignOptions o) {
     namespace K = kernels;
-    const std::string tname(type);
     auto detail_of = [](const std::exception& e, const std::string& quoted) {
         // Drop a repeated 'expression "...": ' or 'expression "..." ' (the key shows the value).
         const std::string m = e.what();
@@ -42,6 +45,182 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
             i += 1;
         return m.substr(i);
     };
+    auto path_of = [&](const toml::node* n, const std::string& rel) {
+        return detail::resolve_path(n, rel, base);
+    };
+    const toml::node* radius_node = r.node("radius");
+    const double radius = o.radius;
+    const toml::node* energy_node = r.node("energy");
+    o.energy = r.number(
+        "energy", o.energy, [](double v) { return v > 0 && v < 1; },
+        "a fraction in (0, 1) of the kernel energy to keep, e.g. 0.99");
+    if (energy_node && radius_node)
+        r.fail(energy_node, "energy",
+               "give energy or radius, not both (radius fixes the size)");
+    o.nyquist = r.number("nyquist", o.nyquist, kPositive,
+                         "a frequency > 0 (cycles per unit; 0.5 = pixel Nyquist at zoom 1)");
+    o.rolloff = r.number(
+        "rolloff", o.rolloff, [](double v) { return v >= 0 && v <= 0.9; },
+        "a fraction in [0, 0.9] of nyquist");
+    o.max_radius =
+        r.number("max_radius", o.max_radius, kPositive, "a radius > 0 (texture units)");
+    if (radius > o.max_radius)
+        r.fail(radius_node, "radius",
+               "expected <= max_radius = " + std::to_string(o.max_radius));
+
+    // Exactly one source.
+    std::vector<std::string> given;
+    for (const char* g : {"model", "expression", "table"})
+        if (r.has(g)) given.push_back(g);
+    if (given.size() > 1)
+        r.fail(r.node(given[1]), given[1],
+               "give one of model, expression" + std::string(acf ? "" : ", table") +
+                   ", not both " + given[0] + " and " + given[1]);
+    if (given.empty())
+        r.fail(nullptr, "model",
+               acf ? "missing: a kernel of type autocorrelation needs model = "
+                     "\"markov\" (or ...) or expression = \"...\" of r"
+                   : "missing: a kernel of type spectrum needs model = \"markov\" "
+                     "(or ...), expression = \"...\" of k and theta, or table = "
+                     "\"path.csv\"");
+    const std::string source = given[0];
+    const toml::node* sn = r.node(source);
+
+    // Model parameters: read the ones the model uses, warn about the others.
+    const std::array<const char*, 11> model_keys = {"variance", "length", "exponent", "nu",
+                                                    "k0",       "f0",     "width",    "slope",
+                                                    "k_low",    "k_high", "omega"};
+    K::ModelParams mp;
+    std::vector<const char*> used;
+    if (source == "model") {
+        const std::string name = r.string("model", "");
+        const auto m = K::spectral_model_from_string(name);
+        if (!m) {
+            std::string list;
+            for (auto n : K::kSpectralModelNames)
+                list += (list.empty() ? "" : ", ") + std::string(n);
+            r.fail(sn, "model", "expected one of " + list + " (exponential = markov)");
+        }
+        if (acf && !K::defined_by_autocorrelation(*m))
+            r.fail(sn, "model",
+                   "defined by its spectrum: expected one of markov, gaussian, markaussian, "
+                   "matern, oscillatory_markov, oscillatory_gaussian for an autocorrelation "
+                   "kernel (or use type = \"spectrum\")");
+        mp.model = *m;
+        used.push_back("variance");
+        switch (mp.model) {
+            case K::SpectralModel::Markov:
+            case K::SpectralModel::Gaussian:
+                used.push_back("length");
+                break;
+            case K::SpectralModel::Markaussian:
+                used.insert(used.end(), {"length", "exponent"});
+                break;
+            case K::SpectralModel::Matern:
+                used.insert(used.end(), {"length", "nu"});
+                break;
+            case K::SpectralModel::OscillatoryMarkov:
+            case K::SpectralModel::OscillatoryGaussian:
+                used.insert(used.end(), {"length", "omega"});
+                break;
+            case K::SpectralModel::Lorentzian:
+                used.push_back("k0");
+                break;
+            case K::SpectralModel::Bandpass:
+                used.insert(used.end(), {"f0", "width"});
+                break;
+            case K::SpectralModel::Power:
+                used.insert(used.end(), {"slope", "k_low", "k_high"});
+                break;
+        }
+        auto uses = [&](std::string_view key) {
+            return std::find(used.begin(), used.end(), key) != used.end();
+        };
+        if (uses("variance"))
+            mp.variance = r.number("variance", mp.variance, kPositive, "a variance > 0 (R(0))");
+        if (uses("length"))
+            mp.length = r.number("length", mp.length, kPositive,
+                                 "a correlation length > 0 (texture units)");
+        if (uses("exponent"))
+            mp.exponent = r.number(
+                "exponent", mp.exponent, [](double v) { return v > 0 && v <= 2; },
+                "an exponent in (0, 2] (exp(-(r/l)^a) is an autocorrelation only there)");
+        if (uses("nu"))
+            mp.nu = r.number(
+                "nu", mp.nu, [](double v) { return v > 0 && v <= 50; },
+                "a smoothness in (0, 50]");
+        if (uses("omega"))
+            mp.omega = r.number("omega", mp.omega, kNonNegative,
+                                "an angular frequency >= 0 (radians per unit)");
+        if (uses("k0"))
+            mp.k0 =
+                r.number("k0", mp.k0, kPositive, "a corner frequency > 0 (cycles per unit)");
+        if (uses("f0"))
+            mp.f0 = r.number("f0", mp.f0, kNonNegative,
+                             "a centre frequency >= 0 (cycles per unit)");
+        if (uses("width"))
+            mp.width =
+                r.number("width", mp.width, kPositive, "a ring width > 0 (cycles per unit)");
+        if (uses("slope"))
+            mp.slope = r.number("slope", mp.slope, kPositive, "a slope > 0 (S ~ k^-slope)");
+        if (uses("k_low"))
+            mp.k_low =
+                r.number("k_low", mp.k_low, kPositive, "a low cut-off > 0 (cycles per unit)");
+        if (uses("k_high"))
+            mp.k_high =
+                r.number("k_high", mp.k_high, kNonNegative, "a high cut-off >= 0 (0: none)");
+        try {
+            K::validate(mp);
+        } catch (const ValueError& e) {  // a combination (power: slope <= 2 without k_high)
+            r.fail(r.node("slope"), "slope", e.what());
+        }
+    }
+    for (const char* g : model_keys)
+        if (std::find(used.begin(), used.end(), std::string_view(g)) == used.end() && r.has(g))
+            r.warn(g, source == "model" ? "ignored for model " + r.string("model", "")
+                                        : std::string("ignored without a model"));
+    if (acf && source == "table")
+        r.fail(sn, "table",
+               "a table gives a spectrum: use type = \"spectrum\" (or an expression of r)");
+
+    K::DesignedKernel d;
+    try {
+        if (acf) {
+            const K::Autocorrelation a =
+                source == "model" ? K::model_autocorrelation(mp)
+                                  : K::expression_autocorrelation(r.string("expression", ""));
+            d = K::kernel_from_autocorrelation(a, o);
+        } else {
+            K::Spectrum sp;
+            if (source == "model")
+                sp = K::model_spectrum(mp, o.nyquist, o.dims);
+            else if (source == "expression")
+                sp = K::expression_spectrum(r.string("expression", ""));
+            else
+                sp = K::table_spectrum(path_of(sn, r.string("table", "")).string());
+            d = K::kernel_from_spectrum(sp, o);
+        }
+    } catch (const Error& e) {
+        const std::string prefix =
+            source == "expression" ? "expression \"" + r.string("expression", "") + "\"" : "";
+        // Radius problems belong to the radius or energy key when one was given.
+        const std::string what = e.what();
+        if (what.find("radius") != std::string::npos && (radius_node || energy_node))
+            r.fail(radius_node ? radius_node : energy_node, radius_node ? "radius" : "energy",
+                   detail_of(e, prefix));
+        r.fail(sn, source, detail_of(e, prefix));
+    }
+    return d;
+}
+
+namespace {
+
+/// A designed kernel: `spectrum`, `autocorrelation` or `exemplar` (kernels/spectral.h). Library
+/// errors (ValueError, IoError) are reported at the key whose value caused them.
+kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Reader& layer,
+                                           const fs::path& base, std::vector<KernelKey>& keys) {
+    namespace K = kernels;
+    const std::string tname(type);
     auto path_of = [&](const toml::node* n, const std::string& rel) {
         return detail::resolve_path(n, rel, base);
     };
@@ -94,170 +273,10 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
             r.fail(pn, "path", e.what());
         }
     } else {
-        const bool acf = type == "autocorrelation";
         K::DesignOptions o;
         o.window = window;
         o.radius = radius;
-        const toml::node* energy_node = r.node("energy");
-        o.energy = r.number(
-            "energy", o.energy, [](double v) { return v > 0 && v < 1; },
-            "a fraction in (0, 1) of the kernel energy to keep, e.g. 0.99");
-        if (energy_node && radius_node)
-            r.fail(energy_node, "energy",
-                   "give energy or radius, not both (radius fixes the size)");
-        o.nyquist = r.number("nyquist", o.nyquist, kPositive,
-                             "a frequency > 0 (cycles per unit; 0.5 = pixel Nyquist at zoom 1)");
-        o.rolloff = r.number(
-            "rolloff", o.rolloff, [](double v) { return v >= 0 && v <= 0.9; },
-            "a fraction in [0, 0.9] of nyquist");
-        o.max_radius =
-            r.number("max_radius", o.max_radius, kPositive, "a radius > 0 (texture units)");
-        if (radius > o.max_radius)
-            r.fail(radius_node, "radius",
-                   "expected <= max_radius = " + std::to_string(o.max_radius));
-
-        // Exactly one source.
-        std::vector<std::string> given;
-        for (const char* g : {"model", "expression", "table"})
-            if (r.has(g)) given.push_back(g);
-        if (given.size() > 1)
-            r.fail(r.node(given[1]), given[1],
-                   "give one of model, expression" + std::string(acf ? "" : ", table") +
-                       ", not both " + given[0] + " and " + given[1]);
-        if (given.empty())
-            r.fail(nullptr, "model",
-                   acf ? "missing: a kernel of type autocorrelation needs model = "
-                         "\"markov\" (or ...) or expression = \"...\" of r"
-                       : "missing: a kernel of type spectrum needs model = \"markov\" "
-                         "(or ...), expression = \"...\" of k and theta, or table = "
-                         "\"path.csv\"");
-        const std::string source = given[0];
-        const toml::node* sn = r.node(source);
-
-        // Model parameters: read the ones the model uses, warn about the others.
-        const std::array<const char*, 11> model_keys = {"variance", "length", "exponent", "nu",
-                                                        "k0",       "f0",     "width",    "slope",
-                                                        "k_low",    "k_high", "omega"};
-        K::ModelParams mp;
-        std::vector<const char*> used;
-        if (source == "model") {
-            const std::string name = r.string("model", "");
-            const auto m = K::spectral_model_from_string(name);
-            if (!m) {
-                std::string list;
-                for (auto n : K::kSpectralModelNames)
-                    list += (list.empty() ? "" : ", ") + std::string(n);
-                r.fail(sn, "model", "expected one of " + list + " (exponential = markov)");
-            }
-            if (acf && !K::defined_by_autocorrelation(*m))
-                r.fail(sn, "model",
-                       "defined by its spectrum: expected one of markov, gaussian, markaussian, "
-                       "matern, oscillatory_markov, oscillatory_gaussian for an autocorrelation "
-                       "kernel (or use type = \"spectrum\")");
-            mp.model = *m;
-            used.push_back("variance");
-            switch (mp.model) {
-                case K::SpectralModel::Markov:
-                case K::SpectralModel::Gaussian:
-                    used.push_back("length");
-                    break;
-                case K::SpectralModel::Markaussian:
-                    used.insert(used.end(), {"length", "exponent"});
-                    break;
-                case K::SpectralModel::Matern:
-                    used.insert(used.end(), {"length", "nu"});
-                    break;
-                case K::SpectralModel::OscillatoryMarkov:
-                case K::SpectralModel::OscillatoryGaussian:
-                    used.insert(used.end(), {"length", "omega"});
-                    break;
-                case K::SpectralModel::Lorentzian:
-                    used.push_back("k0");
-                    break;
-                case K::SpectralModel::Bandpass:
-                    used.insert(used.end(), {"f0", "width"});
-                    break;
-                case K::SpectralModel::Power:
-                    used.insert(used.end(), {"slope", "k_low", "k_high"});
-                    break;
-            }
-            auto uses = [&](std::string_view key) {
-                return std::find(used.begin(), used.end(), key) != used.end();
-            };
-            if (uses("variance"))
-                mp.variance = r.number("variance", mp.variance, kPositive, "a variance > 0 (R(0))");
-            if (uses("length"))
-                mp.length = r.number("length", mp.length, kPositive,
-                                     "a correlation length > 0 (texture units)");
-            if (uses("exponent"))
-                mp.exponent = r.number(
-                    "exponent", mp.exponent, [](double v) { return v > 0 && v <= 2; },
-                    "an exponent in (0, 2] (exp(-(r/l)^a) is an autocorrelation only there)");
-            if (uses("nu"))
-                mp.nu = r.number(
-                    "nu", mp.nu, [](double v) { return v > 0 && v <= 50; },
-                    "a smoothness in (0, 50]");
-            if (uses("omega"))
-                mp.omega = r.number("omega", mp.omega, kNonNegative,
-                                    "an angular frequency >= 0 (radians per unit)");
-            if (uses("k0"))
-                mp.k0 =
-                    r.number("k0", mp.k0, kPositive, "a corner frequency > 0 (cycles per unit)");
-            if (uses("f0"))
-                mp.f0 = r.number("f0", mp.f0, kNonNegative,
-                                 "a centre frequency >= 0 (cycles per unit)");
-            if (uses("width"))
-                mp.width =
-                    r.number("width", mp.width, kPositive, "a ring width > 0 (cycles per unit)");
-            if (uses("slope"))
-                mp.slope = r.number("slope", mp.slope, kPositive, "a slope > 0 (S ~ k^-slope)");
-            if (uses("k_low"))
-                mp.k_low =
-                    r.number("k_low", mp.k_low, kPositive, "a low cut-off > 0 (cycles per unit)");
-            if (uses("k_high"))
-                mp.k_high =
-                    r.number("k_high", mp.k_high, kNonNegative, "a high cut-off >= 0 (0: none)");
-            try {
-                K::validate(mp);
-            } catch (const ValueError& e) {  // a combination (power: slope <= 2 without k_high)
-                r.fail(r.node("slope"), "slope", e.what());
-            }
-        }
-        for (const char* g : model_keys)
-            if (std::find(used.begin(), used.end(), std::string_view(g)) == used.end() && r.has(g))
-                r.warn(g, source == "model" ? "ignored for model " + r.string("model", "")
-                                            : std::string("ignored without a model"));
-        if (acf && source == "table")
-            r.fail(sn, "table",
-                   "a table gives a spectrum: use type = \"spectrum\" (or an expression of r)");
-
-        K::DesignedKernel d;
-        try {
-            if (acf) {
-                const K::Autocorrelation a =
-                    source == "model" ? K::model_autocorrelation(mp)
-                                      : K::expression_autocorrelation(r.string("expression", ""));
-                d = K::kernel_from_autocorrelation(a, o);
-            } else {
-                K::Spectrum sp;
-                if (source == "model")
-                    sp = K::model_spectrum(mp, o.nyquist);
-                else if (source == "expression")
-                    sp = K::expression_spectrum(r.string("expression", ""));
-                else
-                    sp = K::table_spectrum(path_of(sn, r.string("table", "")).string());
-                d = K::kernel_from_spectrum(sp, o);
-            }
-        } catch (const Error& e) {
-            const std::string prefix =
-                source == "expression" ? "expression \"" + r.string("expression", "") + "\"" : "";
-            // Radius problems belong to the radius or energy key when one was given.
-            const std::string what = e.what();
-            if (what.find("radius") != std::string::npos && (radius_node || energy_node))
-                r.fail(radius_node ? radius_node : energy_node, radius_node ? "radius" : "energy",
-                       detail_of(e, prefix));
-            r.fail(sn, source, detail_of(e, prefix));
-        }
+        K::DesignedKernel d = read_design(r, type == "autocorrelation", base, o);
         // Scale so the layer's spectrum is S itself: lambda E[a^2] |H|^2 = S with this layer's
         // lambda = density / (pi R^2) (the aspect squeeze changes lambda and int h^2 by inverse
         // factors, so the variance stays int S d^2k = R(0)).

@@ -13,7 +13,9 @@ packages=(build-essential cmake pkg-config libeigen3-dev libtbb-dev libopenimage
           ccache
           # the Python module (build/python/) and its tests; the preview server and its
           # browser test
-          python3-dev pybind11-dev python3-numpy python3-pytest libcpp-httplib-dev chromium)
+          python3-dev pybind11-dev python3-numpy python3-pytest libcpp-httplib-dev chromium
+          # the solid noise loops run under an emulated CPU without AVX2 (tests/app/test_solid_simd.sh)
+          qemu-user)
 missing=()
 for p in "${packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
