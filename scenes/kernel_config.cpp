@@ -25,67 +25,11 @@ namespace {
 const std::array<std::string_view, 6> kSceneKernelTypes = {
     "cosine", "gaussian", "gabor", "spectrum", "autocorrelation", "exemplar"};
 
-}  // namespace
-
-/// The design keys of a `spectrum` or `autocorrelation` kernel in table `r` (energy, nyquist,
-/// rolloff, max_radius; one of model, expression, table and the model's parameters) and the
-/// design in o.dims dimensions; o.radius and o.window are the caller's (radius read from `r`).
-/// Library errors are reported at the key whose value caused them.
-kernels::DesignedKernel read_design(Reader& r, bool acf, const fs::path& base,
-                                    kernels::DesignOptions o) {
+/// The parameters of `model` (source == "model"): the ones the model uses, warning about the
+/// others (also without a model).
+kernels::ModelParams read_model_params(Reader& r, bool acf, const std::string& source,
+                                       const toml::node* sn) {
     namespace K = kernels;
-    auto detail_of = [](const std::exception& e, const std::string& quoted) {
-        // Drop a repeated 'expression "...": ' or 'expression "..." ' (the key shows the value).
-        const std::string m = e.what();
-        if (quoted.empty() || m.rfind(quoted, 0) != 0) return m;
-        size_t i = quoted.size();
-        if (m.compare(i, 2, ": ") == 0)
-            i += 2;
-        else if (m.compare(i, 1, " ") == 0)
-            i += 1;
-        return m.substr(i);
-    };
-    auto path_of = [&](const toml::node* n, const std::string& rel) {
-        return detail::resolve_path(n, rel, base);
-    };
-    const toml::node* radius_node = r.node("radius");
-    const double radius = o.radius;
-    const toml::node* energy_node = r.node("energy");
-    o.energy = r.number(
-        "energy", o.energy, [](double v) { return v > 0 && v < 1; },
-        "a fraction in (0, 1) of the kernel energy to keep, e.g. 0.99");
-    if (energy_node && radius_node)
-        r.fail(energy_node, "energy",
-               "give energy or radius, not both (radius fixes the size)");
-    o.nyquist = r.number("nyquist", o.nyquist, kPositive,
-                         "a frequency > 0 (cycles per unit; 0.5 = pixel Nyquist at zoom 1)");
-    o.rolloff = r.number(
-        "rolloff", o.rolloff, [](double v) { return v >= 0 && v <= 0.9; },
-        "a fraction in [0, 0.9] of nyquist");
-    o.max_radius =
-        r.number("max_radius", o.max_radius, kPositive, "a radius > 0 (texture units)");
-    if (radius > o.max_radius)
-        r.fail(radius_node, "radius",
-               "expected <= max_radius = " + std::to_string(o.max_radius));
-
-    // Exactly one source.
-    std::vector<std::string> given;
-    for (const char* g : {"model", "expression", "table"})
-        if (r.has(g)) given.push_back(g);
-    if (given.size() > 1)
-        r.fail(r.node(given[1]), given[1],
-               "give one of model, expression" + std::string(acf ? "" : ", table") +
-                   ", not both " + given[0] + " and " + given[1]);
-    if (given.empty())
-        r.fail(nullptr, "model",
-               acf ? "missing: a kernel of type autocorrelation needs model = "
-                     "\"markov\" (or ...) or expression = \"...\" of r"
-                   : "missing: a kernel of type spectrum needs model = \"markov\" "
-                     "(or ...), expression = \"...\" of k and theta, or table = "
-                     "\"path.csv\"");
-    const std::string source = given[0];
-    const toml::node* sn = r.node(source);
-
     // Model parameters: read the ones the model uses, warn about the others.
     const std::array<const char*, 11> model_keys = {"variance", "length", "exponent", "nu",
                                                     "k0",       "f0",     "width",    "slope",
@@ -179,6 +123,71 @@ kernels::DesignedKernel read_design(Reader& r, bool acf, const fs::path& base,
         if (std::find(used.begin(), used.end(), std::string_view(g)) == used.end() && r.has(g))
             r.warn(g, source == "model" ? "ignored for model " + r.string("model", "")
                                         : std::string("ignored without a model"));
+    return mp;
+}
+
+}  // namespace
+
+/// The design keys of a `spectrum` or `autocorrelation` kernel in table `r` (energy, nyquist,
+/// rolloff, max_radius; one of model, expression, table and the model's parameters) and the
+/// design in o.dims dimensions; o.radius and o.window are the caller's (radius read from `r`).
+/// Library errors are reported at the key whose value caused them.
+kernels::DesignedKernel read_design(Reader& r, bool acf, const fs::path& base,
+                                    kernels::DesignOptions o) {
+    namespace K = kernels;
+    auto detail_of = [](const std::exception& e, const std::string& quoted) {
+        // Drop a repeated 'expression "...": ' or 'expression "..." ' (the key shows the value).
+        const std::string m = e.what();
+        if (quoted.empty() || m.rfind(quoted, 0) != 0) return m;
+        size_t i = quoted.size();
+        if (m.compare(i, 2, ": ") == 0)
+            i += 2;
+        else if (m.compare(i, 1, " ") == 0)
+            i += 1;
+        return m.substr(i);
+    };
+    auto path_of = [&](const toml::node* n, const std::string& rel) {
+        return detail::resolve_path(n, rel, base);
+    };
+    const toml::node* radius_node = r.node("radius");
+    const double radius = o.radius;
+    const toml::node* energy_node = r.node("energy");
+    o.energy = r.number(
+        "energy", o.energy, [](double v) { return v > 0 && v < 1; },
+        "a fraction in (0, 1) of the kernel energy to keep, e.g. 0.99");
+    if (energy_node && radius_node)
+        r.fail(energy_node, "energy",
+               "give energy or radius, not both (radius fixes the size)");
+    o.nyquist = r.number("nyquist", o.nyquist, kPositive,
+                         "a frequency > 0 (cycles per unit; 0.5 = pixel Nyquist at zoom 1)");
+    o.rolloff = r.number(
+        "rolloff", o.rolloff, [](double v) { return v >= 0 && v <= 0.9; },
+        "a fraction in [0, 0.9] of nyquist");
+    o.max_radius =
+        r.number("max_radius", o.max_radius, kPositive, "a radius > 0 (texture units)");
+    if (radius > o.max_radius)
+        r.fail(radius_node, "radius",
+               "expected <= max_radius = " + std::to_string(o.max_radius));
+
+    // Exactly one source.
+    std::vector<std::string> given;
+    for (const char* g : {"model", "expression", "table"})
+        if (r.has(g)) given.push_back(g);
+    if (given.size() > 1)
+        r.fail(r.node(given[1]), given[1],
+               "give one of model, expression" + std::string(acf ? "" : ", table") +
+                   ", not both " + given[0] + " and " + given[1]);
+    if (given.empty())
+        r.fail(nullptr, "model",
+               acf ? "missing: a kernel of type autocorrelation needs model = "
+                     "\"markov\" (or ...) or expression = \"...\" of r"
+                   : "missing: a kernel of type spectrum needs model = \"markov\" "
+                     "(or ...), expression = \"...\" of k and theta, or table = "
+                     "\"path.csv\"");
+    const std::string source = given[0];
+    const toml::node* sn = r.node(source);
+
+    const K::ModelParams mp = read_model_params(r, acf, source, sn);
     if (acf && source == "table")
         r.fail(sn, "table",
                "a table gives a spectrum: use type = \"spectrum\" (or an expression of r)");
