@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "app/synth_solid.h"
+#include "app/synth_solid_design.h"
 
 #include <CLI/CLI.hpp>
 #include <unistd.h>
@@ -126,11 +127,18 @@ CLI::App* add_synth_solid(CLI::App& synth, SynthSolidOptions& o) {
     CLI::App* s = synth.add_subcommand("solid", "Solid noise (Lewis 1989): sparse convolution or a lattice noise, "
                                                 "on a W x H x D grid or at points");
     s->add_option("--method", o.method, "sparse, perlin, value or wiener")->required();
-    s->add_option("--kernel", o.kernel, "sparse: cosine (default), gaussian (sigma = R/3) or gabor");
-    s->add_option("--radius", o.radius, "sparse: kernel radius R; lattice methods: lattice spacing (default 8)");
+    s->add_option("--kernel", o.kernel,
+                  "sparse: cosine (default), gaussian (sigma = R/3), gabor, or designed from a 3-D "
+                  "spectrum or an isotropic correlation: spectrum, autocorrelation");
+    s->add_option("--radius", o.radius,
+                  "sparse: kernel radius R (default 8; designed kernels: from --energy); lattice "
+                  "methods: lattice spacing (default 8)");
     s->add_option("--density", o.density, "sparse: impulses per kernel volume 4/3 pi R^3, in (0, 1000] (16)");
     s->add_option("--covariance", o.covariance, "wiener: gaussian, markov, spherical (default) or cosine");
-    s->add_option("--length", o.length, "wiener: covariance length in lattice spacings (default 1)");
+    s->add_option("--length", o.length,
+                  "wiener: covariance length in lattice spacings (default 1); designed kernels: the "
+                  "model's length in texture units (default 8)");
+    add_solid_design_options(*s, o);
     s->add_option("--size", o.size, "Grid WxHxD, sample (i, j, k) at (i, j, k) texture units");
     s->add_option("--seed", o.seed, "Random seed, integer in [0, 2^63 - 1] (default 0)");
     s->add_option("--points", o.points, "CSV of x,y,z lines: evaluate there, -o values.csv");
@@ -144,8 +152,11 @@ int run_synth_solid(const SynthSolidOptions& o) {
     const std::string method = o.method;
     if (method != "sparse" && method != "perlin" && method != "value" && method != "wiener")
         throw ValueError("--method " + method + ": expected one of sparse, perlin, value, wiener");
-    const double radius = parse_number<double>("--radius", o.radius, "a number > 0");
-    if (!(radius > 0.0) || !(radius <= 1e6)) throw ValueError("--radius " + o.radius + ": expected a number in (0, 1e6]");
+    const bool designed = method == "sparse" && is_designed_kernel(o.kernel);
+    const std::string radius_text = o.radius.empty() ? (designed ? "0" : "8") : o.radius;
+    const double radius = parse_number<double>("--radius", radius_text, "a number > 0");
+    if (!(radius > 0.0 || (designed && o.radius.empty())) || !(radius <= 1e6))
+        throw ValueError("--radius " + radius_text + ": expected a number in (0, 1e6]");
     const auto seed = parse_number<long long>("--seed", o.seed, "an integer in [0, 9223372036854775807]");
     if (seed < 0) throw ValueError("--seed " + o.seed + ": expected an integer in [0, 2^63 - 1]");
     const bool points = !o.points.empty();
@@ -184,16 +195,23 @@ int run_synth_solid(const SynthSolidOptions& o) {
 
     std::vector<float> values;
     std::ostringstream desc;
-    desc << "impulse synth solid --method " << method << " --radius " << o.radius << " --seed " << seed;
+    desc << "impulse synth solid --method " << method << " --radius " << radius_text << " --seed " << seed;
     if (method == "sparse") {
         synth::SolidParams p;
-        const auto type = kernels::kernel_type_from_string(o.kernel);
-        if (!type) throw ValueError("--kernel " + o.kernel + ": expected one of cosine, gaussian, gabor");
-        p.kernel.type = *type;
-        p.kernel.radius = radius;
-        p.kernel.sigma = radius / 3.0;
-        p.kernel.frequency = 2.0 / radius;
         p.density = parse_number<double>("--density", o.density, "impulses per kernel volume in (0, 1000]");
+        if (designed) {
+            if (!(p.density > 0.0)) throw ValueError("--density " + o.density + ": expected a number in (0, 1000]");
+            p.kernel = solid_design_kernel(o, radius, p.density, desc);
+        } else {
+            const auto type = kernels::kernel_type_from_string(o.kernel);
+            if (!type || *type == kernels::KernelType::Sampled)
+                throw ValueError("--kernel " + o.kernel +
+                                 ": expected one of cosine, gaussian, gabor, spectrum, autocorrelation");
+            p.kernel.type = *type;
+            p.kernel.radius = radius;
+            p.kernel.sigma = radius / 3.0;
+            p.kernel.frequency = 2.0 / radius;
+        }
         p.seed = uint64_t(seed);
         const synth::SolidNoise noise(p);  // validates density
         desc << " --kernel " << o.kernel << " --density " << o.density << " (variance "
@@ -206,9 +224,10 @@ int run_synth_solid(const SynthSolidOptions& o) {
         p.spacing = radius;
         p.seed = uint64_t(seed);
         if (p.method == synth::LatticeMethod::Wiener) {
-            const double l = parse_number<double>("--length", o.length, "a number > 0");
+            const std::string length = o.length.empty() ? "1" : o.length;
+            const double l = parse_number<double>("--length", length, "a number > 0");
             p.covariance = synth::wiener_covariance(o.covariance, l);
-            desc << " --covariance " << o.covariance << " --length " << o.length;
+            desc << " --covariance " << o.covariance << " --length " << length;
         }
         const synth::LatticeNoise noise(p);  // wiener: refuses a covariance the lattice cannot realize
         if (points) noise.evaluate(pts, values);

@@ -7,6 +7,7 @@
 
 #include <cstdio>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "bench/common.h"
@@ -33,6 +34,10 @@ Stats time_runs(int runs, const F& f) {
 int main(int argc, char** argv) {
     const int n = argc > 1 ? std::atoi(argv[1]) : 256;
     const int runs = argc > 2 ? std::atoi(argv[2]) : 3;
+    // For profiles (callgrind: bench/README.md): only one noise, and fewer random points.
+    const std::string only = argc > 3 ? argv[3] : "all";
+    const size_t npts = argc > 4 ? size_t(std::atol(argv[4])) : 1000000;
+    const bool grid = argc <= 5 || std::string(argv[5]) != "points";  // "points": skip the grid
     synth::SolidParams sp;
     sp.kernel.radius = 8.0;
     sp.density = 16.0;
@@ -46,7 +51,7 @@ int main(int argc, char** argv) {
 
     std::mt19937_64 rng(1);
     std::uniform_real_distribution<double> u(0.0, n);
-    std::vector<synth::SolidPoint> pts(1000000);
+    std::vector<synth::SolidPoint> pts(npts);
     for (auto& p : pts) p = {u(rng), u(rng), u(rng), 0.0};
     std::vector<float> out;
 
@@ -55,9 +60,10 @@ int main(int argc, char** argv) {
                 loadavg().c_str());
     std::printf("%-34s %14s %14s\n", "", "grid Mpts/s", "points Mpts/s");
     auto row = [&](const char* name, const auto& noise) {
-        const Stats g = time_runs(runs, [&] { out = noise.grid(n, n, n, {}); });
+        if (only != "all" && std::string(name).rfind(only, 0) != 0) return std::pair<double, double>{1.0, 1.0};
+        const Stats g = time_runs(grid ? runs : 0, [&] { out = noise.grid(n, n, n, {}); });
         const Stats p = time_runs(runs, [&] { noise.evaluate(pts, out); });
-        std::printf("%-34s %14.2f %14.2f\n", name, grid_pts / g.med / 1e3, 1e6 / p.med / 1e3);
+        std::printf("%-34s %14.2f %14.2f\n", name, grid_pts / g.med / 1e3, double(npts) / p.med / 1e3);
         return std::pair<double, double>{g.med, p.med};
     };
     const auto s = row("sparse cosine R=8, 16/kernel vol", sparse);

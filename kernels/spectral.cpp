@@ -81,6 +81,23 @@ double window_weight(DesignWindow w, double r, double R, double a) {
 
 double sinc(double x) { return x == 0.0 ? 1.0 : std::sin(kPi * x) / (kPi * x); }
 
+/// The radial transform of an isotropic function in the plane or in space (both directions,
+/// with H(k) = int h e^{-2 pi i k.x}): G(k) = int g(r) basis(2 pi k r) shell(r) dr, the shell
+/// 2 pi r and basis J0 in 2-D (Hankel), the shell 4 pi r^2 and basis sin x / x in 3-D (the
+/// Hankel transform of order 1/2: G(k) = (2 / k) int g(r) sin(2 pi k r) r dr).
+struct Radial {
+    int dims = 2;
+    /// Quadrature weight w times the shell measure at x (2-D: the expression order of the
+    /// original 2-D code, so 2-D designs keep their bits).
+    double shell(double w, double x) const {
+        return dims == 2 ? 2 * kPi * w * x : 4 * kPi * w * x * x;
+    }
+    double basis(double x) const {
+        if (dims == 2) return detail::bessel_j0(x);
+        return x == 0.0 ? 1.0 : std::sin(x) / x;
+    }
+};
+
 /// A sample of a spectrum, for the negativity report.
 struct SpectrumSample {
     double k, theta, s;
@@ -235,7 +252,8 @@ struct RadialAmplitude {
 
 /// The panel count resolves J0(2 pi k r) up to r_hi (2 panels = 32 nodes per period 1/r_hi)
 /// and features of S down to K/256.
-RadialAmplitude radial_amplitude(const Spectrum& sp, double K, double kp, double r_hi) {
+RadialAmplitude radial_amplitude(const Radial& rad, const Spectrum& sp, double K, double kp,
+                                 double r_hi) {
     RadialAmplitude a;
     const int panels = std::max(256, 32 + static_cast<int>(std::ceil(2.0 * K * r_hi)));
     const int pass = std::max(1, static_cast<int>(std::lround(panels * kp / K)));
@@ -244,17 +262,18 @@ RadialAmplitude radial_amplitude(const Spectrum& sp, double K, double kp, double
     for (size_t j = 0; j < a.n.x.size(); ++j) {
         const double k = a.n.x[j];
         const double amp = std::sqrt(std::max(sp.density(k, 0.0), 0.0)) * rolloff(k, K, kp);
-        a.wa.push_back(2 * kPi * a.n.w[j] * k * amp);
-        a.energy += 2 * kPi * a.n.w[j] * k * amp * amp;
+        a.wa.push_back(rad.shell(a.n.w[j], k) * amp);
+        a.energy += rad.shell(a.n.w[j], k) * amp * amp;
     }
     return a;
 }
 
-/// h(r) = int A(k) J0(2 pi k r) 2 pi k dk (the 2-D inverse Fourier transform of a radial A).
-double radial_h(const RadialAmplitude& a, double r) {
+/// h(r) = int A(k) J0(2 pi k r) 2 pi k dk (the 2-D inverse Fourier transform of a radial A; in
+/// 3-D int A(k) sinc(2 pi k r) 4 pi k^2 dk).
+double radial_h(const Radial& rad, const RadialAmplitude& a, double r) {
     double s = 0.0;
     for (size_t j = 0; j < a.wa.size(); ++j)
-        s += a.wa[j] * detail::bessel_j0(2 * kPi * a.n.x[j] * r);
+        s += a.wa[j] * rad.basis(2 * kPi * a.n.x[j] * r);
     return s;
 }
 
@@ -264,22 +283,22 @@ double radial_h(const RadialAmplitude& a, double r) {
 /// not the trapezoid rule, whose Euler–Maclaurin end correction dr^2/12 * 2 pi h(0)^2 at
 /// r = 0 is ~1 % for peaked kernels (markov). Within the panel that crosses the target, R_f is
 /// interpolated linearly; a window's taper starts at R_f.
-double radial_energy_radius(const Spectrum& sp, const DesignOptions& o, double K, double kp,
-                            double total) {
+double radial_energy_radius(const Radial& rad, const Spectrum& sp, const DesignOptions& o,
+                            double K, double kp, double total) {
     const bool tapered = o.window != DesignWindow::None;
     const double limit = tapered ? kTaperStart * o.max_radius : o.max_radius;
     const double pw = 1.0 / K, target = o.energy * total;
     double cum = 0.0, r = 0.0, rf = -1.0;
     while (rf < 0.0) {
         const double chunk_end = r + 64.0 * pw;
-        const RadialAmplitude a = radial_amplitude(sp, K, kp, chunk_end);
+        const RadialAmplitude a = radial_amplitude(rad, sp, K, kp, chunk_end);
         for (; r < chunk_end - 0.5 * pw; r += pw) {
             Nodes pn;
             pn.add(r, r + pw, 1);
             double add = 0.0;
             for (size_t j = 0; j < pn.x.size(); ++j) {
-                const double h = radial_h(a, pn.x[j]);
-                add += pn.w[j] * 2 * kPi * pn.x[j] * h * h;
+                const double h = radial_h(rad, a, pn.x[j]);
+                add += rad.shell(pn.w[j], pn.x[j]) * h * h;
             }
             if (cum + add >= target) {
                 rf = r + pw * (target - cum) / add;
@@ -301,8 +320,8 @@ double radial_energy_radius(const Spectrum& sp, const DesignOptions& o, double K
 }
 
 /// The windowed profile h(r) at n samples on [0, R], zero at R.
-std::shared_ptr<SampledKernel> radial_profile(const RadialAmplitude& a, const DesignOptions& o,
-                                              double R, int n) {
+std::shared_ptr<SampledKernel> radial_profile(const Radial& rad, const RadialAmplitude& a,
+                                              const DesignOptions& o, double R, int n) {
     const bool tapered = o.window != DesignWindow::None;
     auto sk = std::make_shared<SampledKernel>();
     sk->radial = true;
@@ -311,21 +330,35 @@ std::shared_ptr<SampledKernel> radial_profile(const RadialAmplitude& a, const De
     const double taper_start = tapered ? kTaperStart * R : R;
     for (int i = 0; i < n; ++i) {
         const double r = R * i / (n - 1);
-        sk->values[i] = radial_h(a, r) * window_weight(o.window, r, R, taper_start);
+        sk->values[i] = radial_h(rad, a, r) * window_weight(o.window, r, R, taper_start);
     }
     sk->values[n - 1] = 0.0;  // the profile is zero from R on
     return sk;
 }
 
 /// |H|^2 of the final profile (as Kernel evaluates it) against S on [0, K]: the relative
-/// spectrum error, the achieved |H|^2 and the worst ratio error in the pass band.
-void report_radial_spectrum(DesignReport& rep, const Kernel& kern, const Spectrum& sp, double K,
+/// spectrum error, the achieved |H|^2 and the worst ratio error in the pass band; the energy
+/// kept of the amplitude's `amplitude_energy` and the effective area (int h^2)^2 / int h^4.
+void report_radial_spectrum(DesignReport& rep, const Radial& rad, const Kernel& kern,
+                            const Spectrum& sp, const DesignOptions& o, double amplitude_energy,
                             double kp, double R, int n) {
+    const double K = o.nyquist;
     Nodes rn;
     rn.add(0.0, R, std::max({64, (n - 1) / 2, 32 + static_cast<int>(std::ceil(2.0 * K * R))}));
     std::vector<double> hr(rn.x.size());
-    for (size_t j = 0; j < rn.x.size(); ++j)
-        hr[j] = 2 * kPi * rn.w[j] * rn.x[j] * kern.envelope(rn.x[j] * rn.x[j] / (R * R));
+    double i2 = 0.0, i4 = 0.0;  // int h^2, int h^4 over space (3-D)
+    for (size_t j = 0; j < rn.x.size(); ++j) {
+        const double e = kern.envelope(rn.x[j] * rn.x[j] / (R * R));
+        hr[j] = rad.shell(rn.w[j], rn.x[j]) * e;
+        i2 += hr[j] * e;
+        i4 += hr[j] * e * e * e;
+    }
+    if (o.dims == 2) {  // the kernel's own integrals, as before 3-D designs existed
+        i2 = kern.integral_sq();
+        i4 = kern.integral_4();
+    }
+    rep.energy_fraction = i2 / amplitude_energy;
+    rep.effective_area = i2 * i2 / i4;
     const int M = 256;
     double num2 = 0.0, den2 = 0.0, pmax = 0.0;
     std::vector<double> hk2(M + 1), sm(M + 1);
@@ -333,11 +366,11 @@ void report_radial_spectrum(DesignReport& rep, const Kernel& kern, const Spectru
         const double k = K * m / M;
         double H = 0.0;
         for (size_t j = 0; j < rn.x.size(); ++j)
-            H += hr[j] * detail::bessel_j0(2 * kPi * k * rn.x[j]);
+            H += hr[j] * rad.basis(2 * kPi * k * rn.x[j]);
         hk2[m] = H * H;
         sm[m] = std::max(sp.density(k, 0.0), 0.0);
         pmax = std::max(pmax, sm[m]);
-        const double wt = (m == 0 || m == M ? 0.5 : 1.0) * k;
+        const double wt = (m == 0 || m == M ? 0.5 : 1.0) * (o.dims == 2 ? k : k * k);
         num2 += wt * (hk2[m] - sm[m]) * (hk2[m] - sm[m]);
         den2 += wt * sm[m] * sm[m];
     }
@@ -372,15 +405,16 @@ double radial_render_error(const SampledKernel& sk, const Kernel& kern, double R
 
 DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
     const double K = o.nyquist, kp = (1.0 - o.rolloff) * K;
+    const Radial rad{o.dims};
     check_radial_spectrum(sp, K);
-    const double total = radial_amplitude(sp, K, kp, 0.0).energy;
-    const double R = o.radius == 0.0 ? radial_energy_radius(sp, o, K, kp, total) : o.radius;
+    const double total = radial_amplitude(rad, sp, K, kp, 0.0).energy;
+    const double R = o.radius == 0.0 ? radial_energy_radius(rad, sp, o, K, kp, total) : o.radius;
 
     // Samples for the Catmull–Rom profile: 16 per shortest period 1/K (interpolation error
     // < 0.1 % at K), at most 4097.
     const int n = std::clamp(static_cast<int>(std::ceil(16.0 * K * R)) + 1, 64, 4097);
-    const RadialAmplitude a = radial_amplitude(sp, K, kp, R);
-    const auto sk = radial_profile(a, o, R, n);
+    const RadialAmplitude a = radial_amplitude(rad, sp, K, kp, R);
+    const auto sk = radial_profile(rad, a, o, R, n);
     DesignedKernel out;
     out.params.type = KernelType::Sampled;
     out.params.radius = R;
@@ -391,9 +425,7 @@ DesignedKernel design_radial(const Spectrum& sp, const DesignOptions& o) {
     rep.radius = R;
     rep.samples = n;
     rep.passband = kp;
-    rep.energy_fraction = kern.integral_sq() / a.energy;
-    rep.effective_area = kern.integral_sq() * kern.integral_sq() / kern.integral_4();
-    report_radial_spectrum(rep, kern, sp, K, kp, R, n);
+    report_radial_spectrum(rep, rad, kern, sp, o, a.energy, kp, R, n);
     rep.render_error = radial_render_error(*sk, kern, R);
     return out;
 }
@@ -674,8 +706,57 @@ void validate(const ModelParams& p) {
     }
 }
 
-Spectrum model_spectrum(const ModelParams& params, double k_max) {
+namespace {
+
+/// The 3-D spectra of the models defined by an autocorrelation (int S d^3k = R(0)).
+Spectrum model_spectrum_3d(const ModelParams& p, double k_max) {
+    const double v = p.variance, l = p.length;
+    Spectrum s;
+    s.name = std::string(kSpectralModelNames[static_cast<int>(p.model)]);
+    switch (p.model) {
+        case SpectralModel::Markov:  // the 3-D transform of e^{-r/l}
+            s.density = [v, l](double k, double) {
+                const double u = 1 + std::pow(2 * kPi * l * k, 2);
+                return v * 8 * kPi * l * l * l / (u * u);
+            };
+            break;
+        case SpectralModel::Gaussian:  // of e^{-r^2/l^2}
+            s.density = [v, l](double k, double) {
+                return v * std::pow(kPi, 1.5) * l * l * l * std::exp(-std::pow(kPi * l * k, 2));
+            };
+            break;
+        case SpectralModel::Matern: {
+            // Rasmussen & Williams 2006 eq. 4.15 in D dimensions: (4 pi / a)^(D/2)
+            // Gamma(nu + D/2) / Gamma(nu) (1 + 4 pi^2 k^2 / a)^-(nu + D/2), a = 2 nu / l^2.
+            const double a = 2 * p.nu / (l * l), nu = p.nu;
+            const double c = v * std::pow(4 * kPi / a, 1.5) * std::tgamma(nu + 1.5) / std::tgamma(nu);
+            s.density = [a, c, nu](double k, double) {
+                return c * std::pow(1 + 4 * kPi * kPi * k * k / a, -(nu + 1.5));
+            };
+            break;
+        }
+        case SpectralModel::Markaussian:
+        case SpectralModel::OscillatoryMarkov:
+        case SpectralModel::OscillatoryGaussian:
+            s.density = spectrum_of_autocorrelation(model_autocorrelation(p), k_max, 3).density;
+            break;
+        default:
+            throw ValueError("model = \"" + s.name +
+                             "\": its spectrum is defined in 2-D; for a 3-D kernel give an "
+                             "expression or a table of the 3-D spectrum S(k), or a model defined by "
+                             "its autocorrelation (markov, gaussian, markaussian, matern, "
+                             "oscillatory_markov, oscillatory_gaussian)");
+    }
+    return s;
+}
+
+}  // namespace
+
+Spectrum model_spectrum(const ModelParams& params, double k_max, int dims) {
     validate(params);
+    if (dims != 2 && dims != 3)
+        throw ValueError("dims = " + std::to_string(dims) + ": expected 2 or 3");
+    if (dims == 3) return model_spectrum_3d(params, k_max);
     const ModelParams p = params;
     const double v = p.variance;
     Spectrum s;
@@ -893,14 +974,17 @@ Spectrum table_spectrum(const std::string& path) {
     return table_spectrum_text(read_text_file(path, "spectrum table"), path);
 }
 
-Spectrum spectrum_of_autocorrelation(const Autocorrelation& acf, double k_max) {
+Spectrum spectrum_of_autocorrelation(const Autocorrelation& acf, double k_max, int dims) {
     require(k_max > 0, "nyquist", k_max, "a frequency > 0 (cycles per unit)");
+    if (dims != 2 && dims != 3)
+        throw ValueError("dims = " + std::to_string(dims) + ": expected 2 or 3");
+    const Radial rad{dims};
     const double r0 = acf.function(0.0);
     if (!(r0 > 0) || !std::isfinite(r0))
         throw ValueError(acf.name + ": R(0) = " + num(r0) + ": expected a finite variance > 0");
     // Support: scan at 1/(16 k_max) for the last r with |R| >= kAcfTail R(0).
     const double dr = 1.0 / (16.0 * k_max);
-    double last = 0.0;
+    double last = 0.0, lowest = r0, lowest_r = 0.0;
     for (double r = dr; r <= kAcfMaxRadius; r += dr) {
         const double v = acf.function(r);
         if (!std::isfinite(v))
@@ -910,6 +994,7 @@ Spectrum spectrum_of_autocorrelation(const Autocorrelation& acf, double k_max) {
             throw ValueError("autocorrelation " + acf.name + " is not non-negative definite: |R(" +
                              num(r) + ")| = " + num(std::abs(v)) + " > R(0) = " + num(r0));
         if (std::abs(v) >= kAcfTail * r0) last = r;
+        if (v < lowest) lowest = v, lowest_r = r;
     }
     if (last > kAcfMaxRadius - 1.0)
         throw ValueError(acf.name + ": R(" + num(kAcfMaxRadius) +
@@ -924,7 +1009,7 @@ Spectrum spectrum_of_autocorrelation(const Autocorrelation& acf, double k_max) {
     rn.add(0.0, rs, std::max(64, 32 + static_cast<int>(std::ceil(2.0 * k_max * rs))));
     std::vector<double> wr(rn.x.size());
     for (size_t j = 0; j < rn.x.size(); ++j)
-        wr[j] = 2 * kPi * rn.w[j] * rn.x[j] * acf.function(rn.x[j]);
+        wr[j] = rad.shell(rn.w[j], rn.x[j]) * acf.function(rn.x[j]);
     const int nk = std::max(4096, static_cast<int>(std::ceil(8.0 * rs * k_max)));
     auto table = std::make_shared<std::vector<double>>(nk + 1);
     std::vector<SpectrumSample> samples(nk + 1);
@@ -933,13 +1018,17 @@ Spectrum spectrum_of_autocorrelation(const Autocorrelation& acf, double k_max) {
         const double k = k_max * i / nk;
         double s = 0.0;
         for (size_t j = 0; j < wr.size(); ++j)
-            s += wr[j] * detail::bessel_j0(2 * kPi * k * rn.x[j]);
+            s += wr[j] * rad.basis(2 * kPi * k * rn.x[j]);
         (*table)[i] = s;
         samples[i] = {k, 0.0, s};
         smax = std::max(smax, s);
     }
-    refuse_negative(samples, smax, true, 0.0,
-                    "autocorrelation " + acf.name + " is not non-negative definite", false);
+    std::string what = "autocorrelation " + acf.name + " is not non-negative definite";
+    if (dims == 3)  // the minimum of sin x / x: Yaglom 1987, the 3-D isotropic bound
+        what += " in 3-D (an isotropic 3-D correlation may dip to about -0.218 R(0), the "
+                "minimum of sin x / x, not below; this one reaches " + num(lowest / r0) +
+                " R(0) at r = " + num(lowest_r) + ")";
+    refuse_negative(samples, smax, true, 0.0, what, false);
     for (double& s : *table) s = std::max(s, 0.0);
     Spectrum out;
     out.name = "spectrum of autocorrelation " + acf.name;
@@ -1012,6 +1101,8 @@ void validate(const DesignOptions& o) {
     require(o.energy > 0 && o.energy < 1, "energy", o.energy, "a fraction in (0, 1), e.g. 0.99");
     require(o.radius >= 0, "radius", o.radius, "a radius > 0 (texture units)");
     require(o.max_radius > 0, "max_radius", o.max_radius, "a radius > 0");
+    if (o.dims != 2 && o.dims != 3)
+        throw ValueError("dims = " + std::to_string(o.dims) + ": expected 2 or 3");
     if (o.radius > o.max_radius)
         throw ValueError("radius = " + num(o.radius) +
                          ": expected <= max_radius = " + num(o.max_radius));
@@ -1020,13 +1111,17 @@ void validate(const DesignOptions& o) {
 DesignedKernel kernel_from_spectrum(const Spectrum& spectrum, const DesignOptions& options) {
     validate(options);
     if (!spectrum.density) throw ValueError("spectrum " + spectrum.name + ": no density function");
+    if (options.dims == 3 && !spectrum.isotropic)
+        throw ValueError(spectrum.name + ": a 3-D kernel is designed from an isotropic spectrum "
+                                         "S(k) only (no theta; solid noise takes anisotropy as a metric)");
     return spectrum.isotropic ? design_radial(spectrum, options) : design_grid(spectrum, options);
 }
 
 DesignedKernel kernel_from_autocorrelation(const Autocorrelation& acf,
                                            const DesignOptions& options) {
     validate(options);
-    return kernel_from_spectrum(spectrum_of_autocorrelation(acf, options.nyquist), options);
+    return kernel_from_spectrum(spectrum_of_autocorrelation(acf, options.nyquist, options.dims),
+                                options);
 }
 
 }  // namespace impulse::kernels

@@ -119,8 +119,11 @@ struct Autocorrelation {
 
 /// The spectrum of a named model: closed form (markov, gaussian, matern, lorentzian, bandpass,
 /// power) or, for markaussian, the numerical Hankel transform of R tabulated on [0, k_max]
-/// (zero beyond: pass the design's nyquist). Validates (ValueError).
-Spectrum model_spectrum(const ModelParams& params, double k_max = 0.5);
+/// (zero beyond: pass the design's nyquist). Validates (ValueError). dims = 3: the model's 3-D
+/// spectrum (int S d^3k = R(0)) for the models defined by an autocorrelation (markov
+/// 8 pi l^3 / (1 + (2 pi l k)^2)^2, gaussian pi^1.5 l^3 exp(-(pi l k)^2), matern, the others
+/// numerically); ValueError for those defined by a 2-D spectrum (lorentzian, bandpass, power).
+Spectrum model_spectrum(const ModelParams& params, double k_max = 0.5, int dims = 2);
 /// The autocorrelation of a model defined by one (markov, gaussian, markaussian, matern,
 /// oscillatory_markov, oscillatory_gaussian);
 /// ValueError for the spectrum-defined ones.
@@ -148,7 +151,10 @@ Autocorrelation table_autocorrelation(const std::string& path);
 /// otherwise). Refuses (ValueError "autocorrelation is not non-negative definite: S(0.12) =
 /// -0.034, ...") when S < -1e-6 max S anywhere in [0, k_max] (the threshold is far above the
 /// quadrature's noise, ~1e-9 max S, and far below any real negative lobe).
-Spectrum spectrum_of_autocorrelation(const Autocorrelation& acf, double k_max);
+/// dims = 3: the 3-D spectrum S(k) = (2 / k) int_0^inf R(r) sin(2 pi k r) r dr (the Hankel
+/// transform of order 1/2); the refusal then says that an isotropic 3-D correlation may dip to
+/// about -0.218 R(0) (the minimum of sin x / x), not below, and how low this one goes.
+Spectrum spectrum_of_autocorrelation(const Autocorrelation& acf, double k_max, int dims = 2);
 /// The autocorrelation of an isotropic spectrum band-limited to |k| <= k_max, by the inverse
 /// Wiener–Khinchine relation R(r) = 2 pi int_0^k_max S(k) J0(2 pi k r) k dk (Gauss–Legendre
 /// panels over [0, k_max], two per period of J0 at r, at least 64). Each distinct |r| is
@@ -183,6 +189,12 @@ struct DesignOptions {
     DesignWindow window = DesignWindow::Hann;
     /// Refuse kernels needing a larger radius (texture units).
     double max_radius = 1024.0;
+    /// 2: a kernel of the plane, S a 2-D density (int S d^2k = R(0)). 3: a radial kernel of
+    /// space for solid noise (synth/solid.h), S a 3-D density (int S d^3k = R(0)), designed by the
+    /// 3-D radial transform h(r) = (2 / r) int_0^nyquist sqrt(S) T sin(2 pi k r) k dk; the
+    /// report's effective_area is then a volume (int h^2)^2 / int h^4 over space, its
+    /// energy_fraction and spectrum errors 3-D integrals. Isotropic spectra only.
+    int dims = 2;
 };
 
 /// What the design achieved.
@@ -227,7 +239,7 @@ void validate(const DesignOptions& options);
 /// renderer interpolates), centred, windowed and cropped. Refuses S < -1e-6 max S or a non-finite
 /// S (ValueError naming k), and kernels needing more than max_radius.
 DesignedKernel kernel_from_spectrum(const Spectrum& spectrum, const DesignOptions& options = {});
-/// kernel_from_spectrum(spectrum_of_autocorrelation(acf, options.nyquist), options).
+/// kernel_from_spectrum(spectrum_of_autocorrelation(acf, options.nyquist, options.dims), options).
 DesignedKernel kernel_from_autocorrelation(const Autocorrelation& acf,
                                            const DesignOptions& options = {});
 

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // What the CPU can run, asked once (numeric/cpu.cpp): every vectorised loop of impulse is an
-// AVX2 copy of a baseline loop with the same bits, chosen at run time from these.
+// AVX2 copy of a baseline loop with the same bits, chosen at run time from these. The environment
+// variable IMPULSE_SIMD=baseline makes both false (the baseline loops on any CPU).
 
 namespace impulse::numeric {
 

@@ -25,102 +25,158 @@ namespace {
 const std::array<std::string_view, 6> kSceneKernelTypes = {
     "cosine", "gaussian", "gabor", "spectrum", "autocorrelation", "exemplar"};
 
-/// An error's message without a leading 'expression "...": ' or 'expression "..." ' (the key
-/// already shows the value).
-std::string without_quoted_prefix(const std::exception& e, const std::string& quoted) {
-    const std::string m = e.what();
-    if (quoted.empty() || m.rfind(quoted, 0) != 0) return m;
-    size_t i = quoted.size();
-    if (m.compare(i, 2, ": ") == 0)
-        i += 2;
-    else if (m.compare(i, 1, " ") == 0)
-        i += 1;
-    return m.substr(i);
-}
-
-/// The layer's density at its largest over time: a design is normalised there (docs/scenes.md
-/// "Keyframes").
-double max_layer_density(Reader& layer) {
-    return layer.keyframed("density", 16.0, kPositive, "a density > 0 (impulses per kernel area)")
-        .max();
-}
-
-sim::Amplitude layer_amplitude(Reader& layer) {
-    return static_cast<sim::Amplitude>(layer.choice("amplitude", sim::kAmplitudeNames, 0));
-}
-
-/// The keys every designed kernel reads first: the window and the size of the design.
-struct DesignSize {
-    kernels::DesignWindow window;
-    const toml::node* radius_node;  // null when radius was not given
-    double radius;                  // 0: from the energy
-};
-
-/// type = "exemplar": a kernel whose layer has the spectrum of an image (kernels/spectral.h).
-kernels::KernelParams read_exemplar_kernel(Reader& r, Reader& layer, const DesignSize& size,
-                                           const fs::path& base) {
+/// The parameters of `model` (source == "model"): the ones the model uses, warning about the
+/// others (also without a model).
+kernels::ModelParams read_model_params(Reader& r, bool acf, const std::string& source,
+                                       const toml::node* sn) {
     namespace K = kernels;
-    const toml::node* pn = r.node("path");
-    const std::string rel = r.string("path", "");
-    if (rel.empty())
-        r.fail(pn, "path", "expected the path of an exemplar image (relative to the scene file)");
-    for (const char* g :
-         {"energy", "nyquist", "rolloff", "max_radius", "model", "expression", "table"})
-        if (r.has(g)) r.warn(g, "ignored for kernel type exemplar");
-    K::ExemplarOptions o;
-    o.radius = size.radius;
-    o.window = size.window;
-    // Normalised at this layer's density and amplitude distribution (read here as well as
-    // in read_scene: same values, same messages).
-    o.density = max_layer_density(layer);
-    o.amplitude_second_moment = sim::amplitude_second_moment(layer_amplitude(layer));
-    render::Frame image;
-    try {
-        image = output::read_image(detail::resolve_path(pn, rel, base).string());
-    } catch (const Error& e) {
-        r.fail(pn, "path", e.what());
+    // Model parameters: read the ones the model uses, warn about the others.
+    const std::array<const char*, 11> model_keys = {"variance", "length", "exponent", "nu",
+                                                    "k0",       "f0",     "width",    "slope",
+                                                    "k_low",    "k_high", "omega"};
+    K::ModelParams mp;
+    std::vector<const char*> used;
+    if (source == "model") {
+        const std::string name = r.string("model", "");
+        const auto m = K::spectral_model_from_string(name);
+        if (!m) {
+            std::string list;
+            for (auto n : K::kSpectralModelNames)
+                list += (list.empty() ? "" : ", ") + std::string(n);
+            r.fail(sn, "model", "expected one of " + list + " (exponential = markov)");
+        }
+        if (acf && !K::defined_by_autocorrelation(*m))
+            r.fail(sn, "model",
+                   "defined by its spectrum: expected one of markov, gaussian, markaussian, "
+                   "matern, oscillatory_markov, oscillatory_gaussian for an autocorrelation "
+                   "kernel (or use type = \"spectrum\")");
+        mp.model = *m;
+        used.push_back("variance");
+        switch (mp.model) {
+            case K::SpectralModel::Markov:
+            case K::SpectralModel::Gaussian:
+                used.push_back("length");
+                break;
+            case K::SpectralModel::Markaussian:
+                used.insert(used.end(), {"length", "exponent"});
+                break;
+            case K::SpectralModel::Matern:
+                used.insert(used.end(), {"length", "nu"});
+                break;
+            case K::SpectralModel::OscillatoryMarkov:
+            case K::SpectralModel::OscillatoryGaussian:
+                used.insert(used.end(), {"length", "omega"});
+                break;
+            case K::SpectralModel::Lorentzian:
+                used.push_back("k0");
+                break;
+            case K::SpectralModel::Bandpass:
+                used.insert(used.end(), {"f0", "width"});
+                break;
+            case K::SpectralModel::Power:
+                used.insert(used.end(), {"slope", "k_low", "k_high"});
+                break;
+        }
+        auto uses = [&](std::string_view key) {
+            return std::find(used.begin(), used.end(), key) != used.end();
+        };
+        if (uses("variance"))
+            mp.variance = r.number("variance", mp.variance, kPositive, "a variance > 0 (R(0))");
+        if (uses("length"))
+            mp.length = r.number("length", mp.length, kPositive,
+                                 "a correlation length > 0 (texture units)");
+        if (uses("exponent"))
+            mp.exponent = r.number(
+                "exponent", mp.exponent, [](double v) { return v > 0 && v <= 2; },
+                "an exponent in (0, 2] (exp(-(r/l)^a) is an autocorrelation only there)");
+        if (uses("nu"))
+            mp.nu = r.number(
+                "nu", mp.nu, [](double v) { return v > 0 && v <= 50; },
+                "a smoothness in (0, 50]");
+        if (uses("omega"))
+            mp.omega = r.number("omega", mp.omega, kNonNegative,
+                                "an angular frequency >= 0 (radians per unit)");
+        if (uses("k0"))
+            mp.k0 =
+                r.number("k0", mp.k0, kPositive, "a corner frequency > 0 (cycles per unit)");
+        if (uses("f0"))
+            mp.f0 = r.number("f0", mp.f0, kNonNegative,
+                             "a centre frequency >= 0 (cycles per unit)");
+        if (uses("width"))
+            mp.width =
+                r.number("width", mp.width, kPositive, "a ring width > 0 (cycles per unit)");
+        if (uses("slope"))
+            mp.slope = r.number("slope", mp.slope, kPositive, "a slope > 0 (S ~ k^-slope)");
+        if (uses("k_low"))
+            mp.k_low =
+                r.number("k_low", mp.k_low, kPositive, "a low cut-off > 0 (cycles per unit)");
+        if (uses("k_high"))
+            mp.k_high =
+                r.number("k_high", mp.k_high, kNonNegative, "a high cut-off >= 0 (0: none)");
+        try {
+            K::validate(mp);
+        } catch (const ValueError& e) {  // a combination (power: slope <= 2 without k_high)
+            r.fail(r.node("slope"), "slope", e.what());
+        }
     }
-    try {
-        return K::kernel_from_exemplar(image.data.data(), image.width, image.height, o).params;
-    } catch (const ValueError& e) {
-        if (size.radius_node) r.fail(size.radius_node, "radius", e.what());
-        r.fail(pn, "path", e.what());
-    }
+    for (const char* g : model_keys)
+        if (std::find(used.begin(), used.end(), std::string_view(g)) == used.end() && r.has(g))
+            r.warn(g, source == "model" ? "ignored for model " + r.string("model", "")
+                                        : std::string("ignored without a model"));
+    return mp;
 }
 
-/// The design's size and band limit (energy, nyquist, rolloff, max_radius); `energy_node` is
-/// the energy key's node, read by the caller.
-kernels::DesignOptions read_design_options(Reader& r, const DesignSize& size,
-                                           const toml::node* energy_node) {
-    kernels::DesignOptions o;
-    o.window = size.window;
-    o.radius = size.radius;
+}  // namespace
+
+/// The design keys of a `spectrum` or `autocorrelation` kernel in table `r` (energy, nyquist,
+/// rolloff, max_radius; one of model, expression, table and the model's parameters) and the
+/// design in o.dims dimensions; o.radius and o.window are the caller's (radius read from `r`).
+/// Library errors are reported at the key whose value caused them.
+kernels::DesignedKernel read_design(Reader& r, bool acf, const fs::path& base,
+                                    kernels::DesignOptions o) {
+    namespace K = kernels;
+    auto detail_of = [](const std::exception& e, const std::string& quoted) {
+        // Drop a repeated 'expression "...": ' or 'expression "..." ' (the key shows the value).
+        const std::string m = e.what();
+        if (quoted.empty() || m.rfind(quoted, 0) != 0) return m;
+        size_t i = quoted.size();
+        if (m.compare(i, 2, ": ") == 0)
+            i += 2;
+        else if (m.compare(i, 1, " ") == 0)
+            i += 1;
+        return m.substr(i);
+    };
+    auto path_of = [&](const toml::node* n, const std::string& rel) {
+        return detail::resolve_path(n, rel, base);
+    };
+    const toml::node* radius_node = r.node("radius");
+    const double radius = o.radius;
+    const toml::node* energy_node = r.node("energy");
     o.energy = r.number(
         "energy", o.energy, [](double v) { return v > 0 && v < 1; },
         "a fraction in (0, 1) of the kernel energy to keep, e.g. 0.99");
-    if (energy_node && size.radius_node)
-        r.fail(energy_node, "energy", "give energy or radius, not both (radius fixes the size)");
+    if (energy_node && radius_node)
+        r.fail(energy_node, "energy",
+               "give energy or radius, not both (radius fixes the size)");
     o.nyquist = r.number("nyquist", o.nyquist, kPositive,
                          "a frequency > 0 (cycles per unit; 0.5 = pixel Nyquist at zoom 1)");
     o.rolloff = r.number(
         "rolloff", o.rolloff, [](double v) { return v >= 0 && v <= 0.9; },
         "a fraction in [0, 0.9] of nyquist");
-    o.max_radius = r.number("max_radius", o.max_radius, kPositive, "a radius > 0 (texture units)");
-    if (size.radius > o.max_radius)
-        r.fail(size.radius_node, "radius",
+    o.max_radius =
+        r.number("max_radius", o.max_radius, kPositive, "a radius > 0 (texture units)");
+    if (radius > o.max_radius)
+        r.fail(radius_node, "radius",
                "expected <= max_radius = " + std::to_string(o.max_radius));
-    return o;
-}
 
-/// The one key that gives the target: model, expression or table (a table only for a spectrum).
-std::string read_design_source(Reader& r, bool acf) {
+    // Exactly one source.
     std::vector<std::string> given;
     for (const char* g : {"model", "expression", "table"})
         if (r.has(g)) given.push_back(g);
     if (given.size() > 1)
         r.fail(r.node(given[1]), given[1],
-               "give one of model, expression" + std::string(acf ? "" : ", table") + ", not both " +
-                   given[0] + " and " + given[1]);
+               "give one of model, expression" + std::string(acf ? "" : ", table") +
+                   ", not both " + given[0] + " and " + given[1]);
     if (given.empty())
         r.fail(nullptr, "model",
                acf ? "missing: a kernel of type autocorrelation needs model = "
@@ -128,250 +184,146 @@ std::string read_design_source(Reader& r, bool acf) {
                    : "missing: a kernel of type spectrum needs model = \"markov\" "
                      "(or ...), expression = \"...\" of k and theta, or table = "
                      "\"path.csv\"");
-    return given[0];
-}
+    const std::string source = given[0];
+    const toml::node* sn = r.node(source);
 
-/// model = "...": a named spectral model; an autocorrelation kernel takes only the models
-/// defined by their autocorrelation.
-kernels::SpectralModel read_spectral_model(Reader& r, const toml::node* sn, bool acf) {
-    namespace K = kernels;
-    const std::string name = r.string("model", "");
-    const auto m = K::spectral_model_from_string(name);
-    if (!m) {
-        std::string list;
-        for (auto n : K::kSpectralModelNames) list += (list.empty() ? "" : ", ") + std::string(n);
-        r.fail(sn, "model", "expected one of " + list + " (exponential = markov)");
-    }
-    if (acf && !K::defined_by_autocorrelation(*m))
-        r.fail(sn, "model",
-               "defined by its spectrum: expected one of markov, gaussian, markaussian, "
-               "matern, oscillatory_markov, oscillatory_gaussian for an autocorrelation "
-               "kernel (or use type = \"spectrum\")");
-    return *m;
-}
-
-/// The parameter keys model `m` uses, in reading order.
-std::vector<const char*> model_parameter_keys(kernels::SpectralModel m) {
-    namespace K = kernels;
-    std::vector<const char*> used = {"variance"};
-    switch (m) {
-        case K::SpectralModel::Markov:
-        case K::SpectralModel::Gaussian:
-            used.push_back("length");
-            break;
-        case K::SpectralModel::Markaussian:
-            used.insert(used.end(), {"length", "exponent"});
-            break;
-        case K::SpectralModel::Matern:
-            used.insert(used.end(), {"length", "nu"});
-            break;
-        case K::SpectralModel::OscillatoryMarkov:
-        case K::SpectralModel::OscillatoryGaussian:
-            used.insert(used.end(), {"length", "omega"});
-            break;
-        case K::SpectralModel::Lorentzian:
-            used.push_back("k0");
-            break;
-        case K::SpectralModel::Bandpass:
-            used.insert(used.end(), {"f0", "width"});
-            break;
-        case K::SpectralModel::Power:
-            used.insert(used.end(), {"slope", "k_low", "k_high"});
-            break;
-    }
-    return used;
-}
-
-/// The values of the `used` model parameters, then a check of their combination.
-void read_model_parameters(Reader& r, const std::vector<const char*>& used,
-                           kernels::ModelParams& mp) {
-    auto uses = [&](std::string_view key) {
-        return std::find(used.begin(), used.end(), key) != used.end();
-    };
-    if (uses("variance"))
-        mp.variance = r.number("variance", mp.variance, kPositive, "a variance > 0 (R(0))");
-    if (uses("length"))
-        mp.length =
-            r.number("length", mp.length, kPositive, "a correlation length > 0 (texture units)");
-    if (uses("exponent"))
-        mp.exponent = r.number(
-            "exponent", mp.exponent, [](double v) { return v > 0 && v <= 2; },
-            "an exponent in (0, 2] (exp(-(r/l)^a) is an autocorrelation only there)");
-    if (uses("nu"))
-        mp.nu = r.number(
-            "nu", mp.nu, [](double v) { return v > 0 && v <= 50; }, "a smoothness in (0, 50]");
-    if (uses("omega"))
-        mp.omega = r.number("omega", mp.omega, kNonNegative,
-                            "an angular frequency >= 0 (radians per unit)");
-    if (uses("k0"))
-        mp.k0 = r.number("k0", mp.k0, kPositive, "a corner frequency > 0 (cycles per unit)");
-    if (uses("f0"))
-        mp.f0 = r.number("f0", mp.f0, kNonNegative, "a centre frequency >= 0 (cycles per unit)");
-    if (uses("width"))
-        mp.width = r.number("width", mp.width, kPositive, "a ring width > 0 (cycles per unit)");
-    if (uses("slope"))
-        mp.slope = r.number("slope", mp.slope, kPositive, "a slope > 0 (S ~ k^-slope)");
-    if (uses("k_low"))
-        mp.k_low = r.number("k_low", mp.k_low, kPositive, "a low cut-off > 0 (cycles per unit)");
-    if (uses("k_high"))
-        mp.k_high = r.number("k_high", mp.k_high, kNonNegative, "a high cut-off >= 0 (0: none)");
-    try {
-        kernels::validate(mp);
-    } catch (const ValueError& e) {  // a combination (power: slope <= 2 without k_high)
-        r.fail(r.node("slope"), "slope", e.what());
-    }
-}
-
-/// Warn about the model parameters that were given but that the model (or no model) ignores.
-void warn_unused_model_keys(Reader& r, const std::string& source,
-                            const std::vector<const char*>& used) {
-    const std::array<const char*, 11> model_keys = {"variance", "length", "exponent", "nu",
-                                                    "k0",       "f0",     "width",    "slope",
-                                                    "k_low",    "k_high", "omega"};
-    for (const char* g : model_keys)
-        if (std::find(used.begin(), used.end(), std::string_view(g)) == used.end() && r.has(g))
-            r.warn(g, source == "model" ? "ignored for model " + r.string("model", "")
-                                        : std::string("ignored without a model"));
-}
-
-/// What a spectrum or autocorrelation kernel is designed from.
-struct DesignTarget {
-    bool acf;                    // type = "autocorrelation" (else "spectrum")
-    std::string source;          // "model", "expression" or "table"
-    const toml::node* node;      // the source key's node
-    kernels::ModelParams model;  // source == "model"
-};
-
-/// The target's keys: the source, the model and its parameters (warning about the others).
-DesignTarget read_design_target(Reader& r, bool acf) {
-    DesignTarget t{acf, read_design_source(r, acf), nullptr, {}};
-    t.node = r.node(t.source);
-    std::vector<const char*> used;
-    if (t.source == "model") {
-        t.model.model = read_spectral_model(r, t.node, acf);
-        used = model_parameter_keys(t.model.model);
-        read_model_parameters(r, used, t.model);
-    }
-    warn_unused_model_keys(r, t.source, used);
-    if (acf && t.source == "table")
-        r.fail(t.node, "table",
+    const K::ModelParams mp = read_model_params(r, acf, source, sn);
+    if (acf && source == "table")
+        r.fail(sn, "table",
                "a table gives a spectrum: use type = \"spectrum\" (or an expression of r)");
-    return t;
-}
 
-/// A design failure, reported at the radius or energy key when it is about the radius and one
-/// was given, else at the source key.
-[[noreturn]] void fail_design(Reader& r, const Error& e, const DesignTarget& t,
-                              const toml::node* radius_node, const toml::node* energy_node) {
-    const std::string prefix =
-        t.source == "expression" ? "expression \"" + r.string("expression", "") + "\"" : "";
-    const std::string what = e.what();
-    if (what.find("radius") != std::string::npos && (radius_node || energy_node))
-        r.fail(radius_node ? radius_node : energy_node, radius_node ? "radius" : "energy",
-               without_quoted_prefix(e, prefix));
-    r.fail(t.node, t.source, without_quoted_prefix(e, prefix));
-}
-
-/// The kernel designed from the target's autocorrelation or spectrum (kernels/spectral.h).
-kernels::DesignedKernel design_kernel(Reader& r, const DesignTarget& t,
-                                      const kernels::DesignOptions& o, const fs::path& base) {
-    namespace K = kernels;
-    if (t.acf) {
-        const K::Autocorrelation a =
-            t.source == "model" ? K::model_autocorrelation(t.model)
-                                : K::expression_autocorrelation(r.string("expression", ""));
-        return K::kernel_from_autocorrelation(a, o);
-    }
-    K::Spectrum sp;
-    if (t.source == "model")
-        sp = K::model_spectrum(t.model, o.nyquist);
-    else if (t.source == "expression")
-        sp = K::expression_spectrum(r.string("expression", ""));
-    else
-        sp = K::table_spectrum(detail::resolve_path(t.node, r.string("table", ""), base).string());
-    return K::kernel_from_spectrum(sp, o);
-}
-
-/// A peaked kernel needs more impulses to look Gaussian (Campbell: the fourth cumulant).
-void warn_if_peaked(Reader& layer, const kernels::DesignedKernel& d, double density, double lambda,
-                    double ea2, double ea4) {
-    const double kurtosis = ea4 / (ea2 * ea2) / (lambda * d.report.effective_area);
-    if (!(kurtosis > 1.0)) return;
-    std::ostringstream s;
-    s << std::setprecision(3) << "the designed kernel is peaked (its energy spreads over "
-      << std::lround(d.report.effective_area) << " units^2 of its "
-      << std::lround(std::numbers::pi * d.params.radius * d.params.radius) << "): at density "
-      << density << " the field's excess kurtosis is " << kurtosis
-      << " and it looks speckled; density >= " << std::ceil(density * kurtosis / 0.3)
-      << " brings it to 0.3";
-    layer.warn("density", s.str());
-}
-
-void warn_if_passband_missed(Reader& r, const kernels::DesignedKernel& d,
-                             const toml::node* radius_node) {
-    if (!(d.report.passband_error > 0.2)) return;
-    std::ostringstream s;
-    s << std::setprecision(3) << "the designed kernel (radius " << d.report.radius << ", "
-      << 100 * d.report.energy_fraction << " % of the energy) misses the target spectrum by up to "
-      << std::lround(100 * d.report.passband_error)
-      << " % in the pass band; a larger energy (e.g. 0.999) or radius costs no time per "
-         "pixel";
-    r.warn(radius_node ? "radius" : "energy", s.str());
-}
-
-/// Scale so the layer's spectrum is S itself: lambda E[a^2] |H|^2 = S with this layer's
-/// lambda = density / (pi R^2) (the aspect squeeze changes lambda and int h^2 by inverse
-/// factors, so the variance stays int S d^2k = R(0)); then warn where the result falls short.
-void normalise_to_layer(Reader& r, Reader& layer, kernels::DesignedKernel& d,
-                        const toml::node* radius_node) {
-    const double density = max_layer_density(layer);
-    const auto amp = layer_amplitude(layer);
-    const double ea2 = sim::amplitude_second_moment(amp), ea4 = sim::amplitude_fourth_moment(amp);
-    const double lambda = density / (std::numbers::pi * d.params.radius * d.params.radius);
-    auto scaled = std::make_shared<kernels::SampledKernel>(*d.params.sampled);
-    for (double& v : scaled->values) v /= std::sqrt(lambda * ea2);
-    d.params.sampled = scaled;
-    warn_if_peaked(layer, d, density, lambda, ea2, ea4);
-    warn_if_passband_missed(r, d, radius_node);
-}
-
-/// type = "spectrum" or "autocorrelation": a kernel designed from a target S(k) or R(r).
-kernels::KernelParams read_target_kernel(Reader& r, Reader& layer, bool acf, const DesignSize& size,
-                                         const fs::path& base) {
-    const toml::node* energy_node = r.node("energy");
-    const kernels::DesignOptions o = read_design_options(r, size, energy_node);
-    const DesignTarget t = read_design_target(r, acf);
-    kernels::DesignedKernel d;
+    K::DesignedKernel d;
     try {
-        d = design_kernel(r, t, o, base);
+        if (acf) {
+            const K::Autocorrelation a =
+                source == "model" ? K::model_autocorrelation(mp)
+                                  : K::expression_autocorrelation(r.string("expression", ""));
+            d = K::kernel_from_autocorrelation(a, o);
+        } else {
+            K::Spectrum sp;
+            if (source == "model")
+                sp = K::model_spectrum(mp, o.nyquist, o.dims);
+            else if (source == "expression")
+                sp = K::expression_spectrum(r.string("expression", ""));
+            else
+                sp = K::table_spectrum(path_of(sn, r.string("table", "")).string());
+            d = K::kernel_from_spectrum(sp, o);
+        }
     } catch (const Error& e) {
-        fail_design(r, e, t, size.radius_node, energy_node);
+        const std::string prefix =
+            source == "expression" ? "expression \"" + r.string("expression", "") + "\"" : "";
+        // Radius problems belong to the radius or energy key when one was given.
+        const std::string what = e.what();
+        if (what.find("radius") != std::string::npos && (radius_node || energy_node))
+            r.fail(radius_node ? radius_node : energy_node, radius_node ? "radius" : "energy",
+                   detail_of(e, prefix));
+        r.fail(sn, source, detail_of(e, prefix));
     }
-    normalise_to_layer(r, layer, d, size.radius_node);
-    return d.params;
+    return d;
 }
+
+namespace {
 
 /// A designed kernel: `spectrum`, `autocorrelation` or `exemplar` (kernels/spectral.h). Library
 /// errors (ValueError, IoError) are reported at the key whose value caused them.
 kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Reader& layer,
                                            const fs::path& base, std::vector<KernelKey>& keys) {
     namespace K = kernels;
+    const std::string tname(type);
+    auto path_of = [&](const toml::node* n, const std::string& rel) {
+        return detail::resolve_path(n, rel, base);
+    };
     r.set_structural_reason(
         "a designed kernel is computed once, when the scene loads (up to a second per design); "
         "orientation and aspect can vary");
-    DesignSize size;
-    size.window = static_cast<K::DesignWindow>(r.choice("window", K::kDesignWindowNames, 1));
-    size.radius_node = r.node("radius");
-    size.radius = r.number("radius", 0.0, kPositive, "a radius > 0 (texture units)");
+    const auto window = static_cast<K::DesignWindow>(r.choice("window", K::kDesignWindowNames, 1));
+    const toml::node* radius_node = r.node("radius");
+    const double radius = r.number("radius", 0.0, kPositive, "a radius > 0 (texture units)");
     const numeric::Keyframed orientation = r.keyframed("orientation", 0.0);
     const numeric::Keyframed aspect = r.keyframed(
         "aspect", 1.0, [](double v) { return v >= 1.0; }, "a ratio >= 1");
+    // The design is normalised at the largest density over time (docs/scenes.md "Keyframes").
+    auto layer_density = [&] {
+        return layer
+            .keyframed("density", 16.0, kPositive, "a density > 0 (impulses per kernel area)")
+            .max();
+    };
     for (const char* g : {"sigma", "frequency", "bandwidth", "phase"})
-        if (r.has(g)) r.warn(g, "ignored for kernel type " + std::string(type));
+        if (r.has(g)) r.warn(g, "ignored for kernel type " + tname);
 
-    K::KernelParams k = type == "exemplar"
-                            ? read_exemplar_kernel(r, layer, size, base)
-                            : read_target_kernel(r, layer, type == "autocorrelation", size, base);
+    K::KernelParams k;
+    if (type == "exemplar") {
+        const toml::node* pn = r.node("path");
+        const std::string rel = r.string("path", "");
+        if (rel.empty())
+            r.fail(pn, "path",
+                   "expected the path of an exemplar image (relative to the scene file)");
+        for (const char* g :
+             {"energy", "nyquist", "rolloff", "max_radius", "model", "expression", "table"})
+            if (r.has(g)) r.warn(g, "ignored for kernel type exemplar");
+        K::ExemplarOptions o;
+        o.radius = radius;
+        o.window = window;
+        // Normalised at this layer's density and amplitude distribution (read here as well as
+        // in read_scene: same values, same messages).
+        o.density = layer_density();
+        o.amplitude_second_moment = sim::amplitude_second_moment(
+            static_cast<sim::Amplitude>(layer.choice("amplitude", sim::kAmplitudeNames, 0)));
+        render::Frame image;
+        try {
+            image = output::read_image(path_of(pn, rel).string());
+        } catch (const Error& e) {
+            r.fail(pn, "path", e.what());
+        }
+        try {
+            k = K::kernel_from_exemplar(image.data.data(), image.width, image.height, o).params;
+        } catch (const ValueError& e) {
+            if (radius_node) r.fail(radius_node, "radius", e.what());
+            r.fail(pn, "path", e.what());
+        }
+    } else {
+        K::DesignOptions o;
+        o.window = window;
+        o.radius = radius;
+        K::DesignedKernel d = read_design(r, type == "autocorrelation", base, o);
+        // Scale so the layer's spectrum is S itself: lambda E[a^2] |H|^2 = S with this layer's
+        // lambda = density / (pi R^2) (the aspect squeeze changes lambda and int h^2 by inverse
+        // factors, so the variance stays int S d^2k = R(0)).
+        const double density = layer_density();
+        const auto amp =
+            static_cast<sim::Amplitude>(layer.choice("amplitude", sim::kAmplitudeNames, 0));
+        const double ea2 = sim::amplitude_second_moment(amp),
+                     ea4 = sim::amplitude_fourth_moment(amp);
+        const double lambda = density / (std::numbers::pi * d.params.radius * d.params.radius);
+        {
+            auto scaled = std::make_shared<K::SampledKernel>(*d.params.sampled);
+            for (double& v : scaled->values) v /= std::sqrt(lambda * ea2);
+            d.params.sampled = scaled;
+        }
+        // A peaked kernel needs more impulses to look Gaussian (Campbell: the fourth cumulant).
+        const double kurtosis = ea4 / (ea2 * ea2) / (lambda * d.report.effective_area);
+        if (kurtosis > 1.0) {
+            std::ostringstream s;
+            s << std::setprecision(3) << "the designed kernel is peaked (its energy spreads over "
+              << std::lround(d.report.effective_area) << " units^2 of its "
+              << std::lround(std::numbers::pi * d.params.radius * d.params.radius)
+              << "): at density " << density << " the field's excess kurtosis is " << kurtosis
+              << " and it looks speckled; density >= " << std::ceil(density * kurtosis / 0.3)
+              << " brings it to 0.3";
+            layer.warn("density", s.str());
+        }
+        if (d.report.passband_error > 0.2) {
+            std::ostringstream s;
+            s << std::setprecision(3) << "the designed kernel (radius " << d.report.radius << ", "
+              << 100 * d.report.energy_fraction
+              << " % of the energy) misses the target spectrum by up to "
+              << std::lround(100 * d.report.passband_error)
+              << " % in the pass band; a larger energy (e.g. 0.999) or radius costs no time per "
+                 "pixel";
+            r.warn(radius_node ? "radius" : "energy", s.str());
+        }
+        k = d.params;
+    }
     k.orientation = orientation.value(0.0);
     k.aspect = aspect.value(0.0);
     if (!orientation.is_constant()) keys.push_back({&K::KernelParams::orientation, orientation});

@@ -33,14 +33,22 @@ uint64_t mix_seed(uint64_t global, uint64_t layer);
 kernels::KernelParams read_kernel(std::optional<Reader> r, Reader& layer,
                                   const std::filesystem::path& base, std::vector<KernelKey>& keys,
                                   bool pyramid);
+/// The design keys of a `spectrum` or `autocorrelation` kernel in table `r` (energy, nyquist,
+/// rolloff, max_radius; one of model, expression, table and the model's parameters) and the
+/// design in o.dims dimensions (2: [layer.kernel]; 3: [layer.solid]); o.radius and o.window are
+/// the caller's. Library errors are reported at the key whose value caused them.
+kernels::DesignedKernel read_design(Reader& r, bool acf, const std::filesystem::path& base,
+                                    kernels::DesignOptions o);
 /// The layer's [[layer.flow]] tables summed into one flow (null without any); type "layer"
 /// flows are handed to `compose` (another layer's field, set by the renderer).
 std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& process,
                                       const std::filesystem::path& base,
                                       CompositionReader& compose, size_t index);
-/// A [[layer]] drawn by another synthesizer (source = "fbm", "subdivision", "solid").
+/// A [[layer]] drawn by another synthesizer (source = "fbm", "subdivision", "solid"); `zoom`:
+/// the camera's smallest zoom (pixels per texture unit).
 void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const std::filesystem::path& base,
-                       const Limits& limits, CompositionReader& compose, LayerConfig& L);
+                       const Limits& limits, double zoom, CompositionReader& compose,
+                       LayerConfig& L);
 /// A volume scene's [volume] and [preview] tables (scenes/volume_config.cpp); `fps` and the
 /// preview size come from [output].
 std::shared_ptr<const VolumeSceneConfig> read_volume_scene(Reader& top, uint64_t global_seed,

@@ -23,7 +23,8 @@ namespace fs = std::filesystem;
 /// mean, gain, marginal and
 /// composition; the impulse process's keys are refused (scenes/source.h).
 void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path& base,
-                       const Limits& limits, detail::CompositionReader& compose, LayerConfig& L) {
+                       const Limits& limits, double zoom, detail::CompositionReader& compose,
+                       LayerConfig& L) {
     const std::string kind(detail::kLayerSourceNames[r.choice("source", detail::kLayerSourceNames, 0)]);
     for (std::string_view key : {"kernel", "density", "amplitude", "period", "lifetime", "envelope",
                                  "loop", "integrator", "substeps", "jacobian", "orientation",
@@ -39,7 +40,7 @@ void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path
     if (kind == "fbm") {
         L.source = detail::read_fbm_source(r.table(kind), L.process.seed, limits.max_memory_mib);
     } else if (kind == "solid") {
-        L.source = detail::read_solid_source(r.table(kind), L.process.seed);
+        L.source = detail::read_solid_source(r.table(kind), L.process.seed, base, zoom);
     } else {
         std::optional<Reader> t = r.table(kind);
         if (!t)

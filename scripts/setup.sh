@@ -15,7 +15,9 @@ packages=(build-essential cmake pkg-config libeigen3-dev libtbb-dev libopenimage
           # browser test
           python3-dev pybind11-dev python3-numpy python3-pytest libcpp-httplib-dev chromium
           # the ffmpeg tool: the SSIM of video presets in bench/README.md
-          ffmpeg)
+          ffmpeg
+          # the solid noise loops run under an emulated CPU without AVX2 (tests/app/test_solid_simd.sh)
+          qemu-user)
 missing=()
 for p in "${packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -119,4 +119,29 @@ private:
     std::array<double, 9> m_warp;  ///< M / R: points to cell units
 };
 
+/// The 2-D power spectrum of a plane z = const through 3-D solid noise with the identity metric:
+/// S_2(k) = int S(sqrt(k^2 + k_z^2)) dk_z (the projection-slice theorem: a slice's spectrum is
+/// the projection of the volume's), k in cycles per unit; int S_2 d^2k is the noise's variance.
+/// The 3-D radial spectrum is tabulated once (64 points per 1/R) out to where it has fallen
+/// below 1e-12 of its peak, S_2 by Gauss–Legendre quadrature over k_z. Immutable.
+class SolidSliceSpectrum {
+public:
+    /// ValueError for 4-D noise or a metric other than the identity.
+    explicit SolidSliceSpectrum(const SolidNoise& noise);
+    double operator()(double k) const;
+    /// The frequency beyond which S (3-D) is taken as 0.
+    double cutoff() const { return m_step * double(m_s3.size() - 3); }
+
+private:
+    double s3(double k) const;  ///< the tabulated 3-D radial spectrum, cubic interpolation
+    double m_step = 0.0;
+    std::vector<double> m_s3;
+};
+
+/// A kernel designed in 3-D (kernels::DesignOptions::dims = 3, so |H|^2 = S) divided by
+/// sqrt(lambda E[a^2]), lambda = density / (4/3 pi R^3), E[a^2] = 1/3: sparse convolution with it
+/// at `density` has the spectrum S itself and the variance int S d^3k. ValueError for a kernel
+/// that is not a radial sampled one.
+kernels::KernelParams solid_designed_kernel(const kernels::KernelParams& designed, double density);
+
 }  // namespace impulse::synth

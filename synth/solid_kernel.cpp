@@ -2,7 +2,9 @@
 // A 2-D kernel's radial shape in 3-D and 4-D, with its integrals and 3-D spectrum
 // (docs/solid.md "Kernels in 3-D").
 
+#include <algorithm>
 #include <cmath>
+#include <memory>
 #include <numbers>
 
 #include "kernels/quadrature.h"
@@ -103,6 +105,63 @@ double SolidKernel::radial_power_spectrum(double k) const {
                          return power_spectrum(k * mu, k * std::sqrt(std::max(0.0, 1.0 - mu * mu)), 0.0);
                      },
                      -1.0, 1.0, 8);
+}
+
+SolidSliceSpectrum::SolidSliceSpectrum(const SolidNoise& noise) {
+    const SolidParams& p = noise.params();
+    if (p.dims != 3) throw ValueError("slice spectrum: 3-D noise only (dims = 4 given)");
+    if (p.metric != std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 1})
+        throw ValueError("slice spectrum: the identity metric only");
+    const double R = noise.kernel().radius();
+    m_step = 1.0 / (64.0 * R);
+    // Out to 24 / R (the carrier's 2 f beyond) and on until a whole 1/R of the table is below
+    // 1e-12 of the peak; at most 2^16 points.
+    const double f = noise.kernel().shape().has_carrier() ? noise.kernel().shape().params().frequency : 0.0;
+    const size_t least = static_cast<size_t>(std::ceil((24.0 / R + 2.0 * f) / m_step));
+    double peak = 0.0, recent = 0.0;
+    for (size_t i = 0; i < (size_t(1) << 16); ++i) {
+        const double v = noise.radial_power_spectrum(double(i) * m_step);
+        m_s3.push_back(v);
+        peak = std::max(peak, v);
+        recent = i % 64 == 0 ? v : std::max(recent, v);
+        if (i >= least && i % 64 == 63 && recent < 1e-12 * peak) break;
+    }
+    for (int i = 0; i < 3; ++i) m_s3.push_back(0.0);
+}
+
+double SolidSliceSpectrum::s3(double k) const {
+    const double x = k / m_step;
+    const size_t i = static_cast<size_t>(x);
+    if (i + 2 >= m_s3.size()) return 0.0;
+    const double t = x - double(i);
+    const double p0 = i == 0 ? m_s3[1] : m_s3[i - 1];  // even in k
+    const double p1 = m_s3[i], p2 = m_s3[i + 1], p3 = m_s3[i + 2];
+    // 4-point Lagrange cubic: follows the quadratic nulls of |H|^2 between side lobes.
+    const double v = -t * (t - 1) * (t - 2) / 6 * p0 + (t + 1) * (t - 1) * (t - 2) / 2 * p1 -
+                     (t + 1) * t * (t - 2) / 2 * p2 + (t + 1) * t * (t - 1) / 6 * p3;
+    return std::max(v, 0.0);
+}
+
+double SolidSliceSpectrum::operator()(double k) const {
+    const double top = cutoff();
+    if (std::abs(k) >= top) return 0.0;
+    const double kz = std::sqrt(top * top - k * k);  // S vanishes beyond
+    // S_2(k) = 2 int_0^kz S(sqrt(k^2 + u^2)) du; panels of 8 table steps.
+    const int panels = std::max(8, static_cast<int>(std::ceil(kz / (8.0 * m_step))));
+    return 2.0 * kernels::detail::integrate([&](double u) { return s3(std::sqrt(k * k + u * u)); },
+                                            0.0, kz, panels);
+}
+
+kernels::KernelParams solid_designed_kernel(const kernels::KernelParams& designed, double density) {
+    if (designed.type != kernels::KernelType::Sampled || !designed.sampled || !designed.sampled->radial)
+        throw ValueError("solid_designed_kernel: expected a radial sampled (designed) kernel");
+    const double R = designed.radius;
+    const double lambda = density / (4.0 / 3.0 * kPi * R * R * R), ea2 = 1.0 / 3.0;
+    kernels::KernelParams k = designed;
+    auto scaled = std::make_shared<kernels::SampledKernel>(*designed.sampled);
+    for (double& v : scaled->values) v /= std::sqrt(lambda * ea2);
+    k.sampled = scaled;
+    return k;
 }
 
 }  // namespace impulse::synth
