@@ -11,7 +11,9 @@ packages=(build-essential cmake pkg-config libeigen3-dev libtbb-dev libopenimage
           openimageio-tools slurm-wlm munge libopenvdb-dev libboost-dev webp
           # the Python module (build/python/) and its tests; the preview server and its
           # browser test
-          python3-dev pybind11-dev python3-numpy python3-pytest libcpp-httplib-dev chromium)
+          python3-dev pybind11-dev python3-numpy python3-pytest libcpp-httplib-dev chromium
+          # the SIMD-path test runs the command line on emulated CPUs without AVX2 / AVX-512
+          qemu-user)
 missing=()
 for p in "${packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
