@@ -1,8 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // The vectorised inner loops of the tiled evaluator (internal to impulse::render). The same
-// source is compiled twice, for baseline x86-64 and for AVX2; with FMA contraction off both
-// round identically, so the CPU that renders never changes a bit.
+// source is compiled three times, for baseline x86-64, AVX2 and AVX-512; with FMA contraction
+// off and every fused multiply-add written out (std::fma), each pixel's arithmetic is the same
+// sequence of correctly rounded operations whatever the lane width, so the CPU that renders
+// never changes a bit.
 
 #include <cstddef>
 #include <cstdint>
@@ -45,9 +47,9 @@ struct LoopImpulses {
     const float* sin_t = nullptr;
 };
 
-/// Columns of slack on each side of a tile row: spans are rounded up to whole vectors of 8 and
-/// may run into it (those pixels are discarded).
-inline constexpr int kPad = 8;
+/// Columns of slack on each side of a tile row: spans are rounded up to whole vectors (8 or 16
+/// lanes) and may run into it (those pixels are discarded).
+inline constexpr int kPad = 16;
 
 /// Adds the impulses idx[0..n) to the tile covering pixels [tx0, tx0+tw) x [ty0, ty0+th);
 /// `acc` holds th rows of tw + 2 kPad floats, pixel (x, y) at
@@ -56,5 +58,7 @@ void eval_tile_base(const LoopKernel& k, const LoopImpulses& p, const uint32_t* 
                     int tx0, int ty0, int tw, int th, float* acc);
 void eval_tile_avx2(const LoopKernel& k, const LoopImpulses& p, const uint32_t* idx, size_t n,
                     int tx0, int ty0, int tw, int th, float* acc);
+void eval_tile_avx512(const LoopKernel& k, const LoopImpulses& p, const uint32_t* idx, size_t n,
+                      int tx0, int ty0, int tw, int th, float* acc);
 
 }  // namespace impulse::render::detail

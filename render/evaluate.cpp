@@ -110,8 +110,10 @@ Prepared prepare(const kernels::Kernel& k, const sim::Impulses& imp, const View&
 }
 
 void eval_tile(const LoopKernel& k, const LoopImpulses& p, const uint32_t* idx, size_t n, int tx0,
-               int ty0, int tw, int th, float* acc, bool avx2) {
-    if (avx2 && numeric::cpu_has_avx2_fma())
+               int ty0, int tw, int th, float* acc, const EvalOptions& o) {
+    if (o.use_avx2 && o.use_avx512 && numeric::cpu_has_avx512())
+        detail::eval_tile_avx512(k, p, idx, n, tx0, ty0, tw, th, acc);
+    else if (o.use_avx2 && numeric::cpu_has_avx2_fma())
         detail::eval_tile_avx2(k, p, idx, n, tx0, ty0, tw, th, acc);
     else
         detail::eval_tile_base(k, p, idx, n, tx0, ty0, tw, th, acc);
@@ -174,7 +176,7 @@ void accumulate(const kernels::Kernel& kernel, const sim::Impulses& impulses, co
         const int stride = tw + 2 * detail::kPad;
         std::vector<float> acc(size_t(stride) * th, 0.0f);
         eval_tile(lk, li, bins.data() + count[t], count[t + 1] - count[t], x0, y0, tw, th,
-                  acc.data(), options.use_avx2);
+                  acc.data(), options);
         for (int y = 0; y < th; ++y) {
             float* dst = out.data.data() + size_t(y0 + y) * view.width + x0;
             const float* src = acc.data() + size_t(y) * stride + detail::kPad;
@@ -197,7 +199,7 @@ void accumulate_region(const kernels::Kernel& kernel, const sim::Impulses& impul
     select(prep, lk.radius_px, x0, y0, x0 + w, y0 + h, idx);
     const int stride = w + 2 * detail::kPad;
     std::vector<float> acc(size_t(stride) * h, 0.0f);
-    eval_tile(lk, prep.view(), idx.data(), idx.size(), x0, y0, w, h, acc.data(), options.use_avx2);
+    eval_tile(lk, prep.view(), idx.data(), idx.size(), x0, y0, w, h, acc.data(), options);
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) tile[size_t(y) * w + x] += acc[size_t(y) * stride + detail::kPad + x];
 }

@@ -17,6 +17,7 @@ struct EvalOptions {
     int tile_size = 128;  ///< square tiles in pixels, >= 8; the result does not depend on it
     bool parallel = true;  ///< false: the serial path through the same code (debugging)
     bool use_avx2 = true;  ///< false: baseline SSE2 loops (bit-identical; for tests)
+    bool use_avx512 = true;  ///< false: at most the AVX2 loops (bit-identical; for tests)
     /// > 0: a perspective frame (accumulate_perspective) whose impulses' pixel boxes add up to
     /// more than this is refused with render::PixelBudgetError before any pixel is evaluated.
     /// The impulse count alone does not bound the work: a footprint blurred isotropically
@@ -33,8 +34,9 @@ public:
 
 /// Adds sum_k w_k h_{theta_k}(x - x_k) to `out` (sized to the view; not cleared) for every
 /// pixel centre. Deterministic: each pixel sums its impulses in their canonical order, so the
-/// bits do not depend on the thread count or the tile size. Uses AVX2 where the CPU has it,
-/// with the same arithmetic (no FMA contraction) as the baseline path. Throws ValueError naming
+/// bits do not depend on the thread count or the tile size. Uses AVX-512 or AVX2 where the CPU
+/// has it (numeric::simd_path), with the same arithmetic (no FMA contraction) as the baseline
+/// path. Throws ValueError naming
 /// the first impulse whose position (in pixels, as a float), orientation or weight is not
 /// finite; accumulate_region too.
 void accumulate(const kernels::Kernel& kernel, const sim::Impulses& impulses, const View& view,

@@ -16,7 +16,8 @@ packages=(build-essential cmake pkg-config libeigen3-dev libtbb-dev libopenimage
           python3-dev pybind11-dev python3-numpy python3-pytest libcpp-httplib-dev chromium
           # the ffmpeg tool: the SSIM of video presets in bench/README.md
           ffmpeg
-          # the solid noise loops run under an emulated CPU without AVX2 (tests/app/test_solid_simd.sh)
+          # the SIMD-path tests run the command line on emulated CPUs without AVX2 / AVX-512
+          # (tests/simd/test_simd_paths.sh, tests/app/test_solid_simd.sh)
           qemu-user)
 missing=()
 for p in "${packages[@]}"; do
