@@ -294,32 +294,27 @@ scenes::Scene load_render_scene(const RenderOptions& opt) {
     return scene;
 }
 
-int run_render(const RenderOptions& opt) {
-    scenes::Scene scene = load_render_scene(opt);
-    const std::string path = scene.path;
-    long long first = 0, last = scene.output.frames - 1;
-    if (!opt.frames.empty()) std::tie(first, last) = parse_frame_range(opt.frames, scene.output.frames);
-
-    // No -o: out/SCENE.mp4, or out/SCENE.png for one frame (README's first command works).
-    const bool default_output = opt.output.empty();
+/// -o, or without it out/SCENE.mp4 (out/SCENE.png for one frame: README's first command works).
+std::string render_output(const RenderOptions& opt, const std::string& scene_path, bool one_frame) {
+    if (!opt.output.empty()) return opt.output;
     const std::string output =
-        default_output ? "out/" + fs::path(path).stem().string() + (first == last ? ".png" : ".mp4")
-                       : opt.output;
-    if (default_output) {
-        std::error_code ec;
-        fs::create_directories("out", ec);
-        std::cerr << "output: " << output << " (-o to choose)\n";
-    }
-    if (scene.volume) {  // impulses in 3-D: OpenVDB frames or a ray-marched preview
-        std::unique_ptr<tbb::global_control> cap;  // --threads, as below
-        if (opt.threads > 0)
-            cap = std::make_unique<tbb::global_control>(
-                tbb::global_control::max_allowed_parallelism, opt.threads);
-        return run_volume_render(scene, {output, first, last, opt.quiet, opt.resume});
-    }
-    const bool video = output::is_video_path(output);
-    const bool sequence = !video && !expand_pattern(output, 0).empty();
-    if (!video && !sequence) {
+        "out/" + fs::path(scene_path).stem().string() + (one_frame ? ".png" : ".mp4");
+    std::error_code ec;
+    fs::create_directories("out", ec);
+    std::cerr << "output: " << output << " (-o to choose)\n";
+    return output;
+}
+
+struct OutputKind {
+    bool video = false, sequence = false;
+};
+
+/// A video, an image sequence or one image; refuses what cannot hold the frames asked for.
+OutputKind output_kind(const std::string& output, long long first, long long last, bool resume) {
+    OutputKind k;
+    k.video = output::is_video_path(output);
+    k.sequence = !k.video && !expand_pattern(output, 0).empty();
+    if (!k.video && !k.sequence) {
         if (!output::is_image_path(output))
             throw ValueError(output + ": unknown output type: expected an image (.exr .png .tif), "
                              "a pattern (frame_####.png) or a video (.mp4 .mov .mkv .webm)");
@@ -327,8 +322,93 @@ int run_render(const RenderOptions& opt) {
             throw ValueError(output + ": one image but " + std::to_string(last - first + 1) +
                              " frames requested: use a pattern like frame_####.png, a video, or --frames N");
     }
-    if (opt.resume && video)
+    if (resume && k.video)
         throw ValueError("--resume: applies to image sequences; a video is always written whole");
+    return k;
+}
+
+/// The metadata every frame of the run carries (frame and time are added per frame).
+output::Metadata run_metadata(const scenes::Scene& sc, const output::ValueMapping& mapping) {
+    std::string layer_seeds;
+    for (const auto& l : sc.layers) layer_seeds += (layer_seeds.empty() ? "" : " ") + std::to_string(l.process.seed);
+    return {{"seed", std::to_string(sc.seed)},
+            {"layer_seeds", layer_seeds},
+            {"scene", sc.path},
+            {"scene_hash", sc.hash},
+            {"fps", std::to_string(sc.output.fps)},
+            {"range", std::to_string(mapping.lo) + " " + std::to_string(mapping.hi)}};
+}
+
+void open_video(output::VideoWriter& writer, const std::string& path,
+                const scenes::OutputConfig& out, const output::Metadata& meta) {
+    output::quiet_video_logs();
+    output::VideoOptions vo;
+    vo.width = out.width, vo.height = out.height, vo.fps = out.fps;
+    vo.codec = output::video_codec_from_string(out.codec);
+    vo.crf = out.crf, vo.preset = out.preset;
+    vo.metadata = meta;
+    writer.open(path, vo);
+}
+
+void prepare_resume(const std::string& output) {
+    remove_stale_temporaries(output);
+    if (!output::keeps_metadata(output))
+        std::cerr << output << ": --resume: this format keeps no metadata; a present frame is "
+                     "kept if it decodes whole with the run's size, channels and sample type "
+                     "(EXR and PNG also check seed, frame and scene hash)\n";
+}
+
+/// Writes frame f as one image: EXR keeps the raw field; display formats get the shading (grey
+/// by default), with what `impulse encode` needs to make the video render would have made.
+void write_frame_image(const scenes::Scene& sc, const render::Frame& frame, long long f,
+                       const std::string& target, const output::ValueMapping& mapping,
+                       output::Metadata m, std::vector<float>& rgb) {
+    const auto& out = sc.output;
+    const double t = sc.frame_time(f);
+    const output::Shading shading = sc.shading_at(t);  // keyframed shading at the frame time
+    m.emplace_back("frame", std::to_string(f));
+    m.emplace_back("time", std::to_string(t));
+    m.emplace_back("display", output::format_display({mapping, shading}));
+    m.emplace_back("encoder", "codec=" + out.codec + " crf=" + std::to_string(out.crf) +
+                                  " preset=" + out.preset);
+    const bool exr = fs::path(target).extension() == ".exr";
+    if (!exr && colour_shading(sc)) {
+        output::shade(frame, mapping, shading, rgb);
+        output::write_rgb_image(target, out.width, out.height, rgb, m, out.bits == 16);
+    } else {
+        output::write_image(target, frame, mapping, m, out.bits == 16, out.compression);
+    }
+}
+
+/// The run's last line: interrupted (exit status 128 + signal) or what was written.
+int report_render(const std::string& output, long long written, long long skipped,
+                  long long redone, int width, int height) {
+    if (const int signo = g_signal) {
+        std::cerr << "interrupted by " << StopSignals::name(signo) << ": " << written << " frame"
+                  << (written == 1 ? "" : "s") << " written to " << output << " (exit status "
+                  << 128 + signo << ")\n";
+        return 128 + signo;
+    }
+    std::cout << "wrote " << output << " (" << written << " frame" << (written == 1 ? "" : "s");
+    if (skipped) std::cout << ", " << skipped << " already present";
+    if (redone) std::cout << ", " << redone << " replaced (present but did not check out)";
+    std::cout << ", " << width << "x" << height << ")\n";
+    return 0;
+}
+
+int run_render(const RenderOptions& opt) {
+    scenes::Scene scene = load_render_scene(opt);
+    long long first = 0, last = scene.output.frames - 1;
+    if (!opt.frames.empty()) std::tie(first, last) = parse_frame_range(opt.frames, scene.output.frames);
+    const std::string output = render_output(opt, scene.path, first == last);
+    if (scene.volume) {  // impulses in 3-D: OpenVDB frames or a ray-marched preview
+        std::unique_ptr<tbb::global_control> cap;  // --threads, as below
+        if (opt.threads > 0)
+            cap = std::make_unique<tbb::global_control>(
+                tbb::global_control::max_allowed_parallelism, opt.threads);
+        return run_volume_render(scene, {output, first, last, opt.quiet, opt.resume});
+    }
+    const auto [video, sequence] = output_kind(output, first, last, opt.resume);
     ensure_directory(sequence ? expand_pattern(output, first) : output);
 
     // Held by pointer so it can be freed before the encoder's flush (below).
@@ -340,34 +420,12 @@ int run_render(const RenderOptions& opt) {
     render::EvalOptions eo;
     eo.tile_size = opt.tile;
 
-    std::string layer_seeds;
-    for (const auto& l : sc.layers) layer_seeds += (layer_seeds.empty() ? "" : " ") + std::to_string(l.process.seed);
-    output::Metadata meta = {{"seed", std::to_string(sc.seed)},
-                             {"layer_seeds", layer_seeds},
-                             {"scene", sc.path},
-                             {"scene_hash", sc.hash},
-                             {"fps", std::to_string(out.fps)},
-                             {"range", std::to_string(mapping.lo) + " " + std::to_string(mapping.hi)}};
+    const output::Metadata meta = run_metadata(sc, mapping);
 
     StopSignals stop_signals;  // from here a stop signal keeps what was written
     output::VideoWriter writer;
-    if (video) {
-        output::quiet_video_logs();
-        output::VideoOptions vo;
-        vo.width = out.width, vo.height = out.height, vo.fps = out.fps;
-        vo.codec = output::video_codec_from_string(out.codec);
-        vo.crf = out.crf, vo.preset = out.preset;
-        vo.metadata = meta;
-        writer.open(output, vo);
-    }
-
-    if (sequence && opt.resume) {
-        remove_stale_temporaries(output);
-        if (!output::keeps_metadata(output))
-            std::cerr << output << ": --resume: this format keeps no metadata; a present frame is "
-                         "kept if it decodes whole with the run's size, channels and sample type "
-                         "(EXR and PNG also check seed, frame and scene hash)\n";
-    }
+    if (video) open_video(writer, output, out, meta);
+    if (sequence && opt.resume) prepare_resume(output);
     Progress progress(last - first + 1, opt.quiet);
     // Frame f + 1 renders while frame f is written: on two cores the encoder and the renderer
     // overlap instead of taking turns. Images: two float frames, f + 1 renders while f is
@@ -383,25 +441,6 @@ int run_render(const RenderOptions& opt) {
     if (opt.threads > 0)
         cap = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
                                                     opt.threads);
-    auto emit = [&](const render::Frame& frame, long long f, const std::string& target) {
-        const double t = sc.frame_time(f);
-        const output::Shading shading = sc.shading_at(t);  // keyframed shading at the frame time
-        output::Metadata m = meta;
-        m.emplace_back("frame", std::to_string(f));
-        m.emplace_back("time", std::to_string(t));
-        // What `impulse encode` needs to make the video render would have made from these frames.
-        m.emplace_back("display", output::format_display({mapping, shading}));
-        m.emplace_back("encoder", "codec=" + out.codec + " crf=" + std::to_string(out.crf) +
-                                      " preset=" + out.preset);
-        // EXR keeps the raw field; display formats get the shading (grey by default).
-        const bool exr = fs::path(target).extension() == ".exr";
-        if (!exr && colour_shading(sc)) {
-            output::shade(frame, mapping, shading, rgb);
-            output::write_rgb_image(target, out.width, out.height, rgb, m, out.bits == 16);
-        } else {
-            output::write_image(target, frame, mapping, m, out.bits == 16, out.compression);
-        }
-    };
     std::future<void> pending;  // the previous frame's output
     auto finish_pending = [&] {
         if (!pending.valid()) return;
@@ -431,8 +470,9 @@ int run_render(const RenderOptions& opt) {
             pending = std::async(std::launch::async, [&] { writer.encode_staged(); });
             continue;  // the frame is free again: f + 1 renders into it
         }
-        pending = std::async(std::launch::async,
-                             [&, s = slot, f, target] { emit(frames[s], f, target); });
+        pending = std::async(std::launch::async, [&, s = slot, f, target] {
+            write_frame_image(sc, frames[s], f, target, mapping, meta, rgb);
+        });
         slot ^= 1;
     }
     finish_pending();
@@ -445,17 +485,7 @@ int run_render(const RenderOptions& opt) {
         renderer.reset();
         writer.close();  // on interruption too: what was encoded stays playable
     }
-    if (const int signo = g_signal) {
-        std::cerr << "interrupted by " << StopSignals::name(signo) << ": " << written << " frame"
-                  << (written == 1 ? "" : "s") << " written to " << output << " (exit status "
-                  << 128 + signo << ")\n";
-        return 128 + signo;
-    }
-    std::cout << "wrote " << output << " (" << written << " frame" << (written == 1 ? "" : "s");
-    if (skipped) std::cout << ", " << skipped << " already present";
-    if (redone) std::cout << ", " << redone << " replaced (present but did not check out)";
-    std::cout << ", " << width << "x" << height << ")\n";
-    return 0;
+    return report_render(output, written, skipped, redone, width, height);
 }
 
 int run_scenes() {

@@ -44,22 +44,7 @@ bool is_mesh_command(int argc, char** argv) {
     return c == "mesh" || c == "trajectories";
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-    if (is_mesh_command(argc, argv)) return run_mesh_companion(argv);
-    CLI::App app{
-        "impulse: animated, anti-aliased procedural textures from Lewis's shaped Poisson point\n"
-        "process (sparse convolution noise) treated as a particle system."};
-    app.require_subcommand(1);
-    app.set_version_flag("--version", "impulse " IMPULSE_VERSION);
-    app.footer(
-        "Exit status: 0 done; 1 an error (one line on stderr); 2 a bad command line; 128 + the\n"
-        "signal's number when stopped by SIGINT (130), SIGTERM (143) or SIGHUP (129): the frames\n"
-        "written so far are kept whole and a video is closed so it plays.");
-    app.set_help_all_flag("--help-all", "Show help for every command");
-
-    impulse::app::RenderOptions ro;
+CLI::App* add_render(CLI::App& app, impulse::app::RenderOptions& ro) {
     CLI::App* render = app.add_subcommand("render", "Render a scene to an image, an image sequence or a video");
     render->add_option("scene", ro.scene, "Scene file (TOML) or built-in scene name (see `impulse scenes`)")
         ->required();
@@ -88,17 +73,10 @@ int main(int argc, char** argv) {
                      "whole; size, channels and, in EXR and PNG, scene hash, seed and frame match), "
                      "render the others, and remove temporaries left by killed runs");
     render->add_flag("-q,--quiet", ro.quiet, "No progress display");
+    return render;
+}
 
-    CLI::App* scenes = app.add_subcommand("scenes", "List the built-in scenes");
-
-    impulse::app::InfoOptions io;
-    CLI::App* info = app.add_subcommand("info", "Print a scene's closed-form statistics and cost estimate");
-    info->add_option("scene", io.scene, "Scene file or built-in name")->required();
-    info->add_option("--set", io.sets, "Override a scene key");
-    info->add_option("--size", io.size, "The scene at WxH pixels, the same view (as render --size)");
-    info->add_option("--crop", io.crop, "A WxH window at the scene's scale (as render --crop)");
-
-    impulse::app::AnalyzeOptions ao;
+CLI::App* add_analyze(CLI::App& app, impulse::app::AnalyzeOptions& ao) {
     CLI::App* analyze = app.add_subcommand(
         "analyze", "Measure an image, sequence or video; with --scene, compare with its theory");
     analyze->add_option("input", ao.input,
@@ -118,12 +96,10 @@ int main(int argc, char** argv) {
     analyze->add_option("--frames", ao.frames, "Inclusive 0-based frame range A-B, or one frame A");
     analyze->add_option("--max-frames", ao.max_frames, "Analyse at most N frames")
         ->check(CLI::PositiveNumber);
+    return analyze;
+}
 
-    impulse::app::EncodeOptions eo;
-    CLI::App* encode = impulse::app::add_encode(app, eo);
-    impulse::app::FarmOptions fm;
-    CLI::App* farm = impulse::app::add_farm(app, fm);
-    impulse::app::PreviewOptions po;
+CLI::App* add_preview(CLI::App& app, impulse::app::PreviewOptions& po) {
     CLI::App* preview = app.add_subcommand(
         "preview", "Play a scene in the browser as it renders; follows its file (app/preview.cpp)");
     preview->add_option("scene", po.scene, "Scene file or built-in name")->required();
@@ -137,6 +113,45 @@ int main(int argc, char** argv) {
                         "layer.0.kernel.radius,layer.0.density")
         ->delimiter(',');
     preview->add_option("--set", po.sets, "Override a scene key (as render --set)");
+    return preview;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    if (is_mesh_command(argc, argv)) return run_mesh_companion(argv);
+    CLI::App app{
+        "impulse: animated, anti-aliased procedural textures from Lewis's shaped Poisson point\n"
+        "process (sparse convolution noise) treated as a particle system."};
+    app.require_subcommand(1);
+    app.set_version_flag("--version", "impulse " IMPULSE_VERSION);
+    app.footer(
+        "Exit status: 0 done; 1 an error (one line on stderr); 2 a bad command line; 128 + the\n"
+        "signal's number when stopped by SIGINT (130), SIGTERM (143) or SIGHUP (129): the frames\n"
+        "written so far are kept whole and a video is closed so it plays.");
+    app.set_help_all_flag("--help-all", "Show help for every command");
+
+    impulse::app::RenderOptions ro;
+    CLI::App* render = add_render(app, ro);
+
+    CLI::App* scenes = app.add_subcommand("scenes", "List the built-in scenes");
+
+    impulse::app::InfoOptions io;
+    CLI::App* info = app.add_subcommand("info", "Print a scene's closed-form statistics and cost estimate");
+    info->add_option("scene", io.scene, "Scene file or built-in name")->required();
+    info->add_option("--set", io.sets, "Override a scene key");
+    info->add_option("--size", io.size, "The scene at WxH pixels, the same view (as render --size)");
+    info->add_option("--crop", io.crop, "A WxH window at the scene's scale (as render --crop)");
+
+    impulse::app::AnalyzeOptions ao;
+    CLI::App* analyze = add_analyze(app, ao);
+
+    impulse::app::EncodeOptions eo;
+    CLI::App* encode = impulse::app::add_encode(app, eo);
+    impulse::app::FarmOptions fm;
+    CLI::App* farm = impulse::app::add_farm(app, fm);
+    impulse::app::PreviewOptions po;
+    CLI::App* preview = add_preview(app, po);
 
     // Past a file size limit (ulimit -f) a write fails with EFBIG and is reported with the file's
     // name, instead of the process being killed by SIGXFSZ with nothing said.

@@ -565,6 +565,114 @@ std::vector<double> translated_spectrum(const HankelGrid& G, const TranslationMa
     return G.to_k(R);
 }
 
+/// Direct inversion rho_G(r) = R_Y^-1(R_T(r)): where S_G = H^-1[rho_G] goes negative, no
+/// Gaussian spectrum maps exactly onto the target (Shields et al. 2011 §2). Measured on the
+/// working band (beyond it the transforms' rounding dominates S_G).
+void direct_inversion(const HankelGrid& G, const TranslationMap& map,
+                      const std::vector<double>& RT, int last_active, double var,
+                      PrecorrectionReport& rep) {
+    const double lowest = map.covariance(-1.0);
+    std::vector<double> rho(G.nr);
+    int below = 0;
+    for (int j = 0; j < G.nr; ++j) {
+        if (RT[j] < lowest - 1e-12 * var) ++below;
+        rho[j] = map.inverse(RT[j]);
+    }
+    const std::vector<double> Sd = G.to_k(rho);
+    double neg = 0.0, all = 0.0;
+    for (int i = 0; i <= last_active; ++i) {
+        neg += G.wk[i] * std::max(-Sd[i], 0.0);
+        all += G.wk[i] * std::abs(Sd[i]);
+    }
+    rep.negative_fraction = all > 0.0 ? neg / all : 0.0;
+    rep.unreachable_fraction = double(below) / G.nr;
+}
+
+/// The corrected kernel h = H^-1[sign(H) sqrt(S_T C)] on the smallest support that keeps the
+/// worst band within budget; returns its spectrum S_G (for the report).
+std::vector<double> corrected_kernel(const HankelGrid& G, const TranslationMap& map,
+                                     const std::vector<double>& ST,
+                                     const std::vector<double>& sign,
+                                     const std::vector<double>& best, double best_band,
+                                     double integral_sq, const ItamOptions& opt,
+                                     KernelParams& kernel) {
+    std::vector<double> final_sg;
+    // h = H^-1[sign(H) sqrt(S_G)] = H^-1[H sqrt(C)], scaled to the requested
+    // int h^2 = int H^2 d^2k.
+    std::vector<double> H(G.nk);
+    for (int i = 0; i < G.nk; ++i) H[i] = sign[i] * std::sqrt(std::max(ST[i] * best[i], 0.0));
+    std::vector<double> H2(G.nk);
+    for (int i = 0; i < G.nk; ++i) H2[i] = H[i] * H[i];
+    const double scale = std::sqrt(integral_sq / G.to_r(H2)[0]);
+    std::vector<double> h = G.to_r(H);
+    for (double& v : h) v *= scale;
+    // The kernel needs a finite support: take the smallest radius, in steps of L / 4 from L,
+    // whose truncation keeps the worst band within half the remaining budget (halfway from
+    // ITAM's result to the tolerance; a tenth of the tolerance when ITAM missed it). The
+    // corrected kernel has a ringing tail a few L long; the far tail is rounding noise.
+    auto truncated_spectrum = [&](int cut) {
+        std::vector<double> ht(G.nr, 0.0);
+        std::copy(h.begin(), h.begin() + cut + 1, ht.begin());
+        std::vector<double> s2 = G.to_k(ht);
+        for (double& v : s2) v *= v;
+        return s2;
+    };
+    const double allowed = best_band < opt.tolerance ? 0.5 * (best_band + opt.tolerance)
+                                                         : best_band + 0.1 * opt.tolerance;
+    int cut = G.nr - 1;
+    for (int c = 64; c < G.nr - 1; c += 16) {
+        const std::vector<double> s2 = truncated_spectrum(c);
+        if (spectrum_errors(G, ST, translated_spectrum(G, map, s2)).band <= allowed) {
+            cut = c;
+            break;
+        }
+    }
+    final_sg = truncated_spectrum(cut);
+    double hh = 0.0;  // int h^2 of the truncated kernel, restored to the requested value
+    for (int i = 0; i < G.nk; ++i) hh += G.wk[i] * final_sg[i];
+    const double fix = std::sqrt(integral_sq / hh);
+    auto sk = std::make_shared<SampledKernel>();
+    sk->radial = true;
+    sk->n = cut + 1;
+    for (int j = 0; j <= cut; ++j) sk->values.push_back(h[j] * fix);
+    kernel = KernelParams{};
+    kernel.type = KernelType::Sampled;
+    kernel.radius = G.r[cut];
+    kernel.sampled = sk;
+    return final_sg;
+}
+
+/// The report's one line: converged, or how close ITAM came and why it could not reach.
+std::string itam_message(const PrecorrectionReport& rep, const Errors& fin, int it,
+                         const TranslationMap& map, const ItamOptions& opt) {
+    std::ostringstream m;
+    m.precision(3);
+    if (opt.max_iterations == 0) {
+        m << "shaped spectrum of the kernel as it is: worst band above 1 % of peak "
+          << 100.0 * fin.band << " % off, relative L2 error " << fin.l2;
+    } else if (rep.converged) {
+        m << "ITAM converged in " << it << " iterations: worst band above 1 % of peak "
+          << 100.0 * fin.band << " % off, relative L2 residual " << fin.l2;
+    } else {
+        m << "no Gaussian spectrum found whose shaped spectrum is within " << 100.0 * opt.tolerance
+          << " % of the target above 1 % of its peak";
+        if (rep.negative_fraction > 0.0 || rep.unreachable_fraction > 0.0) {
+            m << " (";
+            if (rep.negative_fraction > 0.0)
+                m << "the direct inversion needs negative spectral values, "
+                  << 100.0 * rep.negative_fraction << " % of its mass";
+            if (rep.negative_fraction > 0.0 && rep.unreachable_fraction > 0.0) m << "; ";
+            if (rep.unreachable_fraction > 0.0)
+                m << "the target correlation falls below the reachable minimum "
+                  << map.min_correlation();
+            m << ")";
+        }
+        m << "; closest after " << it << " iterations: worst band " << 100.0 * fin.band
+          << " % off, relative L2 residual " << fin.l2;
+    }
+    return m.str();
+}
+
 Precorrection run_itam(const HankelGrid& G, std::vector<double> ST, const std::vector<double>& sign,
                        double integral_sq, const MarginalTransform& g, const ItamOptions& opt,
                        const KernelParams* original) {
@@ -585,26 +693,7 @@ Precorrection run_itam(const HankelGrid& G, std::vector<double> ST, const std::v
     while (last_active + 1 < G.nk && ST[last_active + 1] >= kActive * peak) ++last_active;
 
     PrecorrectionReport rep;
-    // Direct inversion rho_G(r) = R_Y^-1(R_T(r)): where S_G = H^-1[rho_G] goes negative, no
-    // Gaussian spectrum maps exactly onto the target (Shields et al. 2011 §2). Measured on the
-    // working band (beyond it the transforms' rounding dominates S_G).
-    {
-        const double lowest = map.covariance(-1.0);
-        std::vector<double> rho(G.nr);
-        int below = 0;
-        for (int j = 0; j < G.nr; ++j) {
-            if (RT[j] < lowest - 1e-12 * var) ++below;
-            rho[j] = map.inverse(RT[j]);
-        }
-        const std::vector<double> Sd = G.to_k(rho);
-        double neg = 0.0, all = 0.0;
-        for (int i = 0; i <= last_active; ++i) {
-            neg += G.wk[i] * std::max(-Sd[i], 0.0);
-            all += G.wk[i] * std::abs(Sd[i]);
-        }
-        rep.negative_fraction = all > 0.0 ? neg / all : 0.0;
-        rep.unreachable_fraction = double(below) / G.nr;
-    }
+    direct_inversion(G, map, RT, last_active, var, rep);
 
     // ITAM: S_G <- S_G S_T / S_Y, starting from the target's own shape. S_G is carried as the
     // target times a correction C(k) = S_G / S_T (unit variance), updated on the working band
@@ -645,48 +734,8 @@ Precorrection run_itam(const HankelGrid& G, std::vector<double> ST, const std::v
         out.kernel = *original;
         final_sg = ST;
     } else {
-        // h = H^-1[sign(H) sqrt(S_G)] = H^-1[H sqrt(C)], scaled to the requested
-        // int h^2 = int H^2 d^2k.
-        std::vector<double> H(G.nk);
-        for (int i = 0; i < G.nk; ++i) H[i] = sign[i] * std::sqrt(std::max(ST[i] * best[i], 0.0));
-        std::vector<double> H2(G.nk);
-        for (int i = 0; i < G.nk; ++i) H2[i] = H[i] * H[i];
-        const double scale = std::sqrt(integral_sq / G.to_r(H2)[0]);
-        std::vector<double> h = G.to_r(H);
-        for (double& v : h) v *= scale;
-        // The kernel needs a finite support: take the smallest radius, in steps of L / 4 from L,
-        // whose truncation keeps the worst band within half the remaining budget (halfway from
-        // ITAM's result to the tolerance; a tenth of the tolerance when ITAM missed it). The
-        // corrected kernel has a ringing tail a few L long; the far tail is rounding noise.
-        auto truncated_spectrum = [&](int cut) {
-            std::vector<double> ht(G.nr, 0.0);
-            std::copy(h.begin(), h.begin() + cut + 1, ht.begin());
-            std::vector<double> s2 = G.to_k(ht);
-            for (double& v : s2) v *= v;
-            return s2;
-        };
-        const double allowed = best_err.band < opt.tolerance ? 0.5 * (best_err.band + opt.tolerance)
-                                                             : best_err.band + 0.1 * opt.tolerance;
-        int cut = G.nr - 1;
-        for (int c = 64; c < G.nr - 1; c += 16) {
-            const std::vector<double> s2 = truncated_spectrum(c);
-            if (spectrum_errors(G, ST, translated_spectrum(G, map, s2)).band <= allowed) {
-                cut = c;
-                break;
-            }
-        }
-        final_sg = truncated_spectrum(cut);
-        double hh = 0.0;  // int h^2 of the truncated kernel, restored to the requested value
-        for (int i = 0; i < G.nk; ++i) hh += G.wk[i] * final_sg[i];
-        const double fix = std::sqrt(integral_sq / hh);
-        auto sk = std::make_shared<SampledKernel>();
-        sk->radial = true;
-        sk->n = cut + 1;
-        for (int j = 0; j <= cut; ++j) sk->values.push_back(h[j] * fix);
-        out.kernel = KernelParams{};
-        out.kernel.type = KernelType::Sampled;
-        out.kernel.radius = G.r[cut];
-        out.kernel.sampled = sk;
+        final_sg = corrected_kernel(G, map, ST, sign, best, best_err.band, integral_sq, opt,
+                                    out.kernel);
     }
     const std::vector<double> achieved = translated_spectrum(G, map, final_sg);
     const Errors fin = spectrum_errors(G, ST, achieved);
@@ -697,32 +746,7 @@ Precorrection run_itam(const HankelGrid& G, std::vector<double> ST, const std::v
     rep.target = ST;
     rep.achieved = achieved;
 
-    std::ostringstream m;
-    m.precision(3);
-    if (opt.max_iterations == 0) {
-        m << "shaped spectrum of the kernel as it is: worst band above 1 % of peak "
-          << 100.0 * fin.band << " % off, relative L2 error " << fin.l2;
-    } else if (rep.converged) {
-        m << "ITAM converged in " << it << " iterations: worst band above 1 % of peak "
-          << 100.0 * fin.band << " % off, relative L2 residual " << fin.l2;
-    } else {
-        m << "no Gaussian spectrum found whose shaped spectrum is within " << 100.0 * opt.tolerance
-          << " % of the target above 1 % of its peak";
-        if (rep.negative_fraction > 0.0 || rep.unreachable_fraction > 0.0) {
-            m << " (";
-            if (rep.negative_fraction > 0.0)
-                m << "the direct inversion needs negative spectral values, "
-                  << 100.0 * rep.negative_fraction << " % of its mass";
-            if (rep.negative_fraction > 0.0 && rep.unreachable_fraction > 0.0) m << "; ";
-            if (rep.unreachable_fraction > 0.0)
-                m << "the target correlation falls below the reachable minimum "
-                  << map.min_correlation();
-            m << ")";
-        }
-        m << "; closest after " << it << " iterations: worst band " << 100.0 * fin.band
-          << " % off, relative L2 residual " << fin.l2;
-    }
-    rep.message = m.str();
+    rep.message = itam_message(rep, fin, it, map, opt);
     out.report = std::move(rep);
     return out;
 }

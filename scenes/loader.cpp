@@ -174,6 +174,102 @@ void apply_override(toml::table& root, const std::string& text, Source& src) {
 
 
 
+/// [output]: size, frames, timing, codec and its settings, display range, bits, compression.
+void read_output(Reader& o, OutputConfig& out) {
+    o.refuse_keyframes("size");
+    if (const toml::node* n = o.node("size")) {
+        const toml::array* a = n->as_array();
+        if (!a || a->size() != 2 || !(*a)[0].is_integer() || !(*a)[1].is_integer())
+            o.fail(n, "size", "expected [width, height] in whole pixels");
+        const int64_t w = (*a)[0].value<int64_t>().value_or(0), h = (*a)[1].value<int64_t>().value_or(0);
+        if (w < 1 || h < 1 || w > 32768 || h > 32768)
+            o.fail(n, "size", "expected [width, height] with each in [1, 32768]");
+        out.width = static_cast<int>(w), out.height = static_cast<int>(h);
+    }
+    out.frames = o.integer("frames", 1, 1, 100000000);
+    out.fps = o.number("fps", 30.0, [](double v) { return v > 0 && v <= 1000; }, "frames per second in (0, 1000]");
+    out.start_s = o.number("start", 0.0, kNonNegative, "a time >= 0 in seconds");
+    if (!whole_frames(out.start_s, out.fps))
+        o.fail(o.node("start"), "start", "expected a whole number of frames at fps = " + num(out.fps));
+    const std::array<std::string_view, 5> codecs = {"auto", "h264", "prores", "ffv1", "vp9"};
+    out.codec = std::string(codecs[o.choice("codec", codecs, 0)]);
+    out.crf = static_cast<int>(o.integer("crf", 18, 0, 63));
+    const std::array<std::string_view, 9> presets = {"ultrafast", "superfast", "veryfast", "faster", "fast",
+                                                     "medium", "slow", "slower", "veryslow"};
+    out.preset = std::string(presets[o.choice("preset", presets, 5)]);
+    out.range = o.pair("range", "[low, high] field values mapped to black and white");
+    if (out.range && !((*out.range)[1] > (*out.range)[0]))
+        o.fail(o.node("range"), "range", "expected low < high");
+    out.bits = static_cast<int>(o.integer("bits", 8, 8, 16));
+    if (out.bits != 8 && out.bits != 16) o.fail(o.node("bits"), "bits", "expected 8 or 16");
+    out.compression = exr_compression(o);
+    o.finish();
+}
+
+/// [limits]: the budgets a render is held to.
+void read_limits(Reader& l, Limits& limits) {
+    limits.max_impulses = l.number("max_impulses", limits.max_impulses, kPositive, "a count > 0");
+    limits.max_memory_mib = l.number("max_memory_mib", limits.max_memory_mib, kPositive, "MiB > 0");
+    limits.max_pixel_evaluations = l.number(
+        "max_pixel_evaluations", limits.max_pixel_evaluations, kPositive, "a count > 0");
+    l.finish();
+}
+
+/// One [[layer]] of impulses (the point process): kernel, process, orientation, region, flows,
+/// marginal, composition keys and dispersion (its quadrature twin goes to `twins`).
+void read_impulse_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path& base,
+                        const Scene& s, detail::CompositionReader& compose,
+                        std::vector<LayerConfig>& twins, LayerConfig& L) {
+    const bool pyramid = s.camera.type == CameraConfig::Type::Perspective || s.camera.antialiased();
+    L.kernel = read_kernel(r.table("kernel"), r, base, L.kernel_keys, pyramid);
+    if (!r.has("kernel")) r.node("kernel");
+    sim::ProcessConfig& p = L.process;
+    p.layer = static_cast<uint32_t>(i);
+    p.seed = mix_seed(global_seed, static_cast<uint64_t>(r.integer("seed", 1, 0, INT64_MAX)));
+    L.density = r.keyframed("density", 16.0, kPositive, "a density > 0 (impulses per kernel area)");
+    p.amplitude = static_cast<sim::Amplitude>(r.choice("amplitude", sim::kAmplitudeNames, 0));
+    L.mean = r.keyframed("mean", 0.0);
+    L.gain = r.keyframed("gain", 1.0);
+    p.period = r.pair("period", "[width, height] > 0 of the periodic domain", kPositive);
+    p.lifetime_s = r.number("lifetime", 0.0, kNonNegative, "a lifetime >= 0 in seconds (0: still)");
+    p.envelope = static_cast<sim::Envelope>(r.choice("envelope", sim::kEnvelopeNames, 0));
+    p.loop_s = r.number("loop", 0.0, kNonNegative, "a period >= 0 in seconds (0: no loop)");
+    if (p.loop_s > 0) {
+        if (p.lifetime_s <= 0)
+            r.fail(r.node("loop"), "loop", "a loop needs moving particles: set lifetime > 0");
+        if (p.loop_s < p.lifetime_s)
+            r.fail(r.node("loop"), "loop",
+                   "a loop shorter than the lifetime (" + num(p.lifetime_s) +
+                       " s) cannot repeat its births: expected loop >= lifetime");
+        if (!whole_frames(p.loop_s, s.output.fps))
+            r.fail(r.node("loop"), "loop", "expected a whole number of frames at fps = " + num(s.output.fps));
+    }
+    p.integrator = static_cast<sim::Integrator>(r.choice("integrator", sim::kIntegratorNames, 0));
+    p.substeps = static_cast<int>(r.integer("substeps", 2, 1, 64));
+    p.jacobian = r.boolean("jacobian", true);
+    // a mode name or a field table; { type = "layer" } is composition's
+    detail::read_orientation(r, p, base, [&](Reader& f) { compose.read_orientation(f, i); });
+    detail::read_region(r, p, base);       // births confined to a shape or a mask
+    p.max_travel = r.number("max_travel", 4096.0, kPositive, "a distance > 0 in texture units");
+    if (p.lifetime_s <= 0 && !L.density.is_constant())
+        r.fail(r.node("density"), "density",
+               "cannot vary in time in a still layer (lifetime = 0): its impulses are never "
+               "born or die, so their number cannot change without popping; set lifetime > 0");
+    try {
+        prepare_layer(L);
+    } catch (const ValueError& e) {  // combinations the per-key checks cannot see
+        r.fail(r.node("kernel"), "kernel", e.what());
+    }
+    L.flow = read_flows(r, p, base, compose, i);
+    detail::read_marginal(r, L, base);
+    compose.read_layer(r, i, L);
+    detail::read_dispersion(r, L, twins, [&] { return read_flows(r, p, base, compose, i); });
+    if (L.density.min() < 1.0)
+        r.warn("density", "below 1 impulse per kernel area the noise is lumpy, see Lewis 1989 §4.1");
+    else if (!L.source && L.kernel.type != kernels::KernelType::Sampled)
+        warn_overlap(r, L);  // sampled (designed) kernels have their own peakedness warning
+}
+
 Scene read_scene(const toml::table& root, Source& src, const fs::path& base, OutputSize size,
                  OutputSize* own_size) {
     Scene s;
@@ -184,36 +280,7 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base, Out
     if (top.has("include"))
         top.fail(top.node("include"), "include",
                  "includes are resolved before --set applies: write include in the scene file");
-    if (auto o = top.table("output")) {
-        o->refuse_keyframes("size");
-        if (const toml::node* n = o->node("size")) {
-            const toml::array* a = n->as_array();
-            if (!a || a->size() != 2 || !(*a)[0].is_integer() || !(*a)[1].is_integer())
-                o->fail(n, "size", "expected [width, height] in whole pixels");
-            const int64_t w = (*a)[0].value<int64_t>().value_or(0), h = (*a)[1].value<int64_t>().value_or(0);
-            if (w < 1 || h < 1 || w > 32768 || h > 32768)
-                o->fail(n, "size", "expected [width, height] with each in [1, 32768]");
-            s.output.width = static_cast<int>(w), s.output.height = static_cast<int>(h);
-        }
-        s.output.frames = o->integer("frames", 1, 1, 100000000);
-        s.output.fps = o->number("fps", 30.0, [](double v) { return v > 0 && v <= 1000; }, "frames per second in (0, 1000]");
-        s.output.start_s = o->number("start", 0.0, kNonNegative, "a time >= 0 in seconds");
-        if (!whole_frames(s.output.start_s, s.output.fps))
-            o->fail(o->node("start"), "start", "expected a whole number of frames at fps = " + num(s.output.fps));
-        const std::array<std::string_view, 5> codecs = {"auto", "h264", "prores", "ffv1", "vp9"};
-        s.output.codec = std::string(codecs[o->choice("codec", codecs, 0)]);
-        s.output.crf = static_cast<int>(o->integer("crf", 18, 0, 63));
-        const std::array<std::string_view, 9> presets = {"ultrafast", "superfast", "veryfast", "faster", "fast",
-                                                         "medium", "slow", "slower", "veryslow"};
-        s.output.preset = std::string(presets[o->choice("preset", presets, 5)]);
-        s.output.range = o->pair("range", "[low, high] field values mapped to black and white");
-        if (s.output.range && !((*s.output.range)[1] > (*s.output.range)[0]))
-            o->fail(o->node("range"), "range", "expected low < high");
-        s.output.bits = static_cast<int>(o->integer("bits", 8, 8, 16));
-        if (s.output.bits != 8 && s.output.bits != 16) o->fail(o->node("bits"), "bits", "expected 8 or 16");
-        s.output.compression = exr_compression(*o);
-        o->finish();
-    }
+    if (auto o = top.table("output")) read_output(*o, s.output);
     // Defaults that depend on the frame size (centres) come from the scene's own size; --size
     // then scales the orthographic zoom so the same texture region fills the new size.
     const int scene_w = s.output.width, scene_h = s.output.height;
@@ -228,13 +295,7 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base, Out
         s.transform = detail::read_transform(shading->table("transform"), s.camera, scene_w,
                                              scene_h, global_seed);
     s.shading = detail::read_shading(shading, base, s.shading_keys);
-    if (auto l = top.table("limits")) {
-        s.limits.max_impulses = l->number("max_impulses", s.limits.max_impulses, kPositive, "a count > 0");
-        s.limits.max_memory_mib = l->number("max_memory_mib", s.limits.max_memory_mib, kPositive, "MiB > 0");
-        s.limits.max_pixel_evaluations = l->number(
-            "max_pixel_evaluations", s.limits.max_pixel_evaluations, kPositive, "a count > 0");
-        l->finish();
-    }
+    if (auto l = top.table("limits")) read_limits(*l, s.limits);
 
     if (top.has("volume")) {  // impulses in 3-D (docs/volume.md): no [[layer]], no 2-D view
         if (top.has("layer"))
@@ -260,54 +321,7 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base, Out
             s.layers.push_back(std::move(L));
             continue;
         }
-        const bool pyramid = s.camera.type == CameraConfig::Type::Perspective || s.camera.antialiased();
-        L.kernel = read_kernel(r.table("kernel"), r, base, L.kernel_keys, pyramid);
-        if (!r.has("kernel")) r.node("kernel");
-        sim::ProcessConfig& p = L.process;
-        p.layer = static_cast<uint32_t>(i);
-        p.seed = mix_seed(global_seed, static_cast<uint64_t>(r.integer("seed", 1, 0, INT64_MAX)));
-        L.density = r.keyframed("density", 16.0, kPositive, "a density > 0 (impulses per kernel area)");
-        p.amplitude = static_cast<sim::Amplitude>(r.choice("amplitude", sim::kAmplitudeNames, 0));
-        L.mean = r.keyframed("mean", 0.0);
-        L.gain = r.keyframed("gain", 1.0);
-        p.period = r.pair("period", "[width, height] > 0 of the periodic domain", kPositive);
-        p.lifetime_s = r.number("lifetime", 0.0, kNonNegative, "a lifetime >= 0 in seconds (0: still)");
-        p.envelope = static_cast<sim::Envelope>(r.choice("envelope", sim::kEnvelopeNames, 0));
-        p.loop_s = r.number("loop", 0.0, kNonNegative, "a period >= 0 in seconds (0: no loop)");
-        if (p.loop_s > 0) {
-            if (p.lifetime_s <= 0)
-                r.fail(r.node("loop"), "loop", "a loop needs moving particles: set lifetime > 0");
-            if (p.loop_s < p.lifetime_s)
-                r.fail(r.node("loop"), "loop",
-                       "a loop shorter than the lifetime (" + num(p.lifetime_s) +
-                           " s) cannot repeat its births: expected loop >= lifetime");
-            if (!whole_frames(p.loop_s, s.output.fps))
-                r.fail(r.node("loop"), "loop", "expected a whole number of frames at fps = " + num(s.output.fps));
-        }
-        p.integrator = static_cast<sim::Integrator>(r.choice("integrator", sim::kIntegratorNames, 0));
-        p.substeps = static_cast<int>(r.integer("substeps", 2, 1, 64));
-        p.jacobian = r.boolean("jacobian", true);
-        // a mode name or a field table; { type = "layer" } is composition's
-        detail::read_orientation(r, p, base, [&](Reader& f) { compose.read_orientation(f, i); });
-        detail::read_region(r, p, base);       // births confined to a shape or a mask
-        p.max_travel = r.number("max_travel", 4096.0, kPositive, "a distance > 0 in texture units");
-        if (p.lifetime_s <= 0 && !L.density.is_constant())
-            r.fail(r.node("density"), "density",
-                   "cannot vary in time in a still layer (lifetime = 0): its impulses are never "
-                   "born or die, so their number cannot change without popping; set lifetime > 0");
-        try {
-            prepare_layer(L);
-        } catch (const ValueError& e) {  // combinations the per-key checks cannot see
-            r.fail(r.node("kernel"), "kernel", e.what());
-        }
-        L.flow = read_flows(r, p, base, compose, i);
-        detail::read_marginal(r, L, base);
-        compose.read_layer(r, i, L);
-        detail::read_dispersion(r, L, twins, [&] { return read_flows(r, p, base, compose, i); });
-        if (L.density.min() < 1.0)
-            r.warn("density", "below 1 impulse per kernel area the noise is lumpy, see Lewis 1989 §4.1");
-        else if (!L.source && L.kernel.type != kernels::KernelType::Sampled)
-            warn_overlap(r, L);  // sampled (designed) kernels have their own peakedness warning
+        read_impulse_layer(r, i, global_seed, base, s, compose, twins, L);
         r.finish();
         s.layers.push_back(std::move(L));
     }

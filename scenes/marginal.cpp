@@ -56,24 +56,50 @@ std::shared_ptr<const kernels::MarginalTransform> build_transform(LayerConfig& L
 
 }  // namespace
 
-void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base) {
-    auto m = r.table("marginal");
-    if (!m) return;
-    std::string names;
-    for (auto n : kernels::kMarginalTypeNames)
-        names += (names.empty() ? "" : ", ") + std::string(n);
-    if (!m->has("type")) m->fail(nullptr, "type", "a marginal needs a type: one of " + names);
-    kernels::MarginalParams P;
-    P.type = static_cast<kernels::MarginalType>(m->choice("type", kernels::kMarginalTypeNames, 0));
-    const std::string type_str(kernels::to_string(P.type));
-    // Read first: they decide whether the target may vary in time.
-    const bool precorrect = m->boolean("precorrect", false);
-    L.marginal_cdf = read_cdf(*m, L);
-    const std::string fixed_target =
-        precorrect ? "the kernel is pre-corrected once for the target (precorrect = true)"
-        : L.marginal_cdf == kernels::SourceCdf::Empirical
-            ? "the transfer is built once from the calibration render (cdf = \"empirical\")"
-            : "";
+namespace {
+
+/// An empirical target's sample: values = [...] or the pixels of an image.
+std::shared_ptr<std::vector<double>> read_empirical(Reader& m, const kernels::MarginalParams& P0,
+                                                    const std::filesystem::path& base) {
+    kernels::MarginalParams P = P0;
+    const toml::node* vn = m.node("values");
+    const toml::node* in = m.node("image");
+    if ((vn != nullptr) == (in != nullptr))
+        m.fail(vn ? vn : in, vn ? "values" : "image",
+                "an empirical marginal needs exactly one of values = [numbers] or "
+                "image = \"path\"");
+    auto samples = std::make_shared<std::vector<double>>();
+    if (vn) {
+        const toml::array* a = vn->as_array();
+        if (!a)
+            m.fail(vn, "values", "expected an array of numbers, found " + type_name(*vn));
+        for (const auto& e : *a) {
+            if (!e.is_number())
+                m.fail(&e, "values", "expected numbers, found " + type_name(e));
+            samples->push_back(e.value<double>().value_or(0.0));
+        }
+    } else {
+        const std::string rel = m.string("image", "");
+        const std::filesystem::path p = resolve_path(in, rel, base);
+        try {
+            const render::Frame img = output::read_image(p.string());
+            samples->assign(img.data.begin(), img.data.end());
+        } catch (const Error& e) {
+            m.fail(in, "image", std::string("cannot read: ") + e.what());
+        }
+    }
+    P.samples = samples;
+    try {
+        kernels::validate(P);
+    } catch (const ValueError& e) {
+        m.fail(vn ? vn : in, vn ? "values" : "image", e.what());
+    }
+    return samples;
+}
+
+/// The target's parameters, keyframed unless `fixed_target` says why they cannot vary.
+void read_target(Reader* m, LayerConfig& L, kernels::MarginalParams& P,
+                 const std::string& fixed_target, const std::filesystem::path& base) {
     // A target parameter: keyframed (the Renderer rebuilds the transfer when it changes).
     using MP = kernels::MarginalParams;
     auto param = [&](const char* key, double MP::*member, double fallback,
@@ -109,66 +135,43 @@ void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base)
                 "nu", &MP::nu, 4.0, [](double v) { return v > 2.0; },
                 "degrees of freedom > 2 (a finite variance)");
             break;
-        case kernels::MarginalType::Empirical: {
-            const toml::node* vn = m->node("values");
-            const toml::node* in = m->node("image");
-            if ((vn != nullptr) == (in != nullptr))
-                m->fail(vn ? vn : in, vn ? "values" : "image",
-                        "an empirical marginal needs exactly one of values = [numbers] or "
-                        "image = \"path\"");
-            auto samples = std::make_shared<std::vector<double>>();
-            if (vn) {
-                const toml::array* a = vn->as_array();
-                if (!a)
-                    m->fail(vn, "values", "expected an array of numbers, found " + type_name(*vn));
-                for (const auto& e : *a) {
-                    if (!e.is_number())
-                        m->fail(&e, "values", "expected numbers, found " + type_name(e));
-                    samples->push_back(e.value<double>().value_or(0.0));
-                }
-            } else {
-                const std::string rel = m->string("image", "");
-                const std::filesystem::path p = resolve_path(in, rel, base);
-                try {
-                    const render::Frame img = output::read_image(p.string());
-                    samples->assign(img.data.begin(), img.data.end());
-                } catch (const Error& e) {
-                    m->fail(in, "image", std::string("cannot read: ") + e.what());
-                }
-            }
-            P.samples = samples;
-            try {
-                kernels::validate(P);
-            } catch (const ValueError& e) {
-                m->fail(vn ? vn : in, vn ? "values" : "image", e.what());
-            }
+        case kernels::MarginalType::Empirical:
+            P.samples = read_empirical(*m, P, base);
             break;
-        }
     }
-    // Keys of the other types are accepted with a warning, like the kernel's (read_kernel).
+}
+
+/// Keys of the other types are accepted with a warning, like the kernel's (read_kernel).
+void warn_other_type_keys(Reader& m, kernels::MarginalType type) {
+    const std::string type_str(kernels::to_string(type));
     for (size_t t = 0; t < kTypeKeys.size(); ++t)
         for (const auto& key : kTypeKeys[t]) {
-            const auto& own = kTypeKeys[static_cast<size_t>(P.type)];
-            if (std::find(own.begin(), own.end(), key) == own.end() && m->has(key))
-                m->warn(key, "ignored for marginal type " + type_str);
+            const auto& own = kTypeKeys[static_cast<size_t>(type)];
+            if (std::find(own.begin(), own.end(), key) == own.end() && m.has(key))
+                m.warn(key, "ignored for marginal type " + type_str);
         }
-    if (P.type == kernels::MarginalType::Uniform) {
-        // b > a at every time.
-        std::vector<const numeric::Keyframed*> ks;
-        for (const auto& k : L.marginal_keys) ks.push_back(&k.value);
-        for (double t : key_check_times(ks)) {
-            double a = P.a, b = P.b;
-            for (const auto& k : L.marginal_keys) (k.field == &MP::a ? a : b) = k.value.value(t);
-            if (!(b > a)) {
-                std::ostringstream s;
-                s << "expected b > a = " << a;
-                if (!L.marginal_keys.empty()) s << " (at t = " << t << " s)";
-                m->fail(m->node(m->has("b") ? "b" : "a"), m->has("b") ? "b" : "a", s.str());
-            }
+}
+
+/// A uniform target: b > a at every time.
+void check_uniform(Reader& m, const LayerConfig& L, const kernels::MarginalParams& P) {
+    using MP = kernels::MarginalParams;
+    // b > a at every time.
+    std::vector<const numeric::Keyframed*> ks;
+    for (const auto& k : L.marginal_keys) ks.push_back(&k.value);
+    for (double t : key_check_times(ks)) {
+        double a = P.a, b = P.b;
+        for (const auto& k : L.marginal_keys) (k.field == &MP::a ? a : b) = k.value.value(t);
+        if (!(b > a)) {
+            std::ostringstream s;
+            s << "expected b > a = " << a;
+            if (!L.marginal_keys.empty()) s << " (at t = " << t << " s)";
+            m.fail(m.node(m.has("b") ? "b" : "a"), m.has("b") ? "b" : "a", s.str());
         }
     }
-    m->finish();
-    // Keys the shaping overrides, or that a transfer built once cannot follow.
+}
+
+/// Keys the shaping overrides, or that a transfer built once cannot follow.
+void check_layer_keys(Reader& r, const LayerConfig& L, bool precorrect) {
     if (!L.mean.is_constant())
         r.fail(r.node("mean"), "mean",
                "cannot vary in time on a layer with a marginal: the target distribution sets its "
@@ -195,16 +198,13 @@ void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base)
         r.warn("gain",
                "only its sign matters on a layer with a marginal: the target distribution "
                "sets the scale");
+}
 
-    auto build = [&]() { return build_transform(L, P); };
-    try {
-        L.marginal = build();
-    } catch (const ValueError& e) {
-        m->fail(m->node("type"), "type", e.what());
-    }
-    if (!precorrect) return;
+/// precorrect = true: the kernel replaced by the ITAM-corrected one (Lewis 1986 §4.1), and the
+/// transfer rebuilt for it.
+void apply_precorrection(Reader& m, LayerConfig& L, const kernels::MarginalParams& P) {
     if (L.source)
-        m->fail(m->node("precorrect"), "precorrect",
+        m.fail(m.node("precorrect"), "precorrect",
                 "needs an impulse layer's kernel to correct; a " + std::string(L.source->kind()) +
                     " layer's spectrum is its synthesizer's");
     try {
@@ -214,11 +214,43 @@ void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base)
         // left as prepare_layer set them (the corrected kernel is wider, with the same int h^2).
         L.kernel = pc.kernel;
         L.precorrection = std::make_shared<const kernels::PrecorrectionReport>(pc.report);
-        L.marginal = build();
-        if (!pc.report.converged) m->warn("precorrect", pc.report.message);
+        L.marginal = build_transform(L, P);
+        if (!pc.report.converged) m.warn("precorrect", pc.report.message);
     } catch (const ValueError& e) {
-        m->fail(m->node("precorrect"), "precorrect", e.what());
+        m.fail(m.node("precorrect"), "precorrect", e.what());
     }
+}
+
+}  // namespace
+
+void read_marginal(Reader& r, LayerConfig& L, const std::filesystem::path& base) {
+    auto m = r.table("marginal");
+    if (!m) return;
+    std::string names;
+    for (auto n : kernels::kMarginalTypeNames)
+        names += (names.empty() ? "" : ", ") + std::string(n);
+    if (!m->has("type")) m->fail(nullptr, "type", "a marginal needs a type: one of " + names);
+    kernels::MarginalParams P;
+    P.type = static_cast<kernels::MarginalType>(m->choice("type", kernels::kMarginalTypeNames, 0));
+    // Read first: they decide whether the target may vary in time.
+    const bool precorrect = m->boolean("precorrect", false);
+    L.marginal_cdf = read_cdf(*m, L);
+    const std::string fixed_target =
+        precorrect ? "the kernel is pre-corrected once for the target (precorrect = true)"
+        : L.marginal_cdf == kernels::SourceCdf::Empirical
+            ? "the transfer is built once from the calibration render (cdf = \"empirical\")"
+            : "";
+    read_target(&*m, L, P, fixed_target, base);
+    warn_other_type_keys(*m, P.type);
+    if (P.type == kernels::MarginalType::Uniform) check_uniform(*m, L, P);
+    m->finish();
+    check_layer_keys(r, L, precorrect);
+    try {
+        L.marginal = build_transform(L, P);
+    } catch (const ValueError& e) {
+        m->fail(m->node("type"), "type", e.what());
+    }
+    if (precorrect) apply_precorrection(*m, L, P);
 }
 
 namespace {

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <functional>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -299,6 +300,68 @@ TEST_CASE("an empirical F_x shapes a low-density field that a Gaussian F_x canno
     CHECK(din <= 0.004);
 }
 
+namespace {
+
+/// Annuli of one DFT bin width (analysis::radial_average) from b = 1 while the target is above
+/// 1 % of its peak, grouped into bands of >= 4096 bins, with each band's expected power: the
+/// target averaged over exactly the DFT bins of the band.
+struct Bands {
+    std::vector<int> band_of;     ///< per annulus, its band or -1
+    std::vector<uint64_t> bins;   ///< DFT bins per band
+    std::vector<double> expect;   ///< expected summed power per band
+};
+
+Bands make_bands(int n, const std::function<double(double)>& target) {
+    Bands B;
+    const double peak = target(0.0);
+    B.band_of.assign(n / 2, -1);
+    const auto any = A::radial_average(
+        A::periodogram(A::Image{n, n, std::vector<float>(size_t(n) * n, 0.0f)}));
+    int band = 0;
+    uint64_t acc = 0;
+    for (int b = 1; b < n / 2; ++b) {
+        if (target(any.frequency[b]) < 0.01 * peak) break;
+        B.band_of[b] = band;
+        acc += any.count[b];
+        if (acc >= 4096) ++band, B.bins.push_back(acc), acc = 0;
+    }
+    if (acc > 0) {  // a short last band joins the one before
+        for (int& x : B.band_of)
+            if (x == band) x = band - 1;
+        B.bins.back() += acc;
+    }
+    B.expect.assign(B.bins.size(), 0.0);
+    for (int ky = -n / 2; ky < n / 2; ++ky)
+        for (int kx = -n / 2; kx < n / 2; ++kx) {
+            const double r = std::sqrt(double(kx) * kx + double(ky) * ky);
+            const int b = static_cast<int>(r);
+            if (r == 0.0 || b >= n / 2 || B.band_of[b] < 0) continue;
+            B.expect[B.band_of[b]] += target(r / n);
+        }
+    return B;
+}
+
+/// The worst |measured / target - 1| over the bands and the largest standard error (from the
+/// scatter over frames).
+void summarise(const std::vector<std::vector<double>>& ratio, const std::vector<uint64_t>& bins,
+               double& worst, double& worst_se) {
+    worst = 0.0, worst_se = 0.0;
+    for (size_t j = 0; j < ratio.size(); ++j) {
+        const double f = double(ratio[j].size());
+        double m = 0.0, v = 0.0;
+        for (double x : ratio[j]) m += x;
+        m /= f;
+        for (double x : ratio[j]) v += (x - m) * (x - m);
+        const double se = std::sqrt(v / (f - 1) / f);
+        UNSCOPED_INFO("band " << j << " (" << bins[j] << " bins): measured / target " << m
+                              << " +- " << se);
+        worst = std::max(worst, std::abs(m - 1.0));
+        worst_se = std::max(worst_se, se);
+    }
+}
+
+}  // namespace
+
 TEST_CASE("pre-correction gives the shaped field the kernel's spectrum and its absence does not",
           "[kernels][shaping][stats]") {
     // Gaussian kernel R = 4, sigma = 4/3 px, density 128 per kernel area, +-1 amplitudes, shaped
@@ -356,37 +419,12 @@ TEST_CASE("pre-correction gives the shaped field the kernel's spectrum and its a
     // of the density).
     const double var_y = 1.0;  // exponential, rate 1
     auto target = [&](double k) { return var_y * k0.power_spectrum(k, 0.0) / k0.integral_sq(); };
-    const double peak = target(0.0);
-    std::vector<int> band_of(n / 2, -1);
-    std::vector<uint64_t> bins;
-    {
-        const auto any = A::radial_average(
-            A::periodogram(A::Image{n, n, std::vector<float>(size_t(n) * n, 0.0f)}));
-        int band = 0;
-        uint64_t acc = 0;
-        for (int b = 1; b < n / 2; ++b) {
-            if (target(any.frequency[b]) < 0.01 * peak) break;
-            band_of[b] = band;
-            acc += any.count[b];
-            if (acc >= 4096) ++band, bins.push_back(acc), acc = 0;
-        }
-        if (acc > 0) {  // a short last band joins the one before
-            for (int& x : band_of)
-                if (x == band) x = band - 1;
-            bins.back() += acc;
-        }
-    }
+    const Bands bands = make_bands(n, target);
+    const auto& band_of = bands.band_of;
+    const auto& bins = bands.bins;
+    const auto& expect = bands.expect;
     const int nbands = int(bins.size());
     REQUIRE(nbands >= 6);
-    // Expected band power: the target averaged over exactly the DFT bins of the band.
-    std::vector<double> expect(nbands, 0.0);
-    for (int ky = -n / 2; ky < n / 2; ++ky)
-        for (int kx = -n / 2; kx < n / 2; ++kx) {
-            const double r = std::sqrt(double(kx) * kx + double(ky) * ky);
-            const int b = static_cast<int>(r);
-            if (r == 0.0 || b >= n / 2 || band_of[b] < 0) continue;
-            expect[band_of[b]] += target(r / n);
-        }
     auto band_ratios = [&](bool precorrect, int count) {
         std::vector<std::vector<double>> ratio(nbands);
         for (int f = 0; f < count; ++f) {
@@ -401,25 +439,9 @@ TEST_CASE("pre-correction gives the shaped field the kernel's spectrum and its a
         }
         return ratio;
     };
-    auto summarise = [&](const std::vector<std::vector<double>>& ratio, double& worst,
-                         double& worst_se) {
-        worst = 0.0, worst_se = 0.0;
-        for (int j = 0; j < nbands; ++j) {
-            const double f = double(ratio[j].size());
-            double m = 0.0, v = 0.0;
-            for (double x : ratio[j]) m += x;
-            m /= f;
-            for (double x : ratio[j]) v += (x - m) * (x - m);
-            const double se = std::sqrt(v / (f - 1) / f);
-            UNSCOPED_INFO("band " << j << " (" << bins[j] << " bins): measured / target " << m
-                                  << " +- " << se);
-            worst = std::max(worst, std::abs(m - 1.0));
-            worst_se = std::max(worst_se, se);
-        }
-    };
     double worst_pre = 0, se_pre = 0, worst_plain = 0, se_plain = 0;
-    summarise(band_ratios(true, frames), worst_pre, se_pre);
-    summarise(band_ratios(false, plain_frames), worst_plain, se_plain);
+    summarise(band_ratios(true, frames), bins, worst_pre, se_pre);
+    summarise(band_ratios(false, plain_frames), bins, worst_plain, se_plain);
     CAPTURE(nbands, worst_pre, se_pre, worst_plain, se_plain);
     CHECK(se_pre <= 0.0125);
     CHECK(worst_pre <= 0.05);
