@@ -80,7 +80,8 @@ void check_still(const sim::ProcessConfig& c, const numeric::Region& view, doubl
     sim::Impulses got;
     // A still layer's frames all hold the same impulses (frame 3 reuses the output's arrays);
     // the pieces go to any thread.
-    for (const auto& [frame, threads] : {std::pair<int64_t, int>{0, 1}, {3, 2}}) {
+    for (const auto& [f, threads] : {std::pair<int64_t, int>{0, 1}, {3, 2}}) {
+        const int64_t frame = f;  // clang 14 cannot capture a structured binding in a lambda
         tbb::task_arena(threads).execute([&] { s.impulses_at(frame, view, got); });
         const sim::Impulses want =
             reference(c, view, radius, static_cast<double>(timing.start_frame + frame) / timing.fps);
