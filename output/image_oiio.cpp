@@ -111,6 +111,11 @@ void write_pixels(const std::string& path, int width, int height, int channels,
     // takes ~40 ms instead of ~215 ms, most of a whole still render to PNG (measured,
     // bench/startup.sh).
     if (ext == ".png") spec.attribute("png:compressionLevel", 1);
+    // libpng's default tries every row filter and keeps the best guess; on noise the "up" filter
+    // alone gives the smallest file and the fastest write (1080p still: 1.32 MB in 359 CPU-ms
+    // against 1.43 MB in 390 with every filter, none 2.63 MB; whole oiiotool runs, 5 each).
+    constexpr int kPngFilterUp = 0x20;  // PNG_FILTER_UP
+    if (ext == ".png") spec.attribute("png:filter", kPngFilterUp);
     // OIIO stamps files with the wall-clock time unless told otherwise; a frame must be a pure
     // function of the scene (design.md §4), so the stamp is a fixed value.
     spec.attribute("DateTime", "1970:01:01 00:00:00");
