@@ -91,6 +91,12 @@ void accumulate(const LoopKernel& k, const Gathered<D>& g, const std::array<cons
     accumulate_generic<D>(k, g, t, n, acc);
 }
 
+BrickFn brick_loop(const LoopKernel& k) {
+    if (k.terms <= 0 || k.carrier) return nullptr;
+    static const bool avx2 = numeric::cpu_has_avx2();
+    return avx2 ? avx2::brick3(k.terms) : base::brick3(k.terms);
+}
+
 template void accumulate<3>(const LoopKernel&, const Gathered<3>&, const std::array<const float*, 3>&,
                             size_t, float*);
 template void accumulate<4>(const LoopKernel&, const Gathered<4>&, const std::array<const float*, 4>&,
