@@ -241,6 +241,7 @@ void SolidNoise::evaluate(const std::vector<SolidPoint>& points, std::vector<flo
     if (component < 0 || component > 2)
         throw ValueError("component = " + std::to_string(component) + ": expected 0, 1 or 2");
     values.assign(points.size(), 0.0f);
+    if (detail::evaluate_dense(*this, points, component, values.data())) return;
     const auto& w = m_warp;
     const double inv_r = 1.0 / m_kernel.radius();
     auto warp = [&](size_t i, double* o) {

@@ -12,6 +12,12 @@
 #include <vector>
 
 #include "numeric/rng.h"
+#include "synth/solid_loops.h"
+
+namespace impulse::synth {
+class SolidNoise;
+struct SolidPoint;
+}  // namespace impulse::synth
 
 namespace impulse::synth::detail {
 
@@ -61,14 +67,11 @@ struct DenseCells {
     }
 };
 
-}  // namespace impulse::synth::detail
-
-namespace impulse::synth {
-class SolidNoise;
-struct SolidPoint;
-}  // namespace impulse::synth
-
-namespace impulse::synth::detail {
+/// The impulses of the 3^3 cells around `c` in the canonical order (lexicographic offsets, draw
+/// order), relative to c, without those farther than one radius from the box [lo, hi] (cell
+/// units; they add exactly 0 to every point in it).
+void gather_box(const DenseCells& table, const std::array<int64_t, 3>& c, const float* lo,
+                const float* hi, Gathered<3>& out);
 
 /// SolidNoise::grid by bricks (synth/solid_grid.cpp): when the noise is 3-D with a diagonal
 /// metric of positive entries, spacing > 0 and a polynomial kernel, writes the grid into out
@@ -76,5 +79,12 @@ namespace impulse::synth::detail {
 /// otherwise (or for coordinates the point path must refuse) returns false and writes nothing.
 bool grid_by_bricks(const SolidNoise& noise, const std::array<int, 3>& size, const SolidPoint& origin,
                     double spacing, int component, float* out);
+
+/// SolidNoise::evaluate for 3-D points whose cells fill their bounding box densely enough
+/// (synth/solid_points.cpp): impulses from a DenseCells table, points grouped by a counting sort
+/// on the cell, the same bits as any other path. False (nothing written) for 4-D noise, a span
+/// too sparse for the table, or a point the general path must refuse.
+bool evaluate_dense(const SolidNoise& noise, const std::vector<SolidPoint>& points, int component,
+                    float* values);
 
 }  // namespace impulse::synth::detail

@@ -50,6 +50,49 @@ DenseCells::DenseCells(const numeric::CounterRng& rng, double m, const std::arra
     });
 }
 
+/// The impulses of the 3^3 cells around `c` in the canonical order (lexicographic offsets, draw
+/// order), relative to c, without those farther than one radius from the box [lo, hi].
+void gather_box(const DenseCells& table, const std::array<int64_t, 3>& c, const float* lo,
+                const float* hi, Gathered<3>& out) {
+    std::array<size_t, 9> row;  // linear index of the cell (c0 + o0, c1 + o1, c2)
+    size_t total = 0;
+    for (int r = 0; r < 9; ++r) {
+        row[r] = table.linear(c[0] + r / 3 - 1, c[1] + r % 3 - 1, c[2]);
+        total += table.offset[row[r] + 2] - table.offset[row[r] - 1];
+    }
+    for (auto& v : out.v) v.resize(total);
+    out.a.resize(total);
+    float* __restrict v0 = out.v[0].data();
+    float* __restrict v1 = out.v[1].data();
+    float* __restrict v2 = out.v[2].data();
+    float* __restrict amp = out.a.data();
+    const float* u0 = table.u[0].data();
+    const float* u1 = table.u[1].data();
+    const float* u2 = table.u[2].data();
+    const float* a = table.a.data();
+    const float lx = lo[0], ly = lo[1], lz = lo[2], hx = hi[0], hy = hi[1], hz = hi[2];
+    size_t kept = 0;
+    for (int r = 0; r < 9; ++r) {
+        const float o0 = float(r / 3 - 1), o1 = float(r % 3 - 1);
+        // Branch-free: each impulse is written, then kept or overwritten. (float) o + u is the
+        // exact sum rounded once, as the general path's double sum cast to float.
+        for (int o2 = -1; o2 <= 1; ++o2) {
+            const float o2f = float(o2);
+            const uint32_t end = table.offset[row[r] + o2 + 1];
+            for (uint32_t k = table.offset[row[r] + o2]; k < end; ++k) {
+                const float x = o0 + u0[k], y = o1 + u1[k], z = o2f + u2[k];
+                const float ex = std::max(std::max(lx - x, x - hx), 0.0f);
+                const float ey = std::max(std::max(ly - y, y - hy), 0.0f);
+                const float ez = std::max(std::max(lz - z, z - hz), 0.0f);
+                v0[kept] = x, v1[kept] = y, v2[kept] = z, amp[kept] = a[k];
+                kept += (ex * ex + ey * ey) + ez * ez < 1.001f;  // else 0 at every point of the box
+            }
+        }
+    }
+    for (auto& v : out.v) v.resize(kept);
+    out.a.resize(kept);
+}
+
 namespace {
 
 constexpr int kPieceX = 32, kPieceYZ = 8;  // brick sides in samples: acc stays in L1
@@ -83,32 +126,6 @@ bool make_axis(int n, double origin, double spacing, double warp, int limit, Axi
             axis.begin.push_back(i);
     axis.begin.push_back(n);
     return true;
-}
-
-/// The impulses of the 3^3 cells around `c` in the canonical order (lexicographic offsets, draw
-/// order), relative to c, without those farther than one radius from the box [lo, hi].
-void gather_brick(const DenseCells& table, const std::array<int64_t, 3>& c, const float* lo,
-                  const float* hi, Gathered<3>& out) {
-    for (auto& v : out.v) v.clear();
-    out.a.clear();
-    for (int o0 = -1; o0 <= 1; ++o0)
-        for (int o1 = -1; o1 <= 1; ++o1) {
-            const size_t row = table.linear(c[0] + o0, c[1] + o1, c[2]);
-            for (int o2 = -1; o2 <= 1; ++o2) {
-                const int o[3] = {o0, o1, o2};
-                for (uint32_t k = table.offset[row + o2]; k < table.offset[row + o2 + 1]; ++k) {
-                    float v[3], dist2 = 0.0f;
-                    for (int d = 0; d < 3; ++d) {
-                        v[d] = static_cast<float>(double(o[d]) + double(table.u[d][k]));
-                        const float out_of = std::max({0.0f, lo[d] - v[d], v[d] - hi[d]});
-                        dist2 += out_of * out_of;
-                    }
-                    if (dist2 >= 1.001f) continue;  // adds exactly 0 to every sample of the box
-                    for (int d = 0; d < 3; ++d) out.v[d].push_back(v[d]);
-                    out.a.push_back(table.a[k]);
-                }
-            }
-        }
 }
 
 }  // namespace
@@ -164,7 +181,7 @@ bool grid_by_bricks(const SolidNoise& noise, const std::array<int, 3>& size, con
                     box_lo[d] = ax[d]->local[first[d]];
                     box_hi[d] = ax[d]->local[first[d] + count[d] - 1];
                 }
-                gather_brick(table, cell, box_lo, box_hi, g);
+                gather_box(table, cell, box_lo, box_hi, g);
                 const int wx = (count[0] + 7) & ~7;  // whole vectors: no scalar remainder
                 for (int i = 0; i < wx; ++i) tx[i] = axes[0].local[first[0] + std::min(i, count[0] - 1)];
                 acc.assign(size_t(wx) * count[1] * count[2], 0.0f);

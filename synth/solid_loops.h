@@ -56,6 +56,15 @@ LoopFn<3> poly3(int terms, bool few);
 LoopFn<4> poly4(int terms, bool few);
 BrickFn brick3(int terms);
 }  // namespace avx2
+namespace avx512 {
+LoopFn<3> poly3(int terms, bool few);
+LoopFn<4> poly4(int terms, bool few);
+BrickFn brick3(int terms);
+}  // namespace avx512
+
+/// Lanes of the widest loop this CPU runs (16, 8 or 4 floats): groups padded to a multiple
+/// of it run no scalar remainder.
+size_t loop_lanes();
 
 /// The brick loop of the kernel for this CPU, or nullptr when the kernel has none (a table, a
 /// carrier or more than 24 terms): use the points then.
