@@ -30,7 +30,7 @@ struct Warp {
     }
 };
 
-/// floor(w) for |w| < 2^40 without a library call (x86-64's baseline has no rounding
+/// floor(w) for |w| < 2^31 without a library call (x86-64's baseline has no rounding
 /// instruction). For w = -0 it gives +0 where std::floor gives -0: the local position is then
 /// -0 instead of +0, which no difference t - v, square or bound sees.
 inline double floor_small(double w) {
