@@ -16,29 +16,16 @@
 #include "numeric/errors.h"
 #include "numeric/rng.h"
 #include "synth/cells.h"
+#include "synth/solid_cells.h"
 #include "synth/solid_loops.h"
 
 namespace impulse::synth {
 namespace {
 
-constexpr uint32_t kSolidStream = 0x534F4C44u;  // "SOLD": the solid noise's counter stream
+using detail::kSolidStream;
 constexpr double kPi = std::numbers::pi;
 constexpr size_t kChunkGroups = 8192;  // groups whose impulses are generated together
 constexpr int kSplit = 2;              // group cells per impulse cell along each axis
-
-/// Poisson count of mean m from one uniform u in (0, 1] by the inverse CDF (L89 §4.1: "N
-/// Poisson-distributed impulses in each voxel"). m <= 750, so e^{-m} stays normal.
-int poisson(double u, double m) {
-    double p = std::exp(-m), F = p;
-    int k = 0;
-    const int cap = static_cast<int>(m + 20.0 * std::sqrt(m) + 40.0);
-    while (u > F && k < cap) {
-        ++k;
-        p *= m / k;
-        F += p;
-    }
-    return k;
-}
 
 /// The impulses of one cell: position in the cell in [0, 1)^D (cell units) and amplitude.
 template <int D>
@@ -54,13 +41,12 @@ template <int D>
 void generate_cell(const numeric::CounterRng& base, const std::array<int64_t, D>& c, double m,
                    std::array<std::vector<float>, D>& u, std::vector<float>& a) {
     const numeric::CounterRng rng = D == 4 ? base.keyed(c[D - 1]) : base;
-    const int n = poisson(rng.uniforms(c[0], c[1], c[2], 0)[0], m);
+    const int n = detail::cell_count(rng, c[0], c[1], c[2], m);
     for (int j = 0; j < n; ++j) {
-        const auto r = rng.uniforms(c[0], c[1], c[2], uint32_t(j + 1));
-        // u01 is in (0, 1]: 1 maps to the cell's far face, which is still inside the kernel
-        // reach of the 3^D neighbourhood.
-        for (int d = 0; d < 3; ++d) u[d].push_back(static_cast<float>(r[d]));
-        a.push_back(static_cast<float>(2.0 * r[3] - 1.0));
+        float w[3], amplitude;
+        detail::cell_impulse(rng, c[0], c[1], c[2], j, w, amplitude);
+        for (int d = 0; d < 3; ++d) u[d].push_back(w[d]);
+        a.push_back(amplitude);
         if constexpr (D == 4)
             u[3].push_back(static_cast<float>(rng.uniforms(c[0], c[1], c[2], 0x80000000u + uint32_t(j + 1))[0]));
     }
@@ -255,6 +241,7 @@ void SolidNoise::evaluate(const std::vector<SolidPoint>& points, std::vector<flo
     if (component < 0 || component > 2)
         throw ValueError("component = " + std::to_string(component) + ": expected 0, 1 or 2");
     values.assign(points.size(), 0.0f);
+    if (detail::evaluate_dense(*this, points, component, values.data())) return;
     const auto& w = m_warp;
     const double inv_r = 1.0 / m_kernel.radius();
     auto warp = [&](size_t i, double* o) {
@@ -298,7 +285,11 @@ std::vector<float> SolidNoise::grid(int width, int height, int depth, const Soli
                          std::to_string(depth) + ": expected positive sizes");
     const size_t plane = size_t(width) * height;
     std::vector<float> out(plane * depth);
-    // Slabs of planes through the batch path: bounded memory, the same bits as points.
+    if (component < 0 || component > 2)
+        throw ValueError("component = " + std::to_string(component) + ": expected 0, 1 or 2");
+    if (detail::grid_by_bricks(*this, {width, height, depth}, origin, spacing, component, out.data()))
+        return out;
+    // Otherwise slabs of planes through the batch path: bounded memory, the same bits as points.
     const int slab = std::max(1, static_cast<int>(std::min<size_t>(depth, (size_t(1) << 22) / plane)));
     std::vector<SolidPoint> pts;
     std::vector<float> vals;

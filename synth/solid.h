@@ -106,7 +106,9 @@ public:
     void evaluate(const std::vector<SolidPoint>& points, std::vector<float>& values,
                   int component = 0) const;
     /// A dense W x H x D grid, sample (i, j, k) at origin + (i, j, k) * spacing (t = origin.t),
-    /// x fastest; the same bits as evaluate() at those points.
+    /// x fastest; the same bits as evaluate() at those points. 3-D noise with a diagonal metric
+    /// and a polynomial kernel splats each cell's impulses into bricks of its samples (no
+    /// grouping); otherwise slabs of point batches.
     std::vector<float> grid(int width, int height, int depth, const SolidPoint& origin,
                             double spacing = 1.0, int component = 0) const;
 

@@ -78,17 +78,36 @@ void accumulate(const LoopKernel& k, const Gathered<D>& g, const std::array<cons
                 size_t n, float* acc) {
     if (k.terms > 0 && !k.carrier) {
         const bool few = n < kFewPoints;
-        // The AVX2 build where the CPU has it: the same arithmetic per lane, twice the lanes.
-        static const bool avx2 = numeric::cpu_has_avx2();
+        // The widest build the CPU runs: the same arithmetic per lane, more lanes.
+        static const numeric::SimdPath path = numeric::simd_path();
         LoopFn<D> f;
-        if constexpr (D == 3) f = avx2 ? avx2::poly3(k.terms, few) : base::poly3(k.terms, few);
-        else f = avx2 ? avx2::poly4(k.terms, few) : base::poly4(k.terms, few);
+        if constexpr (D == 3)
+            f = path == numeric::SimdPath::Avx512 ? avx512::poly3(k.terms, few)
+                : path == numeric::SimdPath::Avx2 ? avx2::poly3(k.terms, few)
+                                                  : base::poly3(k.terms, few);
+        else
+            f = path == numeric::SimdPath::Avx512 ? avx512::poly4(k.terms, few)
+                : path == numeric::SimdPath::Avx2 ? avx2::poly4(k.terms, few)
+                                                  : base::poly4(k.terms, few);
         if (f) {
             f(k, g, t, n, acc);
             return;
         }
     }
     accumulate_generic<D>(k, g, t, n, acc);
+}
+
+BrickFn brick_loop(const LoopKernel& k) {
+    if (k.terms <= 0 || k.carrier) return nullptr;
+    static const numeric::SimdPath path = numeric::simd_path();
+    return path == numeric::SimdPath::Avx512 ? avx512::brick3(k.terms)
+           : path == numeric::SimdPath::Avx2 ? avx2::brick3(k.terms)
+                                             : base::brick3(k.terms);
+}
+
+size_t loop_lanes() {
+    static const numeric::SimdPath path = numeric::simd_path();
+    return path == numeric::SimdPath::Avx512 ? 16 : path == numeric::SimdPath::Avx2 ? 8 : 4;
 }
 
 template void accumulate<3>(const LoopKernel&, const Gathered<3>&, const std::array<const float*, 3>&,

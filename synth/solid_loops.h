@@ -39,14 +39,36 @@ using LoopFn = void (*)(const LoopKernel&, const Gathered<D>&, const std::array<
                         size_t, float*);
 /// The vectorised polynomial loops of a build (solid_loops.inc): nullptr beyond 24 terms; `few`:
 /// the variant for groups of fewer than 8 points.
+/// A loop over a brick of grid samples, the product of n[0] x n[1] x n[2] coordinates t[d]
+/// along the axes (x fastest in acc; n[0] a multiple of 8, at most kBrickRow): the same sum and
+/// the same bits as LoopFn at those points, q = ((dx^2 + dy^2) + dz^2) as there, with a row
+/// (j, k) skipped when dy^2 + dz^2 >= 1 (then every q of the row is >= 1: its terms are 0).
+using BrickFn = void (*)(const LoopKernel&, const Gathered<3>&, const std::array<const float*, 3>&,
+                         const std::array<int, 3>&, float*);
+constexpr int kBrickRow = 64;
 namespace base {
 LoopFn<3> poly3(int terms, bool few);
 LoopFn<4> poly4(int terms, bool few);
+BrickFn brick3(int terms);
 }  // namespace base
 namespace avx2 {
 LoopFn<3> poly3(int terms, bool few);
 LoopFn<4> poly4(int terms, bool few);
+BrickFn brick3(int terms);
 }  // namespace avx2
+namespace avx512 {
+LoopFn<3> poly3(int terms, bool few);
+LoopFn<4> poly4(int terms, bool few);
+BrickFn brick3(int terms);
+}  // namespace avx512
+
+/// Lanes of the widest loop this CPU runs (16, 8 or 4 floats): groups padded to a multiple
+/// of it run no scalar remainder.
+size_t loop_lanes();
+
+/// The brick loop of the kernel for this CPU, or nullptr when the kernel has none (a table, a
+/// carrier or more than 24 terms): use the points then.
+BrickFn brick_loop(const LoopKernel& k);
 
 /// acc[p] += sum_k a_k h(t(p) - v_k) for the n points t[d][p], in k order.
 template <int D>
