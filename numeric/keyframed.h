@@ -31,6 +31,10 @@ struct Keyframed {
     double min() const;
     double max() const;
     bool is_constant() const { return keys.size() <= 1; }
+    /// int_0^t value(s) ds (negative for t < 0), in closed form: a linear or smoothstep segment
+    /// of keys a, b over dt integrates to (a + b) dt / 2 (int_0^1 3s^2 - 2s^3 ds = 1/2), a step
+    /// segment to a dt; before the first and after the last key the held value times the time.
+    double integral(double t_s) const;
 };
 
 }  // namespace impulse::numeric

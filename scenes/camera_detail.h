@@ -45,6 +45,10 @@ public:
     numeric::Region estimate_region(size_t layer, const render::View& view0) const;
     /// The layer's pyramid (null when not active).
     const kernels::KernelPyramid* pyramid(size_t layer) const;
+    /// Adds a source layer's field at its layer time t_layer as the perspective camera sees it
+    /// at frame time t_s (frame size): LayerSource::add_perspective on the frame's pixel
+    /// footprints (kept while the rays are).
+    void add_source(const LayerSource& source, double t_s, double t_layer, render::Frame& out);
     /// Counts of the last perspective evaluation of a layer.
     const render::PerspectiveStats& stats(size_t layer) const { return m_stats.at(layer); }
 
@@ -63,6 +67,7 @@ private:
     std::optional<double> m_t;
     std::unique_ptr<render::PerspectiveView> m_view;
     render::PixelCoords m_coords;
+    PixelFootprints m_footprints;  ///< of m_view, made on first use (width 0: not yet)
 };
 
 }  // namespace impulse::scenes::detail

@@ -7,6 +7,8 @@
 #include <set>
 #include <sstream>
 
+#include <tbb/parallel_for.h>
+
 #include "scenes/camera_detail.h"
 
 namespace impulse::scenes::detail {
@@ -43,6 +45,45 @@ void CameraPipeline::prepare(double t) {
     if (m_view && m_view->camera().same_rays(cam)) return;
     m_view = std::make_unique<render::PerspectiveView>(cam);
     m_coords = render::pixel_coords(*m_view);
+    m_footprints = PixelFootprints{};
+}
+
+namespace {
+
+// Each pixel centre's texture point and footprint (docs/perspective.md §1); s_major = 0 where
+// the ray misses the plane or the point is too far for doubles to place.
+PixelFootprints pixel_footprints(const render::PerspectiveView& view, const render::AntiAlias& aa) {
+    PixelFootprints px;
+    const auto& cam = view.camera();
+    px.width = cam.width, px.height = cam.height;
+    const size_t n = size_t(px.width) * px.height;
+    px.x.assign(n, 0.0), px.y.assign(n, 0.0);
+    px.s_major.assign(n, 0.0f), px.s_minor.assign(n, 0.0f), px.ex.assign(n, 1.0f), px.ey.assign(n, 0.0f);
+    px.filter_sd_px = aa.enabled ? aa.filter_px * aa.footprint_scale : 0.0;
+    px.cutoff = aa.fade ? aa.cutoff : 0.0;
+    tbb::parallel_for(0, px.height, [&](int j) {
+        for (int i = 0; i < px.width; ++i) {
+            const size_t p = size_t(j) * px.width + i;
+            double x = 0, y = 0;
+            if (!view.texture_point(i + 0.5, j + 0.5, x, y) || !(std::abs(x) < 1e15 && std::abs(y) < 1e15))
+                continue;
+            const auto f = view.footprint(x, y);
+            if (!(std::isfinite(f.s_major) && f.s_major > 0.0 && std::isfinite(f.s_minor))) continue;
+            px.x[p] = x, px.y[p] = y;
+            px.s_major[p] = float(f.s_major), px.s_minor[p] = float(f.s_minor);
+            px.ex[p] = float(f.ex), px.ey[p] = float(f.ey);
+        }
+    });
+    return px;
+}
+
+}  // namespace
+
+void CameraPipeline::add_source(const LayerSource& source, double t, double t_layer,
+                                render::Frame& out) {
+    prepare(t);
+    if (m_footprints.width == 0) m_footprints = pixel_footprints(*m_view, m_aa);
+    source.add_perspective(m_footprints, 0.0, 0.0, t_layer, out);
 }
 
 numeric::Region CameraPipeline::region(size_t layer, const render::View& view, double t) {

@@ -17,6 +17,18 @@ namespace impulse::scenes::detail {
 
 namespace fs = std::filesystem;
 
+std::pair<numeric::Keyframed, numeric::Keyframed> read_uniform_velocity(Reader& f) {
+    numeric::Keyframed vx(0.0), vy(0.0);
+    if (f.node("velocity")) {
+        auto v = f.pair("velocity", "[vx, vy] in units per second");
+        vx = numeric::Keyframed((*v)[0]);
+        vy = numeric::Keyframed((*v)[1]);
+    }
+    if (f.has("vx")) vx = f.keyframed("vx", 0.0);
+    if (f.has("vy")) vy = f.keyframed("vy", 0.0);
+    return {vx, vy};
+}
+
 std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& process,
                                       const fs::path& base, detail::CompositionReader& compose,
                                       size_t index) {
@@ -47,14 +59,7 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
         };
         switch (type) {
             case 0: {  // uniform
-                numeric::Keyframed vx(0.0), vy(0.0);
-                if (f.node("velocity")) {
-                    auto v = f.pair("velocity", "[vx, vy] in units per second");
-                    vx = numeric::Keyframed((*v)[0]);
-                    vy = numeric::Keyframed((*v)[1]);
-                }
-                if (f.has("vx")) vx = f.keyframed("vx", 0.0);
-                if (f.has("vy")) vy = f.keyframed("vy", 0.0);
+                const auto [vx, vy] = read_uniform_velocity(f);
                 sum->push(sim::make_uniform_flow(vx, vy));
                 break;
             }

@@ -44,6 +44,9 @@ kernels::DesignedKernel read_design(Reader& r, bool acf, const std::filesystem::
 std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& process,
                                       const std::filesystem::path& base,
                                       CompositionReader& compose, size_t index);
+/// The velocity of a `type = "uniform"` flow table: `velocity = [vx, vy]` or keyframed `vx`,
+/// `vy` (texture units per second; absent: 0).
+std::pair<numeric::Keyframed, numeric::Keyframed> read_uniform_velocity(Reader& flow);
 /// A [[layer]] drawn by another synthesizer (source = "fbm", "subdivision", "solid"); `zoom`:
 /// the camera's smallest zoom (pixels per texture unit).
 void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const std::filesystem::path& base,

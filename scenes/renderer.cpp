@@ -269,10 +269,12 @@ Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
     }
     for (size_t i = 0; i < count; ++i) {
         const auto& src = S.scene.layers[i].source;
-        if (src && S.rendered[i] && S.scene.camera.type == CameraConfig::Type::Perspective)
+        if (src && S.rendered[i] && S.scene.camera.type == CameraConfig::Type::Perspective &&
+            !src->perspective())
             throw SceneError(S.scene.path + ": layer[" + std::to_string(i) + "]: a " +
                              std::string(src->kind()) +
-                             " layer is seen through an orthographic camera only");
+                             " layer is seen through an orthographic camera only (fbm and "
+                             "subdivision layers also through a perspective one)");
     }
     S.camera = std::make_unique<detail::CameraPipeline>(S.scene, S.kernels);
     // Refuse what would exhaust memory or time, with the estimate (design.md §4).
@@ -524,10 +526,17 @@ void Renderer::State::raw(size_t i, const Pass& pass, const render::View& v, Spa
     if (layer.source) {  // the layer-source seam: the same in camera and texture space
         const double tl = scene.layer_time(i, pass.frame);
         const double gain = layer.gain.value(tl);
-        if (gain == 1.0) return layer.source->add(v, tl, out);
+        // A perspective frame reads the source at each pixel's footprint on the plane.
+        const bool perspective = space == Space::Camera &&
+                                 scene.camera.type == CameraConfig::Type::Perspective;
+        auto draw = [&](render::Frame& to) {
+            if (perspective) return camera->add_source(*layer.source, pass.t, tl, to);
+            layer.source->add(v, tl, to);
+        };
+        if (gain == 1.0) return draw(out);
         render::Frame f;
         f.resize(v.width, v.height);
-        layer.source->add(v, tl, f);
+        draw(f);
         for (size_t p = 0; p < f.data.size(); ++p)
             out.data[p] = static_cast<float>(out.data[p] + gain * f.data[p]);
         return;

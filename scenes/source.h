@@ -6,8 +6,10 @@
 // from another synthesizer (subdivision, fBm, solid noise). Composition, shading, marginal
 // shaping, warps, orientation and analysis take a source's layer as they take any other.
 
+#include <cstdint>
 #include <optional>
 #include <string_view>
+#include <vector>
 
 #include "numeric/frame.h"
 
@@ -18,6 +20,18 @@ namespace impulse::scenes {
 struct Theory {
     double mean = 0.0;
     double variance = 0.0;
+};
+
+/// The pixels of a perspective frame as the texture plane sees them (pixel p = j * width + i):
+/// the texture point of each pixel centre and its footprint, texture units per pixel along the
+/// major axis (ex, ey) and across (docs/perspective.md §1); s_major = 0 where the ray misses the
+/// plane (the pixel shows the mean).
+struct PixelFootprints {
+    int width = 0, height = 0;
+    std::vector<double> x, y;
+    std::vector<float> s_major, s_minor, ex, ey;
+    double filter_sd_px = 0.5;  ///< the pixel filter's sd in pixels (camera.filter)
+    double cutoff = 0.01;       ///< fade to the mean below this fraction of the sd (0: none)
 };
 
 /// A field f(x, t) of texture space x and time t, stated by a synthesizer. Implementations are
@@ -31,6 +45,15 @@ public:
     /// by the source to the view's pixel spacing where it can be. A pure function of (source,
     /// view, t_s): the same pixels in any view, tile or frame order give the same bits.
     virtual void add(const numeric::View& view, double t_s, numeric::Frame& out) const = 0;
+    /// Whether add_perspective draws this source (a perspective camera refuses it otherwise).
+    virtual bool perspective() const { return false; }
+    /// Adds f(x - (dx, dy), t_s) filtered by each pixel's footprint (a Gaussian of sd
+    /// filter_sd_px pixels) to `out` (sized to the pixels), faded to the mean where the footprint
+    /// leaves less than `cutoff` of the sd, as impulse layers are. Pure, like `add`.
+    virtual void add_perspective(const PixelFootprints& pixels, double dx, double dy, double t_s,
+                                 numeric::Frame& out) const {
+        (void)pixels, (void)dx, (void)dy, (void)t_s, (void)out;
+    }
     /// Closed-form mean and variance of f at t_s (before the layer's gain and mean).
     virtual Theory theory(double t_s) const = 0;
     /// A length over which f is correlated (texture units, > 0): the spacing of the lattices on

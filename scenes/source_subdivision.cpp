@@ -48,11 +48,17 @@ public:
     }
     std::string_view kind() const override { return "subdivision"; }
     void add(const numeric::View& v, double, numeric::Frame& out) const override { m_grid.add(v, out); }
+    bool perspective() const override { return true; }
+    void add_perspective(const PixelFootprints& px, double dx, double dy, double,
+                         numeric::Frame& out) const override {
+        m_pyramid.get(m_grid).add(px, dx, dy, out);
+    }
     Theory theory(double) const override { return {0.0, m_variance}; }
     double correlation_length() const override { return m_length; }
 
 private:
     SampleGrid m_grid;
+    LazyPyramid m_pyramid;
     double m_variance = 0.0, m_length = 1.0;
 };
 

@@ -10,6 +10,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "numeric/fft.h"
+
 namespace impulse::synth::detail {
 
 /// Stream tags of the counter RNG (xored into the key): one per independent white noise.
@@ -43,16 +45,15 @@ public:
     /// undefined): the transform along x is skipped for the others (Kaplan & Kuo keep M of N
     /// rows, Stein's embedding N of G).
     PeriodicField(int n, int rows);
-    ~PeriodicField();
     PeriodicField(const PeriodicField&) = delete;
     PeriodicField& operator=(const PeriodicField&) = delete;
 
-    int n() const { return m_n; }
-    int half() const { return m_n / 2 + 1; }
-    std::complex<float>* row(int ky) { return m_spec + size_t(ky) * half(); }
-    const std::complex<float>* row(int ky) const { return m_spec + size_t(ky) * half(); }
+    int n() const { return m_fft.n(); }
+    int half() const { return m_fft.half(); }
+    std::complex<float>* row(int ky) { return m_fft.spectrum() + size_t(ky) * half(); }
+    const std::complex<float>* row(int ky) const { return m_fft.spectrum() + size_t(ky) * half(); }
     /// Bytes of the buffer for side n.
-    static double bytes(int n) { return 8.0 * n * (n / 2 + 1); }
+    static double bytes(int n) { return numeric::InverseFft2dFloat::bytes(n); }
 
     /// Kaplan & Kuo steps 1 and 5: X(k) = amp(k') z(k) with z standard complex normals keyed by
     /// (seed, stream, k), Hermitian (z(n - k) = conj z(k); real at the four self-conjugate
@@ -62,18 +63,12 @@ public:
     void fill(const std::vector<float>& amp, uint64_t seed, uint32_t stream, bool quarter = true);
     /// In place: X -> x(m) = sum_k X(k) e^{+2 pi i k.m / n} (unnormalised inverse DFT, eq. 16)
     /// for m_y < rows: complex transforms along y for every k_x, then c2r along x row by row.
-    void inverse();
+    void inverse() { m_fft.inverse(); }
     /// x(m_x, m_y) after `inverse`.
-    float at(int mx, int my) const { return m_real[size_t(my) * 2 * half() + mx]; }
+    float at(int mx, int my) const { return m_fft.real()[size_t(my) * 2 * half() + mx]; }
 
 private:
-    void release();  ///< plans and buffer (the destructor's work; a failed constructor's too)
-
-    int m_n;
-    std::complex<float>* m_spec = nullptr;
-    float* m_real = nullptr;
-    void* m_plan_y = nullptr;  ///< n/2 + 1 complex columns of length n, in place
-    void* m_plan_x = nullptr;  ///< `rows` c2r rows of length n, in place
+    numeric::InverseFft2dFloat m_fft;
 };
 
 /// The periodic field with amplitude table `amp` (see fill), cropped to its top-left size^2.

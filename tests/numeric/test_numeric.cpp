@@ -2,6 +2,7 @@
 // The base library: keyed counter streams, the FFT wrapper, the normal distribution.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <complex>
 #include <vector>
@@ -72,4 +73,31 @@ TEST_CASE("Region: bounds, area and emptiness of a union of boxes", "[numeric][b
     CHECK(r.area() == 6.0);
     CHECK(!r.empty());
     CHECK(numeric::Region(numeric::Box{1, 1, 0, 0}).empty());
+}
+
+TEST_CASE("Keyframed integral: the closed form matches Simpson's rule for every ease",
+          "[numeric][keyframed]") {
+    for (numeric::Ease ease : {numeric::Ease::Linear, numeric::Ease::Smooth, numeric::Ease::Step}) {
+        numeric::Keyframed k;
+        k.keys = {{-1.0, 2.0}, {0.5, -3.0}, {2.0, 4.0}, {3.5, 1.0}};
+        k.ease = ease;
+        for (double t : {-2.0, -0.4, 0.0, 0.7, 2.0, 2.9, 5.0}) {
+            // Composite Simpson on each piece between keys and t: the integrand is a cubic
+            // there (smoothstep), so Simpson is exact up to rounding; step's jumps sit at keys.
+            std::vector<double> cuts = {0.0, t};
+            for (const auto& key : k.keys)
+                if (key.first > std::min(0.0, t) && key.first < std::max(0.0, t)) cuts.push_back(key.first);
+            std::sort(cuts.begin(), cuts.end());
+            double ref = 0.0;
+            for (size_t c = 1; c < cuts.size(); ++c) {
+                const double a = cuts[c - 1], b = cuts[c], m = 0.5 * (a + b), e = 1e-12;
+                // Just inside the piece, so a step's held value is the piece's own.
+                ref += (b - a) / 6.0 * (k.value(a + e) + 4.0 * k.value(m) + k.value(b - e));
+            }
+            if (t < 0) ref = -ref;
+            CAPTURE(int(ease), t);
+            CHECK(k.integral(t) == Approx(ref).margin(1e-9));
+        }
+    }
+    CHECK(numeric::Keyframed(2.5).integral(3.0) == 7.5);  // a constant: v t
 }

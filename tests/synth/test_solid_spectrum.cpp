@@ -8,13 +8,11 @@
 // reports the figures docs/solid.md quotes (run with -s, or read the WARN lines).
 
 #include <catch2/catch.hpp>
-#include <fftw3.h>
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <complex>
-#include <mutex>
 #include <numbers>
 
 #include "numeric/fft.h"
@@ -30,7 +28,8 @@ constexpr double kZ = 5.0;
 /// |FFT|^2 of an n^3 grid (x fastest) under a separable Hann window, half spectrum n x n x (n/2+1).
 std::vector<double> periodogram3(const std::vector<float>& v, int n) {
     const int h = n / 2 + 1;
-    std::vector<double> in(size_t(n) * n * n);
+    numeric::RealForwardFft3d fft(n, n, n);
+    double* in = fft.real();
     std::vector<double> w(n);
     for (int i = 0; i < n; ++i) w[i] = 0.5 - 0.5 * std::cos(2 * kPi * i / n);
     for (int k = 0; k < n; ++k)
@@ -39,20 +38,10 @@ std::vector<double> periodogram3(const std::vector<float>& v, int n) {
                 const size_t t = (size_t(k) * n + j) * n + i;
                 in[t] = v[t] * w[i] * w[j] * w[k];
             }
-    std::vector<std::complex<double>> out(size_t(n) * n * h);
-    fftw_plan plan;
-    {
-        const std::lock_guard<std::mutex> g(numeric::fftw_planner_mutex());
-        plan = fftw_plan_dft_r2c_3d(n, n, n, in.data(), reinterpret_cast<fftw_complex*>(out.data()),
-                                    FFTW_ESTIMATE);
-    }
-    fftw_execute(plan);
-    {
-        const std::lock_guard<std::mutex> g(numeric::fftw_planner_mutex());
-        fftw_destroy_plan(plan);
-    }
-    std::vector<double> p(out.size());
-    for (size_t t = 0; t < out.size(); ++t) p[t] = std::norm(out[t]);
+    fft.forward();
+    const std::complex<double>* out = fft.spectrum();
+    std::vector<double> p(size_t(n) * n * h);
+    for (size_t t = 0; t < p.size(); ++t) p[t] = std::norm(out[t]);
     return p;
 }
 
@@ -120,13 +109,9 @@ Spread spread(const std::vector<double>& x) {
 template <class Eval>
 double tail_slope(const Eval& eval, int n, double step, int lines, double f0, double f1, bool hann) {
     std::vector<double> sum(n / 2 + 1, 0.0);
-    std::vector<double> in(n);
-    std::vector<std::complex<double>> out(n / 2 + 1);
-    fftw_plan plan;
-    {
-        const std::lock_guard<std::mutex> g(numeric::fftw_planner_mutex());
-        plan = fftw_plan_dft_r2c_1d(n, in.data(), reinterpret_cast<fftw_complex*>(out.data()), FFTW_ESTIMATE);
-    }
+    numeric::RealFft2d fft(1, n, numeric::FftPlans::Forward);  // one row: the 1-D transform
+    double* in = fft.real();
+    const std::complex<double>* out = fft.spectrum();
     std::vector<synth::SolidPoint> pts(size_t(n) * lines);
     for (int l = 0; l < lines; ++l)
         for (int i = 0; i < n; ++i) pts[size_t(l) * n + i] = {i * step, 37.3 * l + 0.41, 11.9 * l + 0.77, 0};
@@ -135,12 +120,8 @@ double tail_slope(const Eval& eval, int n, double step, int lines, double f0, do
     for (int l = 0; l < lines; ++l) {
         for (int i = 0; i < n; ++i)
             in[i] = v[size_t(l) * n + i] * (hann ? 0.5 - 0.5 * std::cos(2 * kPi * i / n) : 1.0);
-        fftw_execute(plan);
+        fft.forward();
         for (int b = 0; b <= n / 2; ++b) sum[b] += std::norm(out[b]);
-    }
-    {
-        const std::lock_guard<std::mutex> g(numeric::fftw_planner_mutex());
-        fftw_destroy_plan(plan);
     }
     double sx = 0, sy = 0, sxx = 0, sxy = 0, m = 0;
     for (int b = 1; b <= n / 2; ++b) {
