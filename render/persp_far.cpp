@@ -154,6 +154,7 @@ struct FarField::Setup {
     bool pixel_rows();
     bool row_in_reach(int j, double smax, double y_lo, double y_hi) const;
     void pixel_filters();
+    void along_reach();
     void pixel_filter(int j, int i);
 };
 
@@ -662,6 +663,37 @@ void FarField::Setup::pixel_filters() {
     });
 }
 
+/// Each pixel sums the sub-rows within kAlongReach sd of its own y' only. The reach is kept
+/// per piece of kAlongPiece columns: sub-rows follow circles, which bend across the image, so
+/// the reach of a whole row is several times that of any of its pixels. A function of the
+/// set-up alone: made once with it (FarField::m_reach0, m_reach1).
+void FarField::Setup::along_reach() {
+    const size_t np = f.m_yp.size();
+    const int nrow = f.m_j1 - f.m_j0, rows = static_cast<int>(f.m_rows.size());
+    const int pieces = (W + kAlongPiece - 1) / kAlongPiece;
+    std::vector<int>& reach0 = f.m_reach0;
+    std::vector<int>& reach1 = f.m_reach1;
+    reach0.assign(size_t(nrow) * pieces, rows), reach1.assign(size_t(nrow) * pieces, 0);
+    for (int jj = 0; jj < nrow; ++jj) {
+        for (int pc = 0; pc < pieces; ++pc) {
+            double lo = 1e300, hi = -1e300;
+            for (int i = pc * kAlongPiece; i < std::min(W, (pc + 1) * kAlongPiece); ++i) {
+                const size_t p = size_t(jj) * W + i;
+                if (f.m_ik[p] == 0.0f) continue;
+                double smax = 0.0;
+                for (int b = 0; b < NB; ++b)
+                    smax = std::max(smax, 1.0 / double(f.m_is[size_t(b) * np + p]));
+                const double reach = kAlongReach * std::sqrt(smax) / f.m_ik[p];
+                lo = std::min(lo, f.m_yp[p] - reach), hi = std::max(hi, f.m_yp[p] + reach);
+            }
+            if (!(lo <= hi)) continue;
+            const size_t e = size_t(jj) * pieces + pc;
+            reach0[e] = std::max(0, static_cast<int>(std::floor((lo - f.m_y0) / f.m_dy)));
+            reach1[e] = std::min(rows, static_cast<int>(std::ceil((hi - f.m_y0) / f.m_dy)) + 1);
+        }
+    }
+}
+
 void FarField::setup(const kernels::KernelPyramid& pyr, const PerspectiveView& view,
                      const PixelCoords& coords, const AntiAlias& aa) {
     // Everything below is set afresh but the arrays' memory (m_v_sign, which the frame may not
@@ -679,6 +711,7 @@ void FarField::setup(const kernels::KernelPyramid& pyr, const PerspectiveView& v
     tbb::parallel_for(0, static_cast<int>(m_rows.size()), [&](int r) { s.row(r); });
     if (!s.pixel_rows()) return;
     s.pixel_filters();
+    s.along_reach();
     m_active = true;
 }
 
@@ -755,7 +788,8 @@ struct FarField::Pass {
     /// or by the band before through its halo: both bands set it, from disjoint tasks' items).
     std::vector<uint8_t> filled, halo_filled;
     int nrow = 0, pieces = 0;
-    std::vector<int> reach0, reach1;  ///< per output row and piece: sub-rows [reach0, reach1)
+    const std::vector<int>& reach0 = f.m_reach0;  ///< FarField::m_reach0, m_reach1
+    const std::vector<int>& reach1 = f.m_reach1;
 
     Pass(const FarField& far, const Impulses& impulses, const PerspLoops& l, bool par,
          FarScratch& s)
@@ -785,7 +819,6 @@ struct FarField::Pass {
     void sort_by_band();
     void deposit_band(int b);
     void add_halo(int b);
-    void along_reach();
     void filter_task(int task, Frame& out);
     /// Column runs [first, second) of the pieces a sub-row reaches from a task's output rows.
     using Runs = std::vector<std::pair<int, int>>;
@@ -895,34 +928,6 @@ void FarField::Pass::add_halo(int b) {
         float* d = grid(r, bin);
         const float* h = halo[size_t(b)].data() + size_t(bin) * hn;
         for (size_t k = 0; k < hn; ++k) d[k] += h[k];
-    }
-}
-
-/// Each pixel sums the sub-rows within kAlongReach sd of its own y' only. The reach is kept
-/// per piece of kAlongPiece columns: sub-rows follow circles, which bend across the image, so
-/// the reach of a whole row is several times that of any of its pixels.
-void FarField::Pass::along_reach() {
-    const size_t np = f.m_yp.size();
-    nrow = f.m_j1 - f.m_j0;
-    pieces = (W + kAlongPiece - 1) / kAlongPiece;
-    reach0.assign(size_t(nrow) * pieces, rows), reach1.assign(size_t(nrow) * pieces, 0);
-    for (int jj = 0; jj < nrow; ++jj) {
-        for (int c = 0; c < pieces; ++c) {
-            double lo = 1e300, hi = -1e300;
-            for (int i = c * kAlongPiece; i < std::min(W, (c + 1) * kAlongPiece); ++i) {
-                const size_t p = size_t(jj) * W + i;
-                if (f.m_ik[p] == 0.0f) continue;
-                double smax = 0.0;
-                for (int b = 0; b < B; ++b)
-                    smax = std::max(smax, 1.0 / double(f.m_is[size_t(b) * np + p]));
-                const double reach = kAlongReach * std::sqrt(smax) / f.m_ik[p];
-                lo = std::min(lo, f.m_yp[p] - reach), hi = std::max(hi, f.m_yp[p] + reach);
-            }
-            if (!(lo <= hi)) continue;
-            const size_t e = size_t(jj) * pieces + c;
-            reach0[e] = std::max(0, static_cast<int>(std::floor((lo - f.m_y0) / f.m_dy)));
-            reach1[e] = std::min(rows, static_cast<int>(std::ceil((hi - f.m_y0) / f.m_dy)) + 1);
-        }
     }
 }
 
@@ -1088,7 +1093,7 @@ size_t FarField::render(const Impulses& in, Frame& out, const PerspLoops& loops,
     // each direction bin, the sub-row is convolved across with its segments' profiles and
     // sampled at the pixel centres, then added to every pixel of the band it reaches through
     // the along filter of that bin.
-    s.along_reach();
+    s.nrow = m_j1 - m_j0, s.pieces = (m_width + kAlongPiece - 1) / kAlongPiece;
     const int tasks = (s.nrow + kRowsPerTask - 1) / kRowsPerTask;
     s.run(tasks, [&](int task) { s.filter_task(task, out); });
     size_t drawn = 0;
