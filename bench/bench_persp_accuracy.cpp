@@ -8,6 +8,7 @@
 // fade's promise where a band is nearly flat: 2 x cut-off). See bench/README.md.
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -62,7 +63,12 @@ Options parse_args(int argc, char** argv) {
         else if (a == "--bands")
             o.bands = positive("--bands", value(), 64);
         else if (a == "--frame")
-            o.frame = positive("--frame", std::to_string(std::atoll(value().c_str()) + 1), 1 << 30) - 1;
+        {
+            const std::string v = value();
+            const auto [end, ec] = std::from_chars(v.data(), v.data() + v.size(), o.frame);
+            if (ec != std::errc() || end != v.data() + v.size() || o.frame < 0)
+                usage_error("--frame " + v + ": expected an integer >= 0");
+        }
         else if (a == "--set")
             o.sets.push_back(value());
         else if (!a.empty() && a[0] != '-' && o.scene.empty())
