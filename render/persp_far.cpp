@@ -11,6 +11,7 @@
 #include <array>
 #include <cmath>
 #include <numbers>
+#include <utility>
 
 namespace impulse::render::detail {
 namespace {
@@ -153,6 +154,7 @@ struct FarField::Setup {
     bool pixel_rows();
     bool row_in_reach(int j, double smax, double y_lo, double y_hi) const;
     void pixel_filters();
+    void along_reach();
     void pixel_filter(int j, int i);
 };
 
@@ -661,6 +663,37 @@ void FarField::Setup::pixel_filters() {
     });
 }
 
+/// Each pixel sums the sub-rows within kAlongReach sd of its own y' only. The reach is kept
+/// per piece of kAlongPiece columns: sub-rows follow circles, which bend across the image, so
+/// the reach of a whole row is several times that of any of its pixels. A function of the
+/// set-up alone: made once with it (FarField::m_reach0, m_reach1).
+void FarField::Setup::along_reach() {
+    const size_t np = f.m_yp.size();
+    const int nrow = f.m_j1 - f.m_j0, rows = static_cast<int>(f.m_rows.size());
+    const int pieces = (W + kAlongPiece - 1) / kAlongPiece;
+    std::vector<int>& reach0 = f.m_reach0;
+    std::vector<int>& reach1 = f.m_reach1;
+    reach0.assign(size_t(nrow) * pieces, rows), reach1.assign(size_t(nrow) * pieces, 0);
+    for (int jj = 0; jj < nrow; ++jj) {
+        for (int pc = 0; pc < pieces; ++pc) {
+            double lo = 1e300, hi = -1e300;
+            for (int i = pc * kAlongPiece; i < std::min(W, (pc + 1) * kAlongPiece); ++i) {
+                const size_t p = size_t(jj) * W + i;
+                if (f.m_ik[p] == 0.0f) continue;
+                double smax = 0.0;
+                for (int b = 0; b < NB; ++b)
+                    smax = std::max(smax, 1.0 / double(f.m_is[size_t(b) * np + p]));
+                const double reach = kAlongReach * std::sqrt(smax) / f.m_ik[p];
+                lo = std::min(lo, f.m_yp[p] - reach), hi = std::max(hi, f.m_yp[p] + reach);
+            }
+            if (!(lo <= hi)) continue;
+            const size_t e = size_t(jj) * pieces + pc;
+            reach0[e] = std::max(0, static_cast<int>(std::floor((lo - f.m_y0) / f.m_dy)));
+            reach1[e] = std::min(rows, static_cast<int>(std::ceil((hi - f.m_y0) / f.m_dy)) + 1);
+        }
+    }
+}
+
 void FarField::setup(const kernels::KernelPyramid& pyr, const PerspectiveView& view,
                      const PixelCoords& coords, const AntiAlias& aa) {
     // Everything below is set afresh but the arrays' memory (m_v_sign, which the frame may not
@@ -678,6 +711,7 @@ void FarField::setup(const kernels::KernelPyramid& pyr, const PerspectiveView& v
     tbb::parallel_for(0, static_cast<int>(m_rows.size()), [&](int r) { s.row(r); });
     if (!s.pixel_rows()) return;
     s.pixel_filters();
+    s.along_reach();
     m_active = true;
 }
 
@@ -754,7 +788,8 @@ struct FarField::Pass {
     /// or by the band before through its halo: both bands set it, from disjoint tasks' items).
     std::vector<uint8_t> filled, halo_filled;
     int nrow = 0, pieces = 0;
-    std::vector<int> reach0, reach1;  ///< per output row and piece: sub-rows [reach0, reach1)
+    const std::vector<int>& reach0 = f.m_reach0;  ///< FarField::m_reach0, m_reach1
+    const std::vector<int>& reach1 = f.m_reach1;
 
     Pass(const FarField& far, const Impulses& impulses, const PerspLoops& l, bool par,
          FarScratch& s)
@@ -784,9 +819,14 @@ struct FarField::Pass {
     void sort_by_band();
     void deposit_band(int b);
     void add_halo(int b);
-    void along_reach();
     void filter_task(int task, Frame& out);
-    int across(const Row& row, int r, int bin, TaskBuffers& buf,
+    /// Column runs [first, second) of the pieces a sub-row reaches from a task's output rows.
+    using Runs = std::vector<std::pair<int, int>>;
+    void task_hull(int ja, int jb, std::vector<int>& lo, std::vector<int>& hi) const;
+    void reached_runs(int r, const std::vector<int>& lo, const std::vector<int>& hi,
+                      Runs& runs) const;
+    void pixel_nodes(const Row& row, const Runs& runs, TaskBuffers& buf) const;
+    int across(const Row& row, int r, int bin, const Runs& runs, TaskBuffers& buf,
                std::array<const float*, kProfiles>& xp);
     void along(int r, int bin, int ja, int jb, float yr,
                const std::array<const float*, kProfiles>& xp, int terms, TaskBuffers& buf) const;
@@ -891,38 +931,51 @@ void FarField::Pass::add_halo(int b) {
     }
 }
 
-/// Each pixel sums the sub-rows within kAlongReach sd of its own y' only. The reach is kept
-/// per piece of kAlongPiece columns: sub-rows follow circles, which bend across the image, so
-/// the reach of a whole row is several times that of any of its pixels.
-void FarField::Pass::along_reach() {
-    const size_t np = f.m_yp.size();
-    nrow = f.m_j1 - f.m_j0;
-    pieces = (W + kAlongPiece - 1) / kAlongPiece;
-    reach0.assign(size_t(nrow) * pieces, rows), reach1.assign(size_t(nrow) * pieces, 0);
-    for (int jj = 0; jj < nrow; ++jj) {
+/// Per piece of columns, the hull [lo, hi) of the sub-rows that output rows [ja, jb) reach
+/// (a superset of what along() reads: across() computes the pixels of these pieces only).
+void FarField::Pass::task_hull(int ja, int jb, std::vector<int>& lo, std::vector<int>& hi) const {
+    lo.assign(size_t(pieces), rows), hi.assign(size_t(pieces), 0);
+    for (int jj = ja; jj < jb; ++jj)
         for (int c = 0; c < pieces; ++c) {
-            double lo = 1e300, hi = -1e300;
-            for (int i = c * kAlongPiece; i < std::min(W, (c + 1) * kAlongPiece); ++i) {
-                const size_t p = size_t(jj) * W + i;
-                if (f.m_ik[p] == 0.0f) continue;
-                double smax = 0.0;
-                for (int b = 0; b < B; ++b)
-                    smax = std::max(smax, 1.0 / double(f.m_is[size_t(b) * np + p]));
-                const double reach = kAlongReach * std::sqrt(smax) / f.m_ik[p];
-                lo = std::min(lo, f.m_yp[p] - reach), hi = std::max(hi, f.m_yp[p] + reach);
-            }
-            if (!(lo <= hi)) continue;
             const size_t e = size_t(jj) * pieces + c;
-            reach0[e] = std::max(0, static_cast<int>(std::floor((lo - f.m_y0) / f.m_dy)));
-            reach1[e] = std::min(rows, static_cast<int>(std::ceil((hi - f.m_y0) / f.m_dy)) + 1);
+            if (reach0[e] >= reach1[e]) continue;
+            lo[size_t(c)] = std::min(lo[size_t(c)], reach0[e]);
+            hi[size_t(c)] = std::max(hi[size_t(c)], reach1[e]);
         }
+}
+
+/// The runs of consecutive pieces whose hull holds sub-row r, as column ranges.
+void FarField::Pass::reached_runs(int r, const std::vector<int>& lo, const std::vector<int>& hi,
+                                  Runs& runs) const {
+    runs.clear();
+    for (int c = 0; c < pieces;) {
+        if (r < lo[size_t(c)] || r >= hi[size_t(c)]) {
+            ++c;
+            continue;
+        }
+        const int c0 = c;
+        while (c < pieces && r >= lo[size_t(c)] && r < hi[size_t(c)]) ++c;
+        runs.emplace_back(c0 * kAlongPiece, std::min(W, c * kAlongPiece));
     }
 }
 
+/// The node left of each pixel centre of the runs and the fraction to the next (linear
+/// interpolation from the nodes to the pixels).
+void FarField::Pass::pixel_nodes(const Row& row, const Runs& runs, TaskBuffers& buf) const {
+    for (const auto& [i0, i1] : runs)
+        for (int i = i0; i < i1; ++i) {
+            const double p = (f.xi_at(row, i + 0.5) - row.xi0) / row.dxi;
+            buf.node[size_t(i)] = static_cast<int>(p);
+            buf.frac[size_t(i)] = static_cast<float>(p - buf.node[size_t(i)]);
+        }
+}
+
 /// Sub-row r, bin `bin`, convolved across with its segments' profiles and sampled at the pixel
-/// centres (linear between nodes, buf.node and buf.frac): xp[m] points at profile m's samples
-/// (zeros when unused); returns the far_along term bits.
-int FarField::Pass::across(const Row& row, int r, int bin, TaskBuffers& buf,
+/// centres of the runs (linear between nodes, buf.node and buf.frac): xp[m] points at profile
+/// m's samples (zeros when unused); returns the far_along term bits. Only the nodes the runs'
+/// pixels read are convolved: each node's sum is the same whichever others are (far_across
+/// sums every node's taps in the same order), so the pixels' values do not depend on the runs.
+int FarField::Pass::across(const Row& row, int r, int bin, const Runs& runs, TaskBuffers& buf,
                            std::array<const float*, kProfiles>& xp) {
     const int T = 2 * row.taps + 1;
     const float* d = grid(r, bin);
@@ -930,20 +983,27 @@ int FarField::Pass::across(const Row& row, int r, int bin, TaskBuffers& buf,
     for (int m = 0; m < kProfiles; ++m) {
         xp[size_t(m)] = buf.zeros.data();
         if (!row.used[size_t(m)]) continue;
-        std::fill(buf.x.begin(), buf.x.end(), 0.0f);
-        for (int g = 0; g < f.m_segments; ++g) {
-            const int n0 = row.segment_node[size_t(g)];
-            const int n1 = row.segment_node[size_t(g) + 1];
-            if (n0 >= n1) continue;
-            const float* t =
-                row.tables.data() + ((size_t(g) * B + size_t(bin)) * kProfiles + size_t(m)) * T;
-            loops.far_across(d, t + row.taps, row.taps, n0, n1, buf.x.data());  // writes
-        }
         auto& v = buf.px[size_t(m)];
         v.resize(size_t(W));
-        for (int i = 0; i < W; ++i) {
-            const size_t nd = size_t(buf.node[size_t(i)]);
-            v[size_t(i)] = buf.x[nd] + buf.frac[size_t(i)] * (buf.x[nd + 1] - buf.x[nd]);
+        for (const auto& [i0, i1] : runs) {
+            int na = row.nodes, nb = 0;  // nodes [na, nb) that the run's pixels read
+            for (int i = i0; i < i1; ++i)
+                na = std::min(na, buf.node[size_t(i)]), nb = std::max(nb, buf.node[size_t(i)] + 2);
+            nb = std::min(nb, row.nodes);
+            if (na >= nb) continue;
+            std::fill(buf.x.begin() + na, buf.x.begin() + nb, 0.0f);
+            for (int g = 0; g < f.m_segments; ++g) {
+                const int n0 = std::max(na, row.segment_node[size_t(g)]);
+                const int n1 = std::min(nb, row.segment_node[size_t(g) + 1]);
+                if (n0 >= n1) continue;
+                const float* t = row.tables.data() +
+                                 ((size_t(g) * B + size_t(bin)) * kProfiles + size_t(m)) * T;
+                loops.far_across(d, t + row.taps, row.taps, n0, n1, buf.x.data());  // writes
+            }
+            for (int i = i0; i < i1; ++i) {
+                const size_t nd = size_t(buf.node[size_t(i)]);
+                v[size_t(i)] = buf.x[nd] + buf.frac[size_t(i)] * (buf.x[nd + 1] - buf.x[nd]);
+            }
         }
         xp[size_t(m)] = v.data();
         if (m) terms |= m == 1 || m == 3 ? 2 : 1;
@@ -990,19 +1050,23 @@ void FarField::Pass::filter_task(int task, Frame& out) {
     buf.acc.assign(size_t(jb - ja) * W, 0.0f);
     buf.zeros.assign(static_cast<size_t>(W), 0.0f), buf.frac.resize(static_cast<size_t>(W));
     buf.node.resize(static_cast<size_t>(W));
+    std::vector<int> lo, hi;
+    task_hull(ja, jb, lo, hi);
+    Runs runs;
     for (int r = ra; r < rb; ++r) {
         const Row& row = f.m_rows[size_t(r)];
         if (!row.nodes) continue;
+        bool any = false;
+        for (int bin = 0; bin < B; ++bin) any = any || filled[size_t(r) * B + bin];
+        if (!any) continue;
+        reached_runs(r, lo, hi, runs);
+        if (runs.empty()) continue;
         buf.x.resize(size_t(row.nodes));
-        for (int i = 0; i < W; ++i) {
-            const double p = (f.xi_at(row, i + 0.5) - row.xi0) / row.dxi;
-            buf.node[size_t(i)] = static_cast<int>(p);
-            buf.frac[size_t(i)] = static_cast<float>(p - buf.node[size_t(i)]);
-        }
+        pixel_nodes(row, runs, buf);
         for (int bin = 0; bin < B; ++bin) {
             if (!filled[size_t(r) * B + bin]) continue;
             std::array<const float*, kProfiles> xp{};
-            const int terms = across(row, r, bin, buf, xp);
+            const int terms = across(row, r, bin, runs, buf, xp);
             along(r, bin, ja, jb, static_cast<float>(row.y), xp, terms, buf);
         }
     }
@@ -1029,7 +1093,7 @@ size_t FarField::render(const Impulses& in, Frame& out, const PerspLoops& loops,
     // each direction bin, the sub-row is convolved across with its segments' profiles and
     // sampled at the pixel centres, then added to every pixel of the band it reaches through
     // the along filter of that bin.
-    s.along_reach();
+    s.nrow = m_j1 - m_j0, s.pieces = (m_width + kAlongPiece - 1) / kAlongPiece;
     const int tasks = (s.nrow + kRowsPerTask - 1) / kRowsPerTask;
     s.run(tasks, [&](int task) { s.filter_task(task, out); });
     size_t drawn = 0;

@@ -135,6 +135,9 @@ private:
     int m_j0 = 0, m_j1 = 0;
     std::vector<float> m_yp, m_ik, m_is, m_rs;
     std::vector<double> m_rho_edge;  ///< set-up only: rho at the pixel edges of those rows
+    /// Per row of [m_j0, m_j1) and piece of kAlongPiece columns: the sub-rows [m_reach0,
+    /// m_reach1) within the along filter's reach of its pixels (Setup::along_reach).
+    std::vector<int> m_reach0, m_reach1;
 
     double y_of(double rho) const { return (m_ya * rho + m_yb) / (m_yc * rho + m_yd); }
     /// Sub-rows per deposit task (a band); the halo between bands fixes the order of the sums,
