@@ -2,7 +2,8 @@
 // impulse_bench_frame: wall-clock cost of one 1920x1080 still frame, per kernel and radius:
 // impulse generation (sim::LayerSimulator::impulses_at), the tiled evaluator
 // (render::accumulate) on 1 and 2 threads, and the naive per-pixel reference
-// (render::accumulate_naive, Lewis 1989 §4.1) on 2 threads. Every timing is the median of
+// (render::accumulate_naive, Lewis 1989 §4.1) on 2 threads; then the same layer with kernel
+// scale fields (constant 1, 1.5, 2 and a ramp 1..2 across the frame) against none. Every timing is the median of
 // repeated runs, measured with std::chrono::steady_clock after an untimed warm-up.
 // See bench/README.md for the columns.
 
@@ -12,6 +13,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -53,13 +55,14 @@ struct Options {
     int reps = 9;                               ///< timed runs of generation and tiled evaluation
     int naive_reps = 3;                         ///< timed runs of the naive reference
     int naive_rows = kHeight;                   ///< rows of the frame the naive reference evaluates
+    bool no_scale = false;                      ///< skip the scale-field rows
 };
 
 [[noreturn]] void usage_error(const std::string& message) {
     throw std::invalid_argument(message +
                                 " (usage: impulse_bench_frame [--quick] [--csv] [--radius N] "
                                 "[--kernel cosine|gabor] [--reps N] [--naive-reps N] "
-                                "[--naive-rows N])");
+                                "[--naive-rows N] [--no-scale])");
 }
 
 int parse_int(std::string_view flag, const char* text, int lo, int hi) {
@@ -84,6 +87,8 @@ Options parse_args(int argc, char** argv) {
             o.quick = true;
         } else if (a == "--csv") {
             o.csv = true;
+        } else if (a == "--no-scale") {
+            o.no_scale = true;
         } else if (a == "--radius") {
             const char* v = value();
             o.radius_px = parse_int(a, v, 1, 1000);
@@ -157,17 +162,20 @@ struct Row {
 
 double mpx_s(double ms) { return double(kWidth) * kHeight / 1e6 / (ms / 1e3); }
 
-Row run_case(kernels::KernelType type, int radius_px, const Options& o, tbb::task_arena& one,
-             tbb::task_arena& two) {
-    const LoadMeter load;
+/// A row's kernel. Gabor: two carrier cycles per radius (the default envelope, 1 % at R, leaves
+/// about one visible cycle each side of the centre).
+kernels::KernelParams row_kernel(kernels::KernelType type, int radius_px) {
     kernels::KernelParams kp;
     kp.type = type;
     kp.radius = radius_px;
-    // Two carrier cycles per radius: the default envelope (1 % at R) leaves about one visible
-    // cycle each side of the centre.
     if (type == kernels::KernelType::Gabor) kp.frequency = 2.0 / radius_px;
-    const kernels::Kernel kernel(kp);
+    return kp;
+}
 
+/// A row's still process: kDensity impulses per kernel area, cells of one radius, Gabor
+/// kernels turned at random.
+sim::ProcessConfig row_process(const kernels::Kernel& kernel, kernels::KernelType type,
+                               int radius_px) {
     sim::ProcessConfig pc;
     pc.seed = 1;
     pc.intensity = kDensity / kernel.support_area();
@@ -175,6 +183,14 @@ Row run_case(kernels::KernelType type, int radius_px, const Options& o, tbb::tas
     pc.cell_size = radius_px;
     pc.orientation = type == kernels::KernelType::Gabor ? sim::OrientationMode::Random
                                                         : sim::OrientationMode::Fixed;
+    return pc;
+}
+
+Row run_case(kernels::KernelType type, int radius_px, const Options& o, tbb::task_arena& one,
+             tbb::task_arena& two) {
+    const LoadMeter load;
+    const kernels::Kernel kernel(row_kernel(type, radius_px));
+    const sim::ProcessConfig pc = row_process(kernel, type, radius_px);
     sim::LayerSimulator simulator(pc, nullptr, sim::Timing{}, kernel.radius());
 
     const render::View view{kWidth, kHeight, 0.0, 0.0, 1.0};
@@ -254,10 +270,98 @@ Row run_case(kernels::KernelType type, int radius_px, const Options& o, tbb::tas
     return row;
 }
 
+std::string kernel_name(kernels::KernelType t) { return std::string(kernels::to_string(t)); }
+
+// ---------------------------------------------------------------------------------------------
+// Scale rows: the cost of a kernel scale field (docs/scenes.md "Kernel scale fields")
+
+/// One scale field over the frame, as a function of the pixel column.
+struct ScaleCase {
+    const char* name;
+    double max_scale;                 ///< the simulator's support is radius * max_scale
+    double (*scale)(double x);        ///< null: no scale field (the unscaled evaluator)
+};
+
+const std::array<ScaleCase, 5> kScaleCases = {{
+    {"none", 1.0, nullptr},
+    {"s=1", 1.0, [](double) { return 1.0; }},
+    {"s=1.5", 1.5, [](double) { return 1.5; }},
+    {"s=2", 2.0, [](double) { return 2.0; }},
+    {"1..2", 2.0, [](double x) { return 1.0 + std::clamp(x / kWidth, 0.0, 1.0); }},
+}};
+
+struct ScaleRow {
+    const ScaleCase* c = nullptr;
+    size_t impulses = 0;
+    Stats gen, eval2, eval1_cpu;
+};
+
+/// Generation (with the support grown to radius * max scale) and evaluation of the same
+/// layer under each scale case, interleaved run by run so machine drift hits every case alike.
+std::vector<ScaleRow> run_scale_rows(kernels::KernelType type, int radius_px, const Options& o,
+                                     tbb::task_arena& one, tbb::task_arena& two) {
+    const kernels::Kernel kernel(row_kernel(type, radius_px));
+    const sim::ProcessConfig pc = row_process(kernel, type, radius_px);
+    const render::View view{kWidth, kHeight, 0.0, 0.0, 1.0};
+    std::vector<sim::LayerSimulator> sims;
+    for (const ScaleCase& c : kScaleCases)
+        sims.emplace_back(pc, nullptr, sim::Timing{}, kernel.radius() * c.max_scale);
+    std::vector<sim::Impulses> imps(kScaleCases.size());
+    render::Frame frame;
+    frame.resize(kWidth, kHeight);
+    auto generate = [&](size_t i) {
+        sims[i].impulses_at(0, view.box(), imps[i]);
+        sim::Impulses& imp = imps[i];
+        imp.scale.clear();
+        if (kScaleCases[i].scale)
+            for (size_t k = 0; k < imp.size(); ++k)
+                imp.scale.push_back(static_cast<float>(kScaleCases[i].scale(imp.x[k])));
+    };
+    kernel.scale_class_overlap();  // computed once per kernel (cached), not per frame
+    std::vector<std::vector<double>> gen(kScaleCases.size()), eval2(kScaleCases.size()),
+        cpu1(kScaleCases.size());
+    for (int r = -1; r < o.reps; ++r)  // r = -1: untimed warm-up
+        for (size_t i = 0; i < kScaleCases.size(); ++i) {
+            clear(frame);
+            two.execute([&] {
+                const auto t0 = Clock::now();
+                generate(i);
+                const double g = ms_since(t0);
+                const auto t1 = Clock::now();
+                render::accumulate(kernel, imps[i], view, frame);
+                if (r >= 0) gen[i].push_back(g), eval2[i].push_back(ms_since(t1));
+            });
+            clear(frame);
+            one.execute([&] {
+                const double c0 = thread_cpu_ms();
+                render::accumulate(kernel, imps[i], view, frame);
+                if (r >= 0) cpu1[i].push_back(thread_cpu_ms() - c0);
+            });
+        }
+    std::vector<ScaleRow> rows;
+    for (size_t i = 0; i < kScaleCases.size(); ++i)
+        rows.push_back({&kScaleCases[i], imps[i].size(), summarise(gen[i]), summarise(eval2[i]),
+                        summarise(cpu1[i])});
+    return rows;
+}
+
+void print_scale_rows(kernels::KernelType type, int radius_px, const std::vector<ScaleRow>& rows) {
+    std::printf("\nscale field, %s r = %d (same layer; \"none\": no [layer.scale]; rho = %.5f)\n",
+                kernel_name(type).c_str(), radius_px,
+                kernels::Kernel(row_kernel(type, radius_px)).scale_class_overlap());
+    std::printf("%-6s %8s  %-19s %-19s %7s  %-19s %7s\n", "scale", "impulses", "generate 2T",
+                "tiled 2T", "x none", "1T cpu", "x none");
+    const ScaleRow& base = rows.front();
+    for (const ScaleRow& r : rows)
+        std::printf("%-6s %8zu  %-19s %-19s %6.2fx  %-19s %6.2fx\n", r.c->name, r.impulses,
+                    cell(r.gen).c_str(), cell(r.eval2).c_str(), r.eval2.med / base.eval2.med,
+                    cell(r.eval1_cpu).c_str(), r.eval1_cpu.med / base.eval1_cpu.med);
+    std::fflush(stdout);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Output
 
-std::string kernel_name(kernels::KernelType t) { return std::string(kernels::to_string(t)); }
 
 void print_header(const Options& o) {
     std::printf(
@@ -360,6 +464,12 @@ int main(int argc, char** argv) {
         // In CSV mode stdout stays pure CSV; the verdict and the load go to stderr.
         FILE* info = o.csv ? stderr : stdout;
         print_target(info, rows);
+        if (!o.csv && !o.no_scale)
+            for (const auto type : {kernels::KernelType::Cosine, kernels::KernelType::Gabor}) {
+                if (o.kernel && type != *o.kernel) continue;
+                const int r = o.radius_px.value_or(kTargetRadius);
+                print_scale_rows(type, r, run_scale_rows(type, r, o, one, two));
+            }
         const double others = load.others_s();
         if (others >= 0)
             std::fprintf(

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <mutex>
 #include <numbers>
 #include <sstream>
 
@@ -181,7 +182,13 @@ float EnvelopePolynomial::evaluate(float q) const {
     return t * b1 - b2 + coefficients[0];
 }
 
-Kernel::Kernel(const KernelParams& params) : m_params(params) {
+struct Kernel::LazyOverlap {
+    std::once_flag once;
+    double value = 1.0;
+};
+
+Kernel::Kernel(const KernelParams& params)
+    : m_params(params), m_overlap(std::make_shared<LazyOverlap>()) {
     validate(params);
     if (params.type == KernelType::Gabor)
         m_gabor_a = params.bandwidth > 0.0 ? params.bandwidth : kGaborEdgeFactor / params.radius;
@@ -443,6 +450,35 @@ double Kernel::autocorrelation(double tx, double ty) const {
         }
     }
     return sum / a;
+}
+
+double Kernel::scale_class_overlap() const {
+    std::call_once(m_overlap->once, [this] {
+        // The same polar quadrature as autocorrelation, over the support of h(x) (h(x / r),
+        // r > 1, is wider, so the product vanishes outside it): sum h(x) h(x / r) and h(x)^2 on
+        // the same nodes, so the ratio's quadrature errors largely cancel.
+        const double R = m_params.radius, a = m_params.aspect, o = m_params.orientation;
+        const double c = std::cos(o), s = std::sin(o), r = kScaleClassRatio;
+        const int angles = 360, panels = 24;
+        const double* xs = detail::gl_nodes();
+        const double* ws = detail::gl_weights();
+        double cross = 0.0, sq = 0.0;
+        for (int p = 0; p < panels; ++p)
+            for (int i = 0; i < detail::kGlPoints; ++i) {
+                const double rho = R * (p + 0.5 * (1.0 + xs[i])) / panels;
+                const double wr = 0.5 * (R / panels) * ws[i] * rho;
+                for (int j = 0; j < angles; ++j) {
+                    const double ang = 2.0 * kPi * (j + 0.5) / angles;
+                    const double u = rho * std::cos(ang), v = rho * std::sin(ang) / a;
+                    const double x = c * u - s * v, y = s * u + c * v;
+                    const double h = evaluate(x, y);
+                    cross += wr * h * evaluate(x / r, y / r);
+                    sq += wr * h * h;
+                }
+            }
+        m_overlap->value = sq > 0.0 ? cross / (r * sq) : 1.0;
+    });
+    return m_overlap->value;
 }
 
 }  // namespace impulse::kernels

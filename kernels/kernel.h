@@ -61,6 +61,9 @@ struct KernelParams {
 /// levels underflow).
 inline constexpr double kMaxKernelRadius = 1e6, kMinKernelRadius = 1e-6;
 
+/// Neighbouring scale classes of a scale field are 1/8 octave apart (render::accumulate).
+inline constexpr double kScaleClassRatio = 1.0905077326652577;  // 2^(1/8)
+
 /// Throws impulse::ValueError naming the first invalid field ("radius = -1: must be > 0").
 void validate(const KernelParams& params);
 
@@ -118,6 +121,13 @@ public:
     /// about 1e-4 for kernels truncated with a jump, far smaller for the cosine kernel).
     double autocorrelation(double tx, double ty) const;
 
+    /// rho = int h(x) h(x / r) dx / (r int h^2) with r = kScaleClassRatio = 2^(1/8): the
+    /// correlation of the kernel scaled by s and by r s, each with amplitude 1/scale so both
+    /// have int h^2 of their own (render's scale classes, docs/scenes.md "Kernel scale fields").
+    /// By polar quadrature over the support; computed on first use, then cached (thread-safe,
+    /// shared by copies).
+    double scale_class_overlap() const;
+
     /// Fast envelope for the renderer.
     const EnvelopePolynomial& polynomial() const { return m_poly; }
     /// Envelope tabulated at q_i = i / (n - 1) (for envelopes the polynomial cannot fit to
@@ -139,6 +149,8 @@ private:
     std::vector<float> m_table;
     double m_table_error = 0.0;
     std::vector<float> m_grid;
+    struct LazyOverlap;  ///< scale_class_overlap, computed once
+    std::shared_ptr<LazyOverlap> m_overlap;
 };
 
 }  // namespace impulse::kernels

@@ -32,8 +32,15 @@ public:
     double needed, budget;
 };
 
+/// The kernel scales an impulse may carry (sim::Impulses::scale): four octaves either way.
+inline constexpr float kMinKernelScale = 0.0625f, kMaxKernelScale = 16.0f;
+
 /// Adds sum_k w_k h_{theta_k}(x - x_k) to `out` (sized to the view; not cleared) for every
-/// pixel centre. Deterministic: each pixel sums its impulses in their canonical order, so the
+/// pixel centre. Impulses with scales (impulses.scale not empty) draw h(x / s_k) / s_k instead:
+/// the kernel s_k times larger with the same int h^2, s_k quantised into classes 1/8 octave
+/// apart and each impulse split between its two bracketing classes with its int h^2 kept
+/// (evaluate.cpp derives the weights); ValueError for a scale outside [kMinKernelScale,
+/// kMaxKernelScale]. Without scales the arithmetic is that of the unscaled evaluator. Deterministic: each pixel sums its impulses in their canonical order, so the
 /// bits do not depend on the thread count or the tile size. Uses AVX-512 or AVX2 where the CPU
 /// has it (numeric::simd_path), with the same arithmetic (no FMA contraction) as the baseline
 /// path. Throws ValueError naming
@@ -41,6 +48,26 @@ public:
 /// finite; accumulate_region too.
 void accumulate(const kernels::Kernel& kernel, const sim::Impulses& impulses, const View& view,
                 Frame& out, const EvalOptions& options = {});
+
+/// One scale class of impulses with scales: the class's scale s_k = 2^(k/8) and the parts of
+/// the impulses it draws, in canonical order, with weights that include the split and 1/s_k;
+/// drawn with the kernel h(x / s_k) (scaled_kernel), they add up to what accumulate draws.
+struct ScaleClass {
+    double scale = 1.0;
+    sim::Impulses impulses;  ///< without scales
+};
+/// The classes of `impulses` (scales set), ascending (for evaluators that keep one kernel or
+/// pyramid per class). Throws ValueError for a scale outside [kMinKernelScale,
+/// kMaxKernelScale], naming `api`.
+std::vector<ScaleClass> split_scale_classes(const kernels::Kernel& kernel,
+                                            const sim::Impulses& impulses,
+                                            const char* api = "render::split_scale_classes");
+/// The smallest class scale 2^(k/8) >= s (the class whose kernel reaches furthest for scales up
+/// to s), for s in [kMinKernelScale, kMaxKernelScale].
+double scale_class_at_least(double s);
+/// The parameters of h(x / s): lengths (radius, sigma) times s, frequencies (frequency, a Gabor
+/// bandwidth) over s; a sampled kernel's samples span its radius and scale with it.
+kernels::KernelParams scaled_kernel(const kernels::KernelParams& params, double s);
 
 /// Evaluates only the pixel rectangle [x0, x0+w) x [y0, y0+h) of the view into `tile`
 /// (w*h floats, added to). Equal bits to the same pixels of `accumulate` (tiling independence).

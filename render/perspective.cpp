@@ -225,6 +225,10 @@ void accumulate_filtered(const kernels::KernelPyramid& pyr, const sim::Impulses&
                          const EvalOptions& options) {
     if (out.width != view.width || out.height != view.height) out.resize(view.width, view.height);
     if (!aa.enabled) return accumulate(pyr.base(), impulses, view, out, options);
+    if (!impulses.scale.empty())
+        throw ValueError(
+            "render::accumulate_filtered: impulses with scales: draw each class of "
+            "render::split_scale_classes with the pyramid of its scaled kernel");
     const double fade = filtered_fade(pyr, view, aa);
     if (!(fade > 0.0)) return;
     const auto b = pyr.select(detail::filter_sigma_px(aa) * view.scale, aa.blend);
@@ -1093,6 +1097,10 @@ void accumulate_perspective(const kernels::KernelPyramid& pyr, const sim::Impuls
     if (out.width != W || out.height != H) out.resize(W, H);
     if (coords.width != W || coords.height != H)
         throw ValueError("accumulate_perspective: pixel coordinates of another view size");
+    if (!imp.scale.empty())
+        throw ValueError(
+            "accumulate_perspective: impulses with scales: draw each class of "
+            "render::split_scale_classes with the pyramid of its scaled kernel");
     const std::vector<detail::PerspLevel> levels = loop_levels(pyr);
     const detail::PerspKernel lk{pyr.radial(), levels.data(), coords.rows.data()};
     const double orient = pyr.base().params().orientation;

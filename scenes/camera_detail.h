@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -54,11 +55,25 @@ public:
 
 private:
     void prepare(double t_s);
+    /// Adds impulses drawn with pyramid `pyr` (the layer's, or one of its scale classes').
+    void accumulate_with(size_t layer, const kernels::KernelPyramid& pyr,
+                         const sim::Impulses& impulses, const render::View& view, double t_s,
+                         render::Frame& out, const render::EvalOptions& options);
+    /// The pyramid of the layer's kernel scaled by a class scale (built on first use, kept).
+    const kernels::KernelPyramid& class_pyramid(size_t layer, double scale) const;
+    /// The pyramid whose support reaches furthest: the layer's, or its largest scale class's.
+    const kernels::KernelPyramid& reach_pyramid(size_t layer) const;
+    /// The impulses' support radius the simulator adds: kernel radius times the largest scale.
+    double kernel_reach(size_t layer) const;
     const Scene* m_scene;
     const std::vector<kernels::Kernel>* m_kernels;
     bool m_active = false;
     render::AntiAlias m_aa;
     std::vector<std::unique_ptr<kernels::KernelPyramid>> m_pyramids;
+    kernels::PyramidParams m_pyramid_params;
+    /// Per layer with a scale field: the pyramids of its classes by scale, built when a frame
+    /// first needs them (0.1-0.3 s each).
+    mutable std::vector<std::map<double, std::unique_ptr<kernels::KernelPyramid>>> m_class_pyramids;
     std::vector<render::PerspectiveStats> m_stats;
     /// Per layer: the perspective evaluation's memory, kept from frame to frame (tens of MB that
     /// would otherwise be new to the process, page fault by page fault, every frame).

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <map>
 #include <set>
 #include <sstream>
 
@@ -20,13 +21,32 @@ CameraPipeline::CameraPipeline(const Scene& scene, const std::vector<kernels::Ke
     m_stats.resize(kernels.size());
     if (!m_active) return;
     m_aa = c.antialias_options();
-    kernels::PyramidParams pp;
     // Levels below a quarter of the cut-off are never drawn (faded out).
-    pp.min_sd_fraction = std::min(1e-3, 0.25 * m_aa.cutoff);
+    m_pyramid_params.min_sd_fraction = std::min(1e-3, 0.25 * m_aa.cutoff);
     for (const auto& k : kernels) {
-        m_pyramids.push_back(std::make_unique<kernels::KernelPyramid>(k, pp));
+        m_pyramids.push_back(std::make_unique<kernels::KernelPyramid>(k, m_pyramid_params));
         m_workspaces.push_back(std::make_unique<render::PerspectiveWorkspace>());
     }
+    m_class_pyramids.resize(kernels.size());
+}
+
+const kernels::KernelPyramid& CameraPipeline::class_pyramid(size_t layer, double scale) const {
+    auto& built = m_class_pyramids.at(layer)[scale];
+    if (!built) {  // h(x / s) with its own band-limited levels (docs/scenes.md "Kernel scale fields")
+        const kernels::Kernel k(render::scaled_kernel(m_kernels->at(layer).params(), scale));
+        built = std::make_unique<kernels::KernelPyramid>(k, m_pyramid_params);
+    }
+    return *built;
+}
+
+const kernels::KernelPyramid& CameraPipeline::reach_pyramid(size_t layer) const {
+    const LayerConfig& L = m_scene->layers.at(layer);
+    if (!L.scale) return *m_pyramids.at(layer);
+    return class_pyramid(layer, render::scale_class_at_least(L.max_scale()));
+}
+
+double CameraPipeline::kernel_reach(size_t layer) const {
+    return m_kernels->at(layer).radius() * m_scene->layers.at(layer).max_scale();
 }
 
 CameraPipeline::~CameraPipeline() = default;
@@ -88,7 +108,7 @@ void CameraPipeline::add_source(const LayerSource& source, double t, double t_la
 
 numeric::Region CameraPipeline::region(size_t layer, const render::View& view, double t) {
     if (!m_active) return view.box();
-    const kernels::KernelPyramid& pyr = *m_pyramids.at(layer);
+    const kernels::KernelPyramid& pyr = reach_pyramid(layer);
     if (m_scene->camera.type == CameraConfig::Type::Perspective) {
         prepare(t);
         numeric::Region r = render::perspective_region(pyr, *m_view, m_aa);
@@ -104,14 +124,25 @@ numeric::Region CameraPipeline::region(size_t layer, const render::View& view, d
     }
     // The simulator adds the kernel's own radius; the blended levels reach further.
     return view.box().expanded(
-        std::max(0.0, render::filtered_support(pyr, view, m_aa) - pyr.radius(0)));
+        std::max(0.0, render::filtered_support(pyr, view, m_aa) - kernel_reach(layer)));
 }
 
 void CameraPipeline::accumulate(size_t layer, const sim::Impulses& impulses,
                                 const render::View& view, double t, render::Frame& out,
                                 const render::EvalOptions& options) {
     if (!m_active) return render::accumulate(m_kernels->at(layer), impulses, view, out, options);
-    const kernels::KernelPyramid& pyr = *m_pyramids.at(layer);
+    if (impulses.scale.empty())
+        return accumulate_with(layer, *m_pyramids.at(layer), impulses, view, t, out, options);
+    // A scale field: each class with its own pyramid, in ascending scale (a fixed order).
+    for (const render::ScaleClass& c :
+         render::split_scale_classes(m_kernels->at(layer), impulses, "layer scale"))
+        accumulate_with(layer, class_pyramid(layer, c.scale), c.impulses, view, t, out, options);
+}
+
+void CameraPipeline::accumulate_with(size_t layer, const kernels::KernelPyramid& pyr,
+                                     const sim::Impulses& impulses, const render::View& view,
+                                     double t, render::Frame& out,
+                                     const render::EvalOptions& options) {
     if (m_scene->camera.type == CameraConfig::Type::Perspective) {
         prepare(t);
         render::EvalOptions o = options;
@@ -134,11 +165,11 @@ void CameraPipeline::accumulate(size_t layer, const sim::Impulses& impulses,
 
 numeric::Region CameraPipeline::estimate_region(size_t layer, const render::View& view0) const {
     if (!m_active) return view0.box();
-    const kernels::KernelPyramid& pyr = *m_pyramids.at(layer);
+    const kernels::KernelPyramid& pyr = reach_pyramid(layer);
     const CameraConfig& c = m_scene->camera;
     if (c.type == CameraConfig::Type::Orthographic)
         return view0.box().expanded(
-            std::max(0.0, render::filtered_support(pyr, view0, m_aa) - pyr.radius(0)));
+            std::max(0.0, render::filtered_support(pyr, view0, m_aa) - kernel_reach(layer)));
     std::set<double> times = {0.0};
     for (const auto* k : {&c.position_x, &c.position_y, &c.altitude, &c.pitch, &c.heading, &c.fov})
         for (const auto& key : k->keys) times.insert(key.first);

@@ -162,6 +162,8 @@ std::optional<std::string> unfit_stream_function(const LayerConfig& source) {
     if (p.orientation == sim::OrientationMode::Field)
         return "has an orientation field: a stream function takes fixed or random "
                "orientations only";
+    if (source.scale)
+        return "has a kernel scale field: a stream function's kernel is the same everywhere";
     if (source.keyframed())
         return "has keyframed parameters: a stream function must be the same at every "
                "time, so each frame stays independent of the others";

@@ -262,6 +262,7 @@ void read_impulse_layer(Reader& r, size_t i, uint64_t global_seed, const fs::pat
     }
     L.flow = read_flows(r, p, base, compose, i);
     detail::read_marginal(r, L, base);
+    detail::read_scale(r, base, L);  // after the marginal, which it cannot shape
     compose.read_layer(r, i, L);
     detail::read_dispersion(r, L, twins, [&] { return read_flows(r, p, base, compose, i); });
     if (L.density.min() < 1.0)

@@ -56,6 +56,9 @@ void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const std::fil
 /// preview size come from [output].
 std::shared_ptr<const VolumeSceneConfig> read_volume_scene(Reader& top, uint64_t global_seed,
                                                           const OutputConfig& output);
+/// layer.scale (scenes/scale_config.cpp): a kernel scale field, a number or a table with a
+/// type; refused with a marginal (read it after the marginal).
+void read_scale(Reader& layer, const std::filesystem::path& base, LayerConfig& L);
 /// The [camera] table (absent: the orthographic default framing a width x height output).
 CameraConfig read_camera(std::optional<Reader> r, int width, int height);
 

@@ -244,7 +244,7 @@ Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
                 std::make_shared<detail::LatticeOrientation>(l.compose.orientation->level_lines);
             process.orientation_field = S.orientations[i];
         }
-        S.sims.emplace_back(process, l.flow, timing, l.max_radius());
+        S.sims.emplace_back(process, l.flow, timing, l.max_radius() * l.max_scale());
     }
     S.marginal_built.resize(count);
     S.impulses.resize(count);
@@ -572,6 +572,11 @@ void Renderer::State::layer_impulses(size_t i, const Pass& pass, const numeric::
         if (turn != 0.0)
             for (auto& th : out.theta) th = static_cast<float>(th + turn);
     }
+    out.scale.clear();
+    if (layer.scale) {  // at each impulse's position at the frame time, as orientation fields
+        out.scale.resize(out.size());
+        layer.scale->scales(tl, out.size(), out.x.data(), out.y.data(), out.scale.data());
+    }
 }
 
 void Renderer::State::orient(size_t i, const Pass& pass, const numeric::Box& box) {
@@ -582,7 +587,7 @@ void Renderer::State::orient(size_t i, const Pass& pass, const numeric::Box& box
     const size_t j = scene.layers[i].compose.orientation->source;
     const auto& src = scene.layers[j].source;
     const double h = (src ? src->correlation_length() : kernels[j].radius()) / 8.0;
-    const numeric::Box b = box.expanded(scene.layers[i].kernel.radius);
+    const numeric::Box b = box.expanded(scene.layers[i].kernel.radius * scene.layers[i].max_scale());
     const int64_t i0 = static_cast<int64_t>(std::floor(b.x0 / h)) - 2;
     const int64_t j0 = static_cast<int64_t>(std::floor(b.y0 / h)) - 2;
     const int64_t i1 = static_cast<int64_t>(std::floor(b.x1 / h)) + 3;

@@ -121,6 +121,19 @@ struct MarginalKey {
     numeric::Keyframed value;
 };
 
+/// [layer.scale] (docs/scenes.md "Kernel scale fields"): a factor s(x, t) by which each impulse's
+/// kernel is scaled at the impulse's position at the frame time, with amplitude 1/s so the
+/// variance stays the layer's (render::accumulate). Deterministic and thread-safe.
+class ScaleField {
+public:
+    virtual ~ScaleField() = default;
+    /// s at the n points (x[i], y[i]) at layer time t_s, into s[i].
+    virtual void scales(double t_s, size_t n, const double* x, const double* y,
+                        float* s) const = 0;
+    /// The largest s anywhere at any time (the simulator's support radius is R times it).
+    virtual double max_scale() const = 0;
+};
+
 /// One [[layer]]. Its keyframed parameters are evaluated at the layer time (layer_time).
 struct LayerConfig {
     /// What the layer draws: null, the impulse process described by the fields below (kernel,
@@ -152,6 +165,8 @@ struct LayerConfig {
     /// cell_size still refer to the original kernel.
     std::shared_ptr<const kernels::PrecorrectionReport> precorrection;
     Composition compose;  ///< blend, opacity, visibility, warp, orientation source
+    /// [layer.scale]: each impulse's kernel scaled by s(x, t); null: the kernel's own size.
+    std::shared_ptr<const ScaleField> scale;
     /// [layer.dispersion] (scenes/dispersion_config.cpp): Omega, the rate in rad/s at which the
     /// Gabor carrier advances on its envelope; the layer's weights are multiplied by
     /// cos(Omega t), its quadrature twin's (carrier_quadrature, kernel phase + pi/2) by
@@ -163,6 +178,9 @@ struct LayerConfig {
     kernels::KernelParams kernel_at(double t_s) const;
     /// The largest support radius over time (seeding cells and culling use it).
     double max_radius() const;
+    /// The largest kernel scale of the scale field (1 without one): the impulses' support
+    /// reaches max_radius() * max_scale().
+    double max_scale() const { return scale ? scale->max_scale() : 1.0; }
     /// The marginal's target parameters at layer time t_s (marginal must be set).
     kernels::MarginalParams marginal_at(double t_s) const;
     /// The weight of the carrier's quadrature component at layer time t_s (1 without

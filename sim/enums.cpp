@@ -71,6 +71,7 @@ void Impulses::clear() {
     y.clear();
     weight.clear();
     theta.clear();
+    scale.clear();
 }
 
 }  // namespace impulse::sim

@@ -349,10 +349,13 @@ struct Timing {
 
 /// The live impulses of a layer at one frame, in canonical order (by time cell, spatial cell,
 /// index), structure of arrays. weight = a * w(age) * sqrt(J); theta = rotation added to the
-/// kernel's own orientation (radians).
+/// kernel's own orientation (radians). scale: empty (every kernel at its own size), or one
+/// factor per impulse by which the renderer scales its kernel (a scene's scale field; the
+/// simulator never sets it, see render::accumulate).
 struct Impulses {
     std::vector<double> x, y;
     std::vector<float> weight, theta;
+    std::vector<float> scale;
     size_t size() const { return x.size(); }
     void clear();
 };

@@ -52,6 +52,13 @@ for scene in still veins marble fire ink clouds; do
     same "$tmp/$scene-avx512.exr" "$tmp/$scene-avx2.exr" "$scene: avx512 = avx2"
     same "$tmp/$scene-avx512.exr" "$tmp/$scene-baseline.exr" "$scene: avx512 = baseline"
 done
+# A kernel scale field (examples/scale_field.toml): its classes of scaled kernels, too.
+example=$(dirname "$0")/../../examples/scale_field.toml
+for path in avx512 avx2 baseline; do
+    IMPULSE_SIMD=$path render "$tmp/scale-$path.exr" "$example" 160x90
+done
+same "$tmp/scale-avx512.exr" "$tmp/scale-avx2.exr" "scale field: avx512 = avx2"
+same "$tmp/scale-avx512.exr" "$tmp/scale-baseline.exr" "scale field: avx512 = baseline"
 # A misspelt path is refused with one line naming the variable, not silently ignored.
 if IMPULSE_SIMD=avx3 render "$tmp/bad.exr" still 16x9 2> "$tmp/err"; then
     echo "FAIL: IMPULSE_SIMD=avx3 was accepted"
