@@ -37,6 +37,10 @@ struct Shading {
     /// Background behind transparent parts (ramp alpha < 1): a vertical gradient.
     float top[3] = {0.25f, 0.45f, 0.85f};
     float bottom[3] = {0.70f, 0.82f, 0.95f};
+    /// Non-empty: the background instead of the top-bottom gradient, RGB triples at n evenly
+    /// spaced heights from the top row (0) to the bottom row (1), linear between (a scene's
+    /// horizon and sea: scenes/sea.cpp). Resolution-independent, like the gradient.
+    std::vector<float> background;
 };
 
 /// The filmic tone curve from a linear display value x (any real; 0 and 1 where the value
@@ -72,7 +76,10 @@ private:
     float m_shoulder = 0;
     float m_lx = 0, m_ly = 0, m_lz = 1, m_relief = 0, m_ambient = 0;
     float m_top[3] = {}, m_bottom[3] = {};
+    std::vector<float> m_background;
     bool m_plain_grey = true;
+    /// The background of row y of h (the gradient, or the table).
+    void background_row(int y, int h, float bg[3]) const;
 };
 
 }  // namespace impulse::output

@@ -129,6 +129,7 @@ void read_camera_view(Reader& r, CameraConfig& c, int width, int height) {
         "cutoff", 0.01, [](double v) { return v >= 1e-6 && v <= 0.5; },
         "a fraction in [1e-6, 0.5] of the texture's standard deviation");
     c.anisotropic = r.boolean("anisotropic", true);
+    if (auto sea = r.table("sea")) read_sea(*sea, c, width, height);
 }
 
 namespace {

@@ -28,6 +28,29 @@ void read_orientation(Reader& layer, sim::ProcessConfig& process,
                       const std::filesystem::path& base,
                       const std::function<void(Reader&)>& layer_source);
 
+/// [camera.sea] of a perspective sky camera `c` (scenes/sea.cpp): depth, roughness, wavelength,
+/// wind, color. Fails on a sea under an orthographic or ground camera, or one whose horizon is
+/// above the frame at some key (nothing of the sea would show).
+void read_sea(Reader& sea, CameraConfig& c, int width, int height);
+
+/// The camera that sees, at every pixel, the cloud deck along the reflected ray of the pixel
+/// mirrored about the centre row (docs/perspective.md §8): a sky camera at height + 2 depth
+/// below the deck, at pitch -pitch, with no sea of its own.
+CameraConfig mirror_camera(const CameraConfig& c);
+
+/// Replaces the pixels of `field` below `camera`'s horizon by the sea: the mirror camera's
+/// field `mirror` looked up along each pixel's ray reflected at the wave normal, as
+/// mean + F (mirror - mean), F the Schlick reflectance. Deterministic (per pixel, + - * / sqrt
+/// sin cos, rows in parallel).
+void apply_sea(const render::PerspectiveCamera& camera, const SeaConfig& sea, double filter_px,
+               double t_s, double mean, const render::Frame& mirror, render::Frame& field);
+
+/// The background of a sky camera with a sea at time t_s (output::Shading::background): the sky
+/// gradient from the top of the frame to the horizon, and below it the sky colour of the
+/// mirrored elevation, Fresnel-weighted against the sea's colour.
+std::vector<float> sea_background(const CameraConfig& camera, const output::Shading& shading,
+                                  double t_s);
+
 /// Per-layer kernel pyramids and the per-frame perspective geometry, used by Renderer::render.
 class CameraPipeline {
 public:

@@ -217,6 +217,23 @@ void read_limits(Reader& l, Limits& limits) {
 
 /// One [[layer]] of impulses (the point process): kernel, process, orientation, region, flows,
 /// marginal, composition keys and dispersion (its quadrature twin goes to `twins`).
+/// Exponential (positive) amplitudes give a field of mean lambda E[a] int h (Campbell). What
+/// assumes a zero-mean impulse train refuses them: the shot-noise marginal (its CDF knows the
+/// zero-mean laws) and the perspective camera, whose fade to the mean towards the horizon drops
+/// a faded impulse's mass instead of keeping it. (An orthographic view fades only when zoomed
+/// out until a kernel keeps under 2 % of its sd; the low-passed levels keep int h, so the mean.)
+void check_positive_amplitudes(Reader& r, const LayerConfig& L, bool perspective) {
+    if (L.process.amplitude != sim::Amplitude::Exponential) return;
+    if (L.marginal)
+        r.fail(r.node("amplitude"), "amplitude",
+               "exponential amplitudes have no shot-noise marginal: expected normal, uniform or "
+               "sign with [layer.marginal]");
+    if (perspective)
+        r.fail(r.node("amplitude"), "amplitude",
+               "exponential amplitudes cannot be faded to the mean by a perspective camera: "
+               "expected normal, uniform or sign");
+}
+
 void read_impulse_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path& base,
                         const Scene& s, detail::CompositionReader& compose,
                         std::vector<LayerConfig>& twins, LayerConfig& L) {
@@ -263,6 +280,7 @@ void read_impulse_layer(Reader& r, size_t i, uint64_t global_seed, const fs::pat
     L.flow = read_flows(r, p, base, compose, i);
     detail::read_marginal(r, L, base);
     detail::read_scale(r, base, L);  // after the marginal, which it cannot shape
+    check_positive_amplitudes(r, L, s.camera.type == CameraConfig::Type::Perspective);
     compose.read_layer(r, i, L);
     detail::read_dispersion(r, L, twins, [&] { return read_flows(r, p, base, compose, i); });
     if (L.density.min() < 1.0)

@@ -24,6 +24,8 @@ inline const auto kNonNegative = [](double v) { return v >= 0.0; };
 
 /// A number as a person writes it (30, 2.5), for messages.
 std::string num(double v);
+/// A colour: [r, g, b] or [r, g, b, a] with components in [0, 1], or "#rrggbb" (alpha 1).
+bool parse_color(const toml::node& n, float c[4]);
 /// Mix the scene-wide seed into a layer's seed (splitmix64 finaliser).
 uint64_t mix_seed(uint64_t global, uint64_t layer);
 

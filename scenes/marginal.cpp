@@ -260,6 +260,7 @@ kernels::AmplitudeLaw amplitude_law(sim::Amplitude a) {
         case sim::Amplitude::Uniform: return kernels::AmplitudeLaw::Uniform;
         case sim::Amplitude::Sign: return kernels::AmplitudeLaw::Sign;
         case sim::Amplitude::Normal: break;
+        case sim::Amplitude::Exponential: break;  // refused with a marginal by the loader
     }
     return kernels::AmplitudeLaw::Normal;
 }

@@ -50,6 +50,7 @@ output::Shading Scene::shading_at(double t) const {
     s.light_azimuth_deg = shading_keys.light_azimuth.value(t);
     s.light_elevation_deg = shading_keys.light_elevation.value(t);
     s.ambient = shading_keys.ambient.value(t);
+    if (camera.sea.enabled) s.background = detail::sea_background(camera, s, t);
     return s;
 }
 
@@ -67,13 +68,16 @@ decltype(auto) in_layer(const Scene& scene, size_t i, F&& f) {
     }
 }
 
-/// (1/T) int_0^T s(t - a) w(a)^2 da for births thinned by s = process.density_scale (births at
-/// t - a, loop-reduced as the simulator reduces them), so that Var = lambda_max E[a^2] int h^2
-/// times this (Campbell's theorem for a Poisson process of rate beta(t_b) = lambda s(t_b) / T,
-/// design.md §1). Without thinning it is (1/T) int w^2: 3/8 for hann, 1 for box.
-double birth_weight(const sim::ProcessConfig& p, double t) {
+/// (1/T) int_0^T s(t - a) w(a)^n da (n = 1 or 2) for births thinned by s =
+/// process.density_scale (births at t - a, loop-reduced as the simulator reduces them), so that
+/// Var = lambda_max E[a^2] int h^2 times the n = 2 weight and Mean = lambda_max E[a] int h times
+/// the n = 1 weight (Campbell's theorem for a Poisson process of rate beta(t_b) = lambda s(t_b) /
+/// T, design.md §1). Without thinning it is (1/T) int w^n: 3/8 (n = 2) and 1/2 (n = 1) for
+/// hann, 1 for box.
+double birth_weight(const sim::ProcessConfig& p, double t, int n = 2) {
     const double T = p.lifetime_s;
-    if (!p.density_scale) return sim::envelope_sq_integral(p.envelope, T) / T;
+    if (!p.density_scale)
+        return (n == 2 ? sim::envelope_sq_integral(p.envelope, T) : sim::envelope_integral(p.envelope, T)) / T;
     // Midpoint rule on 8192 panels: error O(h^2) where s is smooth, O(h) = 1e-4 of the
     // integral at a step key (the thinned rate jumps there).
     constexpr int kPanels = 8192;
@@ -84,7 +88,7 @@ double birth_weight(const sim::ProcessConfig& p, double t) {
         double tb = t - a;
         if (p.loop_s > 0) tb -= std::floor(tb / p.loop_s) * p.loop_s;
         const double w = sim::envelope_weight(p.envelope, a, T);
-        sum += p.density_scale(tb) * w * w;
+        sum += p.density_scale(tb) * (n == 2 ? w * w : w);
     }
     return sum * h / T;
 }
@@ -101,9 +105,11 @@ Theory unshaped_theory(const LayerConfig& layer, double t) {
     const kernels::Kernel k(layer.kernel_keys.empty() ? layer.kernel : layer.kernel_at(t));
     const auto& p = layer.process;
     double v = p.intensity * sim::amplitude_second_moment(p.amplitude) * k.integral_sq();
-    if (p.lifetime_s > 0) v *= birth_weight(p, t);
+    // Positive amplitudes add lambda E[a] int h to the mean (0 for the zero-mean laws).
+    double m = p.intensity * sim::amplitude_mean(p.amplitude) * k.integral();
+    if (p.lifetime_s > 0) v *= birth_weight(p, t, 2), m *= birth_weight(p, t, 1);
     const double gain = layer.gain.value(t) * layer.carrier_weight(t);
-    return {layer.mean.value(t), v * gain * gain};
+    return {layer.mean.value(t) + gain * m, v * gain * gain};
 }
 
 /// A source layer without its marginal at layer time t: the source's theory through the gain.
@@ -126,7 +132,8 @@ Theory layer_theory(const LayerConfig& layer, double t_s) {
     }
     if (layer.source) return source_theory(layer, t);
     // Campbell's theorem: Var = lambda E[a^2] int h^2, times (1/T) int w^2 dt for a process
-    // with births at beta = lambda / T and a temporal envelope w (design.md §1).
+    // with births at beta = lambda / T and a temporal envelope w (design.md §1); Mean = lambda
+    // E[a] int h, times (1/T) int w dt.
     return unshaped_theory(layer, t);
 }
 
@@ -187,6 +194,9 @@ struct Renderer::State {
     std::vector<std::vector<double>> marginal_built;
     /// Camera-dependent evaluation: pyramids, perspective (scenes/camera_render.cpp).
     std::unique_ptr<detail::CameraPipeline> camera;
+    /// [camera.sea]: the same layers seen by the mirror camera (scenes/sea.cpp).
+    std::unique_ptr<Renderer> mirror;
+    render::Frame mirror_field;
 
     // Composition (docs/scenes.md "Composition").
     /// The field of layers oriented by another layer's, filled before each of their evaluations.
@@ -277,6 +287,12 @@ Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
                              "subdivision layers also through a perspective one)");
     }
     S.camera = std::make_unique<detail::CameraPipeline>(S.scene, S.kernels);
+    if (S.scene.camera.sea.enabled) {
+        Scene m = S.scene;
+        m.camera = detail::mirror_camera(S.scene.camera);
+        m.transform = output::FieldTransform{};  // applied once, to the sea and sky together
+        S.mirror = std::make_unique<Renderer>(std::move(m));
+    }
     // Refuse what would exhaust memory or time, with the estimate (design.md §4).
     const double n = estimated_impulses();
     if (n > S.scene.limits.max_impulses) {
@@ -447,6 +463,11 @@ void Renderer::render(int64_t frame, render::Frame& out, const render::EvalOptio
     }
     if (mean != 0.0)
         for (auto& v : out.data) v = static_cast<float>(v + mean);
+    if (S.mirror) {  // the sea below the horizon: the mirror camera's deck, reflected
+        S.mirror->render(frame, S.mirror_field, options);
+        detail::apply_sea(S.scene.camera.perspective(o.width, o.height, t), S.scene.camera.sea,
+                          S.scene.camera.filter, t, scene_theory(S.scene, t).mean, S.mirror_field, out);
+    }
     if (S.scene.transform.type != output::FieldTransform::Type::None) {
         // Marble and wood (Lewis 1989 §5.1) of the field in standard deviations.
         const Theory th = scene_theory(S.scene, t);

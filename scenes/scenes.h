@@ -34,6 +34,19 @@ struct OutputConfig {
     std::string compression;         ///< EXR compression, one of output::kExrCompressions
 };
 
+/// [camera.sea]: a sea below a sky camera's horizon (docs/perspective.md §8). Each pixel below
+/// the horizon reflects its ray at a wavy sea `depth` below the camera and sees the cloud deck
+/// along the reflected ray (rendered by a mirror camera), Fresnel-weighted (Schlick) against the
+/// water's own colour.
+struct SeaConfig {
+    bool enabled = false;
+    double depth = 2.0;         ///< the sea's distance below the camera, texture units, > 0
+    double roughness = 0.05;    ///< rms slope of the waves, in [0, 0.5] (0: a mirror)
+    double wavelength = 6.0;    ///< longest wave, texture units, > 0; 8 waves down to 0.08 of it
+    double wind_deg = 0.0;      ///< direction the waves travel, degrees on the plane (as heading)
+    float color[3] = {0.02f, 0.09f, 0.15f};  ///< the water's colour where it reflects little
+};
+
 /// [camera]: an orthographic (default) or perspective view of the texture plane, and the
 /// anti-aliasing by band-limited kernels (docs/scenes.md "[camera]").
 struct CameraConfig {
@@ -56,6 +69,7 @@ struct CameraConfig {
     double filter = 0.5;       ///< pixel filter standard deviation in pixels, > 0
     double cutoff = 0.01;      ///< fade to the mean below this fraction of the sd, in (0, 0.5]
     bool anisotropic = true;   ///< false: isotropic levels from the footprint's major axis
+    SeaConfig sea;             ///< [camera.sea] (perspective sky cameras only)
 
     /// The view at time t for a frame of the given size.
     render::View view(int width, int height, double t_s) const;

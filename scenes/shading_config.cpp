@@ -9,6 +9,7 @@
 
 #include "output/io_module.h"
 #include "numeric/gaussian.h"
+#include "scenes/loader_detail.h"
 #include "scenes/reader.h"
 #include "scenes/scenes.h"
 
@@ -46,6 +47,8 @@ bool read_rgb_pixels(const std::string& path, std::vector<float>& px, int& chann
     return error.empty();  // a NaN would break the sort by luminance
 }
 
+}  // namespace
+
 /// A colour: [r, g, b] or [r, g, b, a] with components in [0, 1], or "#rrggbb".
 bool parse_color(const toml::node& n, float c[4]) {
     c[3] = 1.0f;
@@ -66,8 +69,6 @@ bool parse_color(const toml::node& n, float c[4]) {
     }
     return true;
 }
-
-}  // namespace
 
 output::Shading read_shading(std::optional<Reader> r, const std::filesystem::path& base,
                              ShadingKeys& keys) {

@@ -149,7 +149,10 @@ std::shared_ptr<const VolumeSceneConfig> read_volume_scene(Reader& top, uint64_t
     c.octaves = int(v.integer("octaves", c.octaves, 1, 6));
     c.lacunarity = v.number("lacunarity", c.lacunarity, [](double l) { return l > 1 && l <= 8; }, "a ratio in (1, 8]");
     c.gain = v.number("gain", c.gain, [](double g) { return g > 0 && g <= 1; }, "an amplitude ratio in (0, 1]");
-    c.amplitude = sim::Amplitude(v.choice("amplitude", sim::kAmplitudeNames, 0));
+    // The zero-mean laws only (the first three names): the volume's theory is a zero-mean one.
+    constexpr std::array<std::string_view, 3> kZeroMean = {sim::kAmplitudeNames[0], sim::kAmplitudeNames[1],
+                                                           sim::kAmplitudeNames[2]};
+    c.amplitude = sim::Amplitude(v.choice("amplitude", kZeroMean, 0));
     c.lifetime_s = v.number("lifetime", c.lifetime_s, [](double t) { return t > 0 && t <= 1e4; },
                             "seconds in (0, 1e4]");
     c.envelope = sim::Envelope(v.choice("envelope", sim::kEnvelopeNames, 0));

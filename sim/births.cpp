@@ -142,6 +142,8 @@ float amplitude_of(Amplitude a, double u, double v) {
             return static_cast<float>(normal_from_uniforms(u, v));
         case Amplitude::Uniform: return static_cast<float>(2.0 * u - 1.0);
         case Amplitude::Sign: return u < 0.5 ? -1.0f : 1.0f;
+        case Amplitude::Exponential:  // inversion: -ln u, u in (0, 1] so finite and >= 0
+            return static_cast<float>(-std::log(u));
     }
     return 0.0f;
 }

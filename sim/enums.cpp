@@ -35,11 +35,14 @@ std::optional<OrientationMode> orientation_mode_from_string(std::string_view n) 
     return from_names<OrientationMode>(kOrientationModeNames, n);
 }
 
+double amplitude_mean(Amplitude a) { return a == Amplitude::Exponential ? 1.0 : 0.0; }
+
 double amplitude_second_moment(Amplitude a) {
     switch (a) {
         case Amplitude::Normal: return 1.0;
         case Amplitude::Uniform: return 1.0 / 3.0;
         case Amplitude::Sign: return 1.0;
+        case Amplitude::Exponential: return 2.0;  // E[a^n] = n! for rate 1
     }
     return 1.0;
 }
@@ -49,6 +52,7 @@ double amplitude_fourth_moment(Amplitude a) {
         case Amplitude::Normal: return 3.0;
         case Amplitude::Uniform: return 1.0 / 5.0;
         case Amplitude::Sign: return 1.0;
+        case Amplitude::Exponential: return 24.0;
     }
     return 1.0;
 }

@@ -28,12 +28,18 @@ using numeric::Region;
 // ---------------------------------------------------------------------------------------------
 // Amplitudes and temporal envelopes
 
-enum class Amplitude { Normal, Uniform, Sign };
-inline constexpr std::array<std::string_view, 3> kAmplitudeNames = {"normal", "uniform", "sign"};
+/// The amplitude law of the impulses. Normal, uniform on [-1, 1] and sign (+-1) are zero-mean;
+/// exponential (rate 1, a = -ln u) is positive, for fields that are a non-negative quantity
+/// (dye, heat): the field's mean is then lambda E[a] int h, not 0 (Campbell's theorem).
+enum class Amplitude { Normal, Uniform, Sign, Exponential };
+inline constexpr std::array<std::string_view, 4> kAmplitudeNames = {"normal", "uniform", "sign",
+                                                                    "exponential"};
 std::optional<Amplitude> amplitude_from_string(std::string_view name);
-/// E[a^2]: normal 1, uniform on [-1, 1] 1/3, sign 1.
+/// E[a]: 0 for normal, uniform and sign; 1 for exponential.
+double amplitude_mean(Amplitude a);
+/// E[a^2]: normal 1, uniform on [-1, 1] 1/3, sign 1, exponential 2.
 double amplitude_second_moment(Amplitude a);
-/// E[a^4]: normal 3, uniform 1/5, sign 1.
+/// E[a^4]: normal 3, uniform 1/5, sign 1, exponential 24.
 double amplitude_fourth_moment(Amplitude a);
 
 /// Temporal envelope w(age) of a particle living T seconds: the time half of a space-time kernel.

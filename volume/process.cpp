@@ -57,6 +57,7 @@ float amplitude_of(sim::Amplitude a, double u, double v) {
         case sim::Amplitude::Normal: return static_cast<float>(sim::detail::normal_from_uniforms(u, v));
         case sim::Amplitude::Uniform: return static_cast<float>(2.0 * u - 1.0);
         case sim::Amplitude::Sign: return u < 0.5 ? -1.0f : 1.0f;
+        case sim::Amplitude::Exponential: return static_cast<float>(-std::log(u));  // refused by the loader
     }
     return 0.0f;
 }

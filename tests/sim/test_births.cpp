@@ -171,6 +171,7 @@ TEST_CASE("amplitudes have the documented moments and laws", "[sim][stats]") {
     //   normal : Var a^2 = 3 - 1 = 2,      Var a^4 = 105 - 9 = 96
     //   uniform: Var a^2 = 1/5 - 1/9,      Var a^4 = 1/9 - 1/25
     //   sign   : a^2 = a^4 = 1 exactly.
+    //   exponential (rate 1, E[a^n] = n!): Var a = 1, Var a^2 = 24 - 4, Var a^4 = 8! - 24^2.
     // Bands are 5 sd; the shape is checked with a KS band (see kKsX).
     struct Case {
         Amplitude a;
@@ -178,7 +179,8 @@ TEST_CASE("amplitudes have the documented moments and laws", "[sim][stats]") {
     };
     for (const Case k : {Case{Amplitude::Normal, 1.0, 3.0, 2.0, 96.0},
                          Case{Amplitude::Uniform, 1.0 / 3.0, 0.2, 0.2 - 1.0 / 9.0, 1.0 / 9.0 - 1.0 / 25.0},
-                         Case{Amplitude::Sign, 1.0, 1.0, 0.0, 0.0}}) {
+                         Case{Amplitude::Sign, 1.0, 1.0, 0.0, 0.0},
+                         Case{Amplitude::Exponential, 2.0, 24.0, 20.0, 40320.0 - 576.0}}) {
         ProcessConfig c = still_config(7);
         c.amplitude = k.a;
         CAPTURE(static_cast<int>(k.a));
@@ -196,7 +198,8 @@ TEST_CASE("amplitudes have the documented moments and laws", "[sim][stats]") {
         for (double a : amps) s1 += a, s2 += a * a, s4 += a * a * a * a;
         const double m1 = s1 / n, m2 = s2 / n, m4 = s4 / n;
         CAPTURE(n, m1, m2, m4);
-        CHECK(std::abs(m1) < 5.0 * std::sqrt(k.m2 / n));
+        const double mean = impulse::sim::amplitude_mean(k.a);
+        CHECK(std::abs(m1 - mean) < 5.0 * std::sqrt((k.m2 - mean * mean) / n));
         CHECK(std::abs(m2 - k.m2) <= 5.0 * std::sqrt(k.var2 / n));
         CHECK(std::abs(m4 - k.m4) <= 5.0 * std::sqrt(k.var4 / n));
         if (k.a == Amplitude::Normal) {
@@ -211,6 +214,12 @@ TEST_CASE("amplitudes have the documented moments and laws", "[sim][stats]") {
         }
         if (k.a == Amplitude::Sign) {
             CHECK(std::all_of(amps.begin(), amps.end(), [](double a) { return a == 1.0 || a == -1.0; }));
+        }
+        if (k.a == Amplitude::Exponential) {
+            CHECK(ks(amps, [](double a) { return a > 0.0 ? 1.0 - std::exp(-a) : 0.0; }) <
+                  kKsX / std::sqrt(n));
+            // Teeth: a zero-mean law's mean is far outside the band.
+            CHECK(std::abs(m1) > 5.0 * std::sqrt((k.m2 - mean * mean) / n));
         }
     }
 }

@@ -105,7 +105,8 @@ numeric::Region wedge() {
 }  // namespace
 
 TEST_CASE("still fast path: plain layer, every amplitude and orientation", "[sim][still]") {
-    for (const auto amp : {sim::Amplitude::Normal, sim::Amplitude::Uniform, sim::Amplitude::Sign})
+    for (const auto amp : {sim::Amplitude::Normal, sim::Amplitude::Uniform, sim::Amplitude::Sign,
+                           sim::Amplitude::Exponential})
         for (const auto orient : {sim::OrientationMode::Fixed, sim::OrientationMode::Random,
                                   sim::OrientationMode::Flow, sim::OrientationMode::Vorticity}) {
             sim::ProcessConfig c;

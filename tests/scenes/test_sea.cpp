@@ -1,0 +1,159 @@
+// SPDX-License-Identifier: Apache-2.0
+// [camera.sea] (docs/perspective.md §8): the mirror camera sees the deck where the reflected ray
+// meets it (closed-form geometry), a flat sea is the mirror image weighted by Schlick's Fresnel
+// reflectance, the sky above the horizon is untouched, and bad seas are refused.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <numbers>
+#include <string>
+
+#include "numeric/errors.h"
+#include "scenes/camera_detail.h"
+#include "scenes/scenes.h"
+
+namespace S = impulse::scenes;
+using impulse::render::Frame;
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+std::string sea_scene(const std::string& sea) {
+    return R"(
+[output]
+size = [160, 90]
+fps = 10
+frames = 3
+[camera]
+type = "perspective"
+plane = "sky"
+position = [5.0, -7.0]
+height = 100.0
+pitch = 14.0
+heading = 30.0
+fov = 55.0
+)" + sea + R"(
+[[layer]]
+density = 5.0
+lifetime = 2.0
+[layer.kernel]
+type = "gaussian"
+radius = 60.0
+sigma = 20.0
+)";
+}
+
+/// The main camera's ray through pixel centre (i + 0.5, j + 0.5) in its own frame: horizontal
+/// distance and height per unit length (pinhole, principal point at the centre).
+void ray(const S::CameraConfig& c, int w, int h, int i, int j, double& horiz, double& dz) {
+    const double p = c.pitch.value(0) * kDeg, f = 0.5 * h / std::tan(0.5 * c.fov.value(0) * kDeg);
+    const double a = i + 0.5 - 0.5 * w, b = 0.5 * h - (j + 0.5);
+    const double dF = f * std::cos(p) - b * std::sin(p), z = f * std::sin(p) + b * std::cos(p);
+    const double len = std::sqrt(dF * dF + a * a + z * z);
+    horiz = std::sqrt(dF * dF + a * a) / len, dz = z / len;
+}
+
+}  // namespace
+
+TEST_CASE("the mirror camera sees the deck where the reflected ray meets it", "[scenes][sea]") {
+    const S::Scene scene = S::load_scene_string(sea_scene("[camera.sea]\ndepth = 3.0\n"), "sea.toml");
+    const S::CameraConfig& c = scene.camera;
+    const S::CameraConfig m = S::detail::mirror_camera(c);
+    const int w = 160, h = 90;
+    const impulse::render::PerspectiveView mv(m.perspective(w, h, 0.0));
+    // A ray of depression delta from the eye meets the sea depth / tan(delta) away and, reflected,
+    // rises height + depth to the deck: (height + 2 depth) / tan(delta) from the foot in all.
+    int checked = 0;
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; i += 7) {
+            double horiz, dz;
+            ray(c, w, h, i, j, horiz, dz);
+            if (!(dz < -1e-3)) continue;  // above the horizon (or grazing it)
+            const double expected = (100.0 + 2.0 * 3.0) * horiz / -dz;
+            double x, y;
+            REQUIRE(mv.texture_point(i + 0.5, h - (j + 0.5), x, y));
+            const double got = std::hypot(x - 5.0, y + 7.0);
+            CAPTURE(i, j, expected, got);
+            CHECK(got == Approx(expected).epsilon(1e-9));
+            ++checked;
+        }
+    CHECK(checked > 200);
+}
+
+TEST_CASE("a flat sea is the mirror image weighted by Schlick's reflectance", "[scenes][sea]") {
+    const S::Scene scene =
+        S::load_scene_string(sea_scene("[camera.sea]\ndepth = 3.0\nroughness = 0.0\n"), "sea.toml");
+    const int w = 160, h = 90;
+    // A mirror picture with a distinct value per pixel, a field of zeros, mean 0.5.
+    Frame mirror, field;
+    mirror.resize(w, h), field.resize(w, h);
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i) mirror.data[size_t(j) * w + i] = float(0.01 * i + 0.37 * j);
+    const double mean = 0.5;
+    S::detail::apply_sea(scene.camera.perspective(w, h, 0.0), scene.camera.sea, 0.5, 0.0, mean,
+                         mirror, field);
+    int sea = 0;
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i < w; ++i) {
+            double horiz, dz;
+            ray(scene.camera, w, h, i, j, horiz, dz);
+            CAPTURE(i, j, dz);
+            if (dz >= 0.0) {  // the sky is left alone
+                CHECK(field.at(i, j) == 0.0f);
+                continue;
+            }
+            // Schlick: F = F0 + (1 - F0) (1 - cos theta)^5, cos theta = sin(depression), F0 = 0.02.
+            const double F = 0.02 + 0.98 * std::pow(1.0 + dz, 5);
+            const double expected = mean + F * (mirror.at(i, h - 1 - j) - mean);
+            CHECK(field.at(i, j) == Approx(expected).epsilon(1e-5));
+            ++sea;
+        }
+    CHECK(sea > 20 * w);  // the horizon is a quarter up the frame
+}
+
+TEST_CASE("the sea leaves the sky's pixels as they were", "[scenes][sea]") {
+    const S::Scene with = S::load_scene_string(sea_scene("[camera.sea]\ndepth = 3.0\n"), "a.toml");
+    const S::Scene without = S::load_scene_string(sea_scene(""), "b.toml");
+    S::Renderer ra(with), rb(without);
+    Frame a, b;
+    ra.render(2, a), rb.render(2, b);
+    int differ_below = 0;
+    for (int j = 0; j < a.height; ++j)
+        for (int i = 0; i < a.width; ++i) {
+            double horiz, dz;
+            ray(with.camera, a.width, a.height, i, j, horiz, dz);
+            if (dz >= 0.0)
+                CHECK(a.at(i, j) == b.at(i, j));
+            else
+                differ_below += a.at(i, j) != b.at(i, j);
+        }
+    CHECK(differ_below > 1000);
+    // The background below the horizon is the sea's, above it the sky gradient's.
+    const auto bg = with.shading_at(0.2).background;
+    REQUIRE(bg.size() == 3 * 2048);
+    CHECK(bg[0] == Approx(with.shading.top[0]));
+    CHECK(bg.back() != Approx(with.shading.bottom[2]));
+    CHECK(without.shading_at(0.2).background.empty());
+}
+
+TEST_CASE("bad seas are refused with one line", "[scenes][sea][errors]") {
+    CHECK_THROWS_WITH(S::load_scene_string(sea_scene("[camera.sea]\ndepth = -1.0\n"), "d.toml"),
+                      Catch::Contains("d.toml:15:9: camera.sea.depth = -1: expected a distance in (0, 1e6]"));
+    CHECK_THROWS_WITH(S::load_scene_string(sea_scene("[camera.sea]\nroughness = 0.9\n"), "r.toml"),
+                      Catch::Contains("camera.sea.roughness = 0.9") && Catch::Contains("[0, 0.5]"));
+    std::string high = sea_scene("[camera.sea]\ndepth = 3.0\n");
+    high.replace(high.find("pitch = 14.0"), 12, "pitch = 40.0");
+    CHECK_THROWS_WITH(S::load_scene_string(high, "p.toml"),
+                      Catch::Contains("p.toml") && Catch::Contains("the horizon is above the frame"));
+    const std::string ground = R"(
+[camera]
+type = "perspective"
+pitch = 30.0
+[camera.sea]
+depth = 2.0
+[[layer]]
+)";
+    CHECK_THROWS_WITH(S::load_scene_string(ground, "g.toml"),
+                      Catch::Contains("g.toml") && Catch::Contains("plane = \"sky\""));
+}
