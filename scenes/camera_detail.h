@@ -34,7 +34,7 @@ void read_orientation(Reader& layer, sim::ProcessConfig& process,
 void read_sea(Reader& sea, CameraConfig& c, int width, int height);
 
 /// The camera that sees, at every pixel, the cloud deck along the reflected ray of the pixel
-/// mirrored about the centre row (docs/perspective.md §8): a sky camera at height + 2 depth
+/// mirrored about the centre row (docs/perspective.md §9): a sky camera at height + 2 depth
 /// below the deck, at pitch -pitch, with no sea of its own.
 CameraConfig mirror_camera(const CameraConfig& c);
 

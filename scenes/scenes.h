@@ -34,7 +34,7 @@ struct OutputConfig {
     std::string compression;         ///< EXR compression, one of output::kExrCompressions
 };
 
-/// [camera.sea]: a sea below a sky camera's horizon (docs/perspective.md §8). Each pixel below
+/// [camera.sea]: a sea below a sky camera's horizon (docs/perspective.md §9). Each pixel below
 /// the horizon reflects its ray at a wavy sea `depth` below the camera and sees the cloud deck
 /// along the reflected ray (rendered by a mirror camera), Fresnel-weighted (Schlick) against the
 /// water's own colour.
