@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// [camera.sea] (docs/perspective.md §8): the mirror camera sees the deck where the reflected ray
+// [camera.sea] (docs/perspective.md §9): the mirror camera sees the deck where the reflected ray
 // meets it (closed-form geometry), a flat sea is the mirror image weighted by Schlick's Fresnel
 // reflectance, the sky above the horizon is untouched, and bad seas are refused.
 #include <catch2/catch.hpp>
