@@ -77,6 +77,13 @@ Shader::Shader(const ValueMapping& mapping, const Shading& sh) {
     m_relief = static_cast<float>(sh.relief), m_ambient = static_cast<float>(sh.ambient);
     for (int k = 0; k < 3; ++k) m_top[k] = sh.top[k], m_bottom[k] = sh.bottom[k];
     m_plain_grey = sh.ramp.empty() && sh.relief == 0.0 && sh.toe == 0.0 && sh.shoulder == 0.0;
+    build_yuv_tables();
+}
+
+/// The sky gradient behind row y of a frame `height` rows high.
+void Shader::sky_at_row(int y, int height, float bg[3]) const {
+    const float s = height > 1 ? float(y) / float(height - 1) : 0.0f;
+    for (int k = 0; k < 3; ++k) bg[k] = m_top[k] + s * (m_bottom[k] - m_top[k]);
 }
 
 void Shader::rows(const Frame& field, int y0, int y1, float* rgb) const {
@@ -84,9 +91,8 @@ void Shader::rows(const Frame& field, int y0, int y1, float* rgb) const {
     const float lo = m_lo, scale = m_scale, relief = m_relief, ambient = m_ambient;
     const float lx = m_lx, ly = m_ly, lz = m_lz;
     for (int y = y0; y < y1; ++y) {
-        const float s = h > 1 ? float(y) / float(h - 1) : 0.0f;
         float bg[3];
-        for (int k = 0; k < 3; ++k) bg[k] = m_top[k] + s * (m_bottom[k] - m_top[k]);
+        sky_at_row(y, h, bg);
         const float* row = field.data.data() + size_t(y) * w;
         float* o = rgb + size_t(y - y0) * w * 3;
         for (int x = 0; x < w; ++x) {
