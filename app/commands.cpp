@@ -427,11 +427,13 @@ int run_render(const RenderOptions& opt) {
     if (video) open_video(writer, output, out, meta);
     if (sequence && opt.resume) prepare_resume(output);
     Progress progress(last - first + 1, opt.quiet);
-    // Frame f + 1 renders while frame f is written: on two cores the encoder and the renderer
-    // overlap instead of taking turns. Images: two float frames, f + 1 renders while f is
-    // shaded and saved. Video: one float frame, shaded band by band straight into the
-    // encoder's 8-bit input (no float RGB frame: 100 MiB at 4K) before f + 1 renders into it;
-    // the conversion and encoding of f overlap the rendering of f + 1.
+    // Frame f + 1 renders (simulation, then evaluation) while frame f is written on another
+    // thread: on two cores the output and the renderer overlap instead of taking turns. Two
+    // float frames. Images: f is shaded and saved. Video: f is shaded band by band straight
+    // into the encoder's YUV 4:2:0 planes (no float RGB frame, no swscale: output::Shader::
+    // rows_yuv420) and encoded; frames reach the encoder in order, one at a time, so the file
+    // does not depend on the overlap or on --threads (x264's own threads: output::
+    // kEncoderThreads, fixed).
     render::Frame frames[2];
     std::vector<float> rgb;
     long long written = 0, skipped = 0, redone = 0;
@@ -464,15 +466,16 @@ int run_render(const RenderOptions& opt) {
         renderer->render(f, frames[slot], eo);
         finish_pending();
         if (video) {
-            const render::Frame& frame = frames[slot];
-            const output::Shader shader(mapping, sc.shading_at(sc.frame_time(f)));
-            writer.stage_frame([&](int y0, int y1, float* band) { shader.rows(frame, y0, y1, band); });
-            pending = std::async(std::launch::async, [&] { writer.encode_staged(); });
-            continue;  // the frame is free again: f + 1 renders into it
+            pending = std::async(std::launch::async, [&, s = slot, f] {
+                const output::Shader shader(mapping, sc.shading_at(sc.frame_time(f)));
+                writer.stage_shaded(frames[s], shader);
+                writer.encode_staged();
+            });
+        } else {
+            pending = std::async(std::launch::async, [&, s = slot, f, target] {
+                write_frame_image(sc, frames[s], f, target, mapping, meta, rgb);
+            });
         }
-        pending = std::async(std::launch::async, [&, s = slot, f, target] {
-            write_frame_image(sc, frames[s], f, target, mapping, meta, rgb);
-        });
         slot ^= 1;
     }
     finish_pending();

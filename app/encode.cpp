@@ -220,7 +220,7 @@ int run_encode(const EncodeOptions& opt) {
         if (frame.width != vo.width || frame.height != vo.height)
             throw IoError(h.path + ": changed while encoding");
         const output::Shader shader(h.display.mapping, h.display.shading);
-        writer.stage_frame([&](int y0, int y1, float* band) { shader.rows(frame, y0, y1, band); });
+        writer.stage_shaded(frame, shader);
         writer.encode_staged();
     }
     writer.close();

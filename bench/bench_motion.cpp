@@ -320,8 +320,8 @@ struct Variant {
 };
 
 /// One run: frames 0 .. n-1 of the default scene on a fresh Renderer, as `impulse render`
-/// does for a video (app/commands.cpp): render frame f, stage it (output::Shader rows
-/// quantised into the encoder's input by VideoWriter::stage_frame), then encode it on another
+/// does for a video (app/commands.cpp): render frame f, stage it (VideoWriter::stage_shaded:
+/// output::Shader straight into the encoder's YUV 4:2:0 planes), then encode it on another
 /// thread (VideoWriter::encode_staged) while frame f + 1 renders. Returns frames per second
 /// over the whole run (open and close included).
 void run_e2e(Variant& v, int n, const std::string& path) {
@@ -352,7 +352,7 @@ void run_e2e(Variant& v, int n, const std::string& path) {
         if (pending.valid()) pending.get();
         wait_ms += ms_since(t0);
         t0 = Clock::now();
-        writer.stage_frame([&](int y0, int y1, float* rgb) { shader.rows(frame, y0, y1, rgb); });
+        writer.stage_shaded(frame, shader);
         stage_ms += ms_since(t0);
         pending = std::async(std::launch::async, [&] {
             const auto e0 = Clock::now();

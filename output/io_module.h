@@ -47,6 +47,8 @@ public:
     virtual void write_frame(const float* rgb) = 0;
     virtual void stage_frame(const VideoWriter::RowSource& rows) = 0;
     virtual void encode_staged() = 0;
+    virtual bool takes_yuv420() const = 0;
+    virtual void stage_yuv420(const VideoWriter::Yuv420Source& rows) = 0;
     virtual void close() = 0;
     virtual void abort() = 0;
     virtual int frames_written() const = 0;
@@ -84,7 +86,7 @@ struct IoModule {
 };
 
 /// Bumped whenever IoModule or a type it passes changes.
-constexpr int kIoModuleAbi = 2;
+constexpr int kIoModuleAbi = 3;
 
 /// The module: the linked-in table when the program carries impulse::output_io, else
 /// libimpulse_io.so loaded on first use from beside the executable, from ../lib/impulse/ next

@@ -78,6 +78,7 @@ Shader::Shader(const ValueMapping& mapping, const Shading& sh) {
     for (int k = 0; k < 3; ++k) m_top[k] = sh.top[k], m_bottom[k] = sh.bottom[k];
     m_background = sh.background;
     m_plain_grey = sh.ramp.empty() && sh.relief == 0.0 && sh.toe == 0.0 && sh.shoulder == 0.0;
+    build_yuv_tables();
 }
 
 void Shader::background_row(int y, int h, float bg[3]) const {

@@ -4,6 +4,7 @@
 // figures shade noise "as an obliquely illuminated height field"), and alpha over a sky
 // gradient. Part of impulse::output; included by output/output.h.
 
+#include <cstdint>
 #include <vector>
 
 #include "numeric/frame.h"
@@ -58,6 +59,23 @@ double tone_curve(double x, double toe, double shoulder);
 void shade(const Frame& field, const ValueMapping& mapping, const Shading& shading,
            std::vector<float>& rgb);
 
+/// Where the rows of an 8-bit YUV 4:2:0 picture go: three planes (the encoder's input picture,
+/// or any buffer laid out like it), each pointer at the band's first row (its luma row y0 and
+/// chroma row y0 / 2). Strides in bytes.
+struct Yuv420Planes {
+    uint8_t* y = nullptr;
+    uint8_t* cb = nullptr;
+    uint8_t* cr = nullptr;
+    int y_stride = 0, cb_stride = 0, cr_stride = 0;
+};
+
+/// Display RGB rows (3 floats per pixel in [0, 1], `width` * 3 per row) as 8-bit YUV 4:2:0 in
+/// one pass: BT.709 (ITU-R BT.709-6 item 3.2: Kr = 0.2126, Kb = 0.0722) limited range (Y' 16..235,
+/// Cb Cr 16..240), rounded to nearest; each chroma sample is the mean of its 2x2 block of pixels
+/// (centre-sited, AVCHROMA_LOC_CENTER, what swscale writes by default). `width` and `rows` even.
+/// Deterministic: the same bytes on every SIMD path.
+void rgb_rows_to_yuv420(const float* rgb, int width, int rows, const Yuv420Planes& planes);
+
 /// `shade` prepared once for a mapping and a shading (the ramp table, the light), applied to
 /// any band of rows: so a caller can shade a frame band by band into a small buffer instead of
 /// holding the whole float RGB frame (the video path quantises each band to 8 or 16 bits at
@@ -68,10 +86,23 @@ public:
     /// Rows [y0, y1) of `field` (0 <= y0 <= y1 <= height) as display RGB into `rgb`: 3 floats
     /// per pixel, field.width * 3 per row, row y0 first.
     void rows(const Frame& field, int y0, int y1, float* rgb) const;
+    /// Rows [y0, y1) of `field` shaded straight into 8-bit YUV 4:2:0 (y0 even; y1 even, the
+    /// field's width even): what rgb_rows_to_yuv420 makes of `rows`, within one code value,
+    /// without a float RGB frame. Without relief the ramp table is held in Y'CbCr (the
+    /// conversion is linear, so it commutes with the compositing over the sky): a clamp, a
+    /// lookup and a multiply-add per sample. With relief (lighting is not linear in the colour)
+    /// two rows at a time go through `rows` and rgb_rows_to_yuv420. Deterministic; thread-safe.
+    void rows_yuv420(const Frame& field, int y0, int y1, const Yuv420Planes& planes) const;
 
 private:
+    void rows_yuv420_table(const Frame& field, int y, const Yuv420Planes& planes) const;
+    void build_yuv_tables();
+
     static constexpr int kLut = 4096;  ///< entries per unit of linear display value
     std::vector<float> m_lut;  ///< RGBA over the linear display values [x0, x1] the curve needs
+    /// The same table premultiplied by alpha in Y'CbCr code units (Y' with its offset of 16, Cb
+    /// and Cr with 128), and 1 - alpha: structure of arrays for rows_yuv420.
+    std::vector<float> m_lut_y, m_lut_cb, m_lut_cr, m_lut_clear;
     float m_lo = 0, m_scale = 1, m_last = kLut - 1;
     float m_shoulder = 0;
     float m_lx = 0, m_ly = 0, m_lz = 1, m_relief = 0, m_ambient = 0;

@@ -1,11 +1,15 @@
 // SPDX-License-Identifier: Apache-2.0
 // Video files through FFmpeg's libav* (FFmpeg 5.1 API: send/receive, AVCodecParameters).
-// Writing: float RGB is quantised to 8- or 16-bit RGB here, band by band, converted by swscale to
-// the codec's pixel format (BT.709, limited range for YUV targets), encoded and muxed into a
+// Writing: for 8-bit YUV 4:2:0 codecs (h264, vp9) the picture is filled band by band in
+// parallel, straight from the shading (Shader::rows_yuv420) or from float RGB
+// (rgb_rows_to_yuv420): BT.709 limited range, centre-sited chroma, no swscale. For the others
+// float RGB is quantised to 8- or 16-bit RGB, band by band, and converted by swscale to the
+// codec's pixel format (BT.709, limited range for YUV targets). Then encoded and muxed into a
 // temporary file beside the target, which close() renames into place. Reading: decode every
 // frame, for probing and for luma analysis.
 
 #include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_pipeline.h>
 #include <unistd.h>
 
@@ -306,6 +310,7 @@ struct Encoder {
     int frames = 0;
     int width = 0, height = 0;
     bool deep = false;  ///< 16-bit RGB input to swscale
+    bool yuv420 = false;  ///< 8-bit YUV 4:2:0 input, filled without swscale
 
     OutputFormatPtr format;
     CodecContextPtr encoder;
@@ -346,6 +351,8 @@ struct Encoder {
     }
 
     void stage(const VideoWriter::RowSource& rows);
+    void stage_yuv420(const VideoWriter::Yuv420Source& rows);
+    void begin_stage();
 
     /// Free every libav object (closing the temporary file) without writing a trailer.
     void release() {
@@ -391,6 +398,7 @@ void Encoder::setup(const std::string& final_path, const VideoOptions& o,
     width = o.width;
     height = o.height;
     deep = spec.deep;
+    yuv420 = spec.pix_fmt == AV_PIX_FMT_YUV420P;
     const ContainerSpec& container = *find_container(path);
 
     // The directory is checked first so a bad path fails before any libav object or file
@@ -431,11 +439,14 @@ void Encoder::setup(const std::string& final_path, const VideoOptions& o,
     c->time_base = av_inv_q(rate);  // pts = frame index
     c->framerate = rate;
     c->sample_aspect_ratio = AVRational{1, 1};
-    c->thread_count = o.threads;
+    c->thread_count = o.threads > 0 ? o.threads : kEncoderThreads;
     c->color_primaries = AVCOL_PRI_BT709;
     c->color_trc = AVCOL_TRC_BT709;
     c->colorspace = spec.yuv ? AVCOL_SPC_BT709 : AVCOL_SPC_RGB;
     c->color_range = spec.yuv ? AVCOL_RANGE_MPEG : AVCOL_RANGE_JPEG;
+    // rgb_rows_to_yuv420 averages 2x2 blocks: chroma sits at their centre (x264 writes it into
+    // the stream's VUI).
+    if (yuv420) c->chroma_sample_location = AVCHROMA_LOC_CENTER;
     if (format->oformat->flags & AVFMT_GLOBALHEADER) c->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
 
     AVDictionary* codec_opts = nullptr;
@@ -496,14 +507,16 @@ void Encoder::setup(const std::string& final_path, const VideoOptions& o,
     frame->color_trc = c->color_trc;
     frame->colorspace = c->colorspace;
     frame->color_range = c->color_range;
+    frame->chroma_location = c->chroma_sample_location;
     err = av_frame_get_buffer(frame.get(), 0);
     if (err < 0) throw_av(path, "cannot allocate frame", err);
 
+    open = true;
+    if (yuv420) return;  // no swscale, no quantised bands
     rgb_stride = aligned_stride(o.width * 3 * (deep ? 2 : 1));
     bands = alloc_buffer(static_cast<size_t>(rgb_stride) * kBandRows * kBandSlots);
     sws = make_sws(o.width, o.height, deep ? AV_PIX_FMT_RGB48 : AV_PIX_FMT_RGB24, true,
                    spec.pix_fmt, !spec.yuv, path);
-    open = true;
 }
 
 /// The libav encoder behind output::VideoWriter.
@@ -514,6 +527,8 @@ public:
     void write_frame(const float* rgb) override;
     void stage_frame(const VideoWriter::RowSource& rows) override;
     void encode_staged() override;
+    bool takes_yuv420() const override { return is_open() && m_impl->yuv420; }
+    void stage_yuv420(const VideoWriter::Yuv420Source& rows) override;
     void close() override;
     void abort() override;
     int frames_written() const override;
@@ -543,10 +558,19 @@ void LibavSink::open(const std::string& path, const VideoOptions& options) {
 /// and they leave the pipeline in order, so band b + kBandSlots reuses the slot of band b only
 /// after band b has been converted.
 void Encoder::stage(const VideoWriter::RowSource& rows) {
-    // The encoder may still hold a reference to the previous frame's buffers: make_writable
-    // copies only in that case.
-    const int err = av_frame_make_writable(frame.get());
-    if (err < 0) throw_av(path, "cannot allocate frame", err);
+    if (yuv420) {
+        // Float RGB converted band by band by rgb_rows_to_yuv420 (the writer's one conversion
+        // to 4:2:0, so write_frame and stage_shaded agree within one code value).
+        const size_t band_values = static_cast<size_t>(width) * 3 * kBandRows;
+        stage_yuv420([&](int y0, int y1, const Yuv420Planes& planes) {
+            std::vector<float>& buf = float_band.local();
+            buf.resize(band_values);
+            rows(y0, y1, buf.data());
+            rgb_rows_to_yuv420(buf.data(), width, y1 - y0, planes);
+        });
+        return;
+    }
+    begin_stage();
     const int n_bands = (height + kBandRows - 1) / kBandRows;
     const size_t band_values = static_cast<size_t>(width) * 3 * kBandRows;
     int next = 0;
@@ -578,6 +602,31 @@ void Encoder::stage(const VideoWriter::RowSource& rows) {
     staged = true;
 }
 
+/// The encoder may still hold a reference to the previous frame's buffers: make_writable copies
+/// only in that case.
+void Encoder::begin_stage() {
+    const int err = av_frame_make_writable(frame.get());
+    if (err < 0) throw_av(path, "cannot allocate frame", err);
+}
+
+/// Bands of kBandRows rows (even: whole chroma rows) in parallel, each written by one task.
+void Encoder::stage_yuv420(const VideoWriter::Yuv420Source& rows) {
+    begin_stage();
+    const int n_bands = (height + kBandRows - 1) / kBandRows;
+    tbb::parallel_for(0, n_bands, [&](int b) {
+        const int y0 = b * kBandRows, y1 = std::min(height, y0 + kBandRows);
+        Yuv420Planes planes;
+        planes.y = frame->data[0] + static_cast<ptrdiff_t>(y0) * frame->linesize[0];
+        planes.cb = frame->data[1] + static_cast<ptrdiff_t>(y0 / 2) * frame->linesize[1];
+        planes.cr = frame->data[2] + static_cast<ptrdiff_t>(y0 / 2) * frame->linesize[2];
+        planes.y_stride = frame->linesize[0];
+        planes.cb_stride = frame->linesize[1];
+        planes.cr_stride = frame->linesize[2];
+        rows(y0, y1, planes);
+    });
+    staged = true;
+}
+
 /// Quantise (clamp, round to nearest), convert with swscale and encode one frame.
 void LibavSink::write_frame(const float* rgb) {
     if (!is_open()) throw ValueError("write_frame: video writer is not open");
@@ -591,6 +640,13 @@ void LibavSink::write_frame(const float* rgb) {
 void LibavSink::stage_frame(const VideoWriter::RowSource& rows) {
     if (!is_open()) throw ValueError("stage_frame: video writer is not open");
     m_impl->stage(rows);
+}
+
+void LibavSink::stage_yuv420(const VideoWriter::Yuv420Source& rows) {
+    if (!is_open()) throw ValueError("stage_yuv420: video writer is not open");
+    if (!m_impl->yuv420)
+        throw ValueError(m_impl->path + ": stage_yuv420: the encoder does not take YUV 4:2:0");
+    m_impl->stage_yuv420(rows);
 }
 
 /// Encode the staged frame.

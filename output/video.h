@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "output/shading.h"
+
 namespace impulse::output {
 
 /// Codec choices. `Auto` picks from the container: .mp4 -> h264, .mov -> prores,
@@ -25,9 +27,17 @@ struct VideoOptions {
     VideoCodec codec = VideoCodec::Auto;
     int crf = 18;              ///< constant rate factor for h264 (0..51) and vp9 (0..63)
     std::string preset = "medium";  ///< x264 preset: ultrafast .. veryslow
-    int threads = 0;           ///< encoder threads, 0 = libav default
+    /// Encoder threads, 0 = kEncoderThreads. Never "as many as the machine has": x264 and libvpx
+    /// write different bytes for different thread counts, so a fixed count keeps a scene's video
+    /// the same on every machine.
+    int threads = 0;
     std::vector<std::pair<std::string, std::string>> metadata;  ///< container metadata (seed, scene hash ...)
 };
+
+/// The encoder threads when VideoOptions::threads is 0. x264 (frame threads, its default) writes
+/// the same bytes run after run for a given count; 2 is measured in bench/README.md ("drift
+/// end to end") on 2 cores: more threads only add CPU time and lookahead memory.
+constexpr int kEncoderThreads = 2;
 
 /// Parse a codec name ("auto", "h264", "prores", "ffv1", "vp9"); throws ValueError listing the
 /// valid names.
@@ -38,7 +48,9 @@ bool is_video_path(const std::string& path);
 class VideoSink;
 
 /// Writes frames of RGB float data (linear [0,1] values, 3 floats per pixel, row-major, top row
-/// first) to a video file. The file is written to a temporary name beside `path` and renamed
+/// first) to a video file. 8-bit YUV 4:2:0 codecs (h264, vp9) get rgb_rows_to_yuv420's BT.709
+/// limited-range, centre-sited conversion (declared in the stream); the others go through
+/// swscale. The file is written to a temporary name beside `path` and renamed
 /// on `close()`, so an interrupted run never leaves a half-written file under the final name,
 /// but `close()` is also called by `finish_partial()` for Ctrl-C: it flushes the encoder and
 /// writes the trailer so what was encoded stays playable, then renames.
@@ -68,6 +80,21 @@ public:
     /// it renders the next frame. Throws IoError on encoder failure, ValueError if no frame was
     /// staged.
     void encode_staged();
+    /// True when the encoder takes 8-bit YUV 4:2:0 (h264, vp9): stage_yuv420 then fills its
+    /// input picture directly. False before open().
+    bool takes_yuv420() const;
+    /// Fills rows [y0, y1) of the encoder's 8-bit YUV 4:2:0 picture (y0 even, y1 even or the
+    /// height) through the planes given, which point at row y0 (chroma row y0 / 2). Called in
+    /// parallel for disjoint bands of rows.
+    using Yuv420Source = std::function<void(int y0, int y1, const Yuv420Planes& planes)>;
+    /// stage_frame for an encoder that takes YUV 4:2:0: `rows` writes the encoder's input planes
+    /// band by band (in parallel) with no conversion after it. Throws ValueError when
+    /// takes_yuv420() is false.
+    void stage_yuv420(const Yuv420Source& rows);
+    /// Stage `field` shaded by `shader`: straight into the planes (Shader::rows_yuv420) when
+    /// the encoder takes YUV 4:2:0, else through stage_frame (Shader::rows). What `impulse
+    /// render` and `impulse encode` both call, so they write the same video.
+    void stage_shaded(const Frame& field, const Shader& shader);
     /// Flush, write the trailer, rename the temporary file to the final path.
     void close();
     /// Close what was written so far into a playable file (used on interruption).

@@ -53,6 +53,20 @@ void VideoWriter::encode_staged() {
     if (!m_sink) throw ValueError("encode_staged: video writer is not open");
     m_sink->encode_staged();
 }
+bool VideoWriter::takes_yuv420() const { return m_sink && m_sink->takes_yuv420(); }
+void VideoWriter::stage_yuv420(const Yuv420Source& rows) {
+    if (!m_sink) throw ValueError("stage_yuv420: video writer is not open");
+    m_sink->stage_yuv420(rows);
+}
+void VideoWriter::stage_shaded(const Frame& field, const Shader& shader) {
+    if (takes_yuv420()) {
+        stage_yuv420([&](int y0, int y1, const Yuv420Planes& planes) {
+            shader.rows_yuv420(field, y0, y1, planes);
+        });
+    } else {
+        stage_frame([&](int y0, int y1, float* rgb) { shader.rows(field, y0, y1, rgb); });
+    }
+}
 void VideoWriter::close() {
     if (m_sink) m_sink->close();
 }

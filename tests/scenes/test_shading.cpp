@@ -3,7 +3,9 @@
 // shading of a field into display colour.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -90,5 +92,112 @@ TEST_CASE("a Shader shades any band of rows exactly as shade does", "[render][sh
             shader.rows(f, y0, y1, banded.data() + y0 * row);
         }
         CHECK(std::memcmp(whole.data(), banded.data(), whole.size() * sizeof(float)) == 0);
+    }
+}
+
+namespace {
+
+/// BT.709 limited range (ITU-R BT.709-6 items 3.2-3.4) in double, the reference the encoder's
+/// input is checked against: Y' = 16 + 219 Ey, Cb = 128 + 224 (B - Ey) / 1.8556,
+/// Cr = 128 + 224 (R - Ey) / 1.5748, rounded to nearest.
+struct RefYuv {
+    double y, cb, cr;
+};
+RefYuv bt709_limited(double r, double g, double b) {
+    const double ey = 0.2126 * r + 0.7152 * g + 0.0722 * b;
+    return {16.0 + 219.0 * ey, 128.0 + 224.0 * (b - ey) / 1.8556, 128.0 + 224.0 * (r - ey) / 1.5748};
+}
+int code(double v) { return int(std::floor(v + 0.5)); }
+
+/// A w x h 4:2:0 picture in three tight planes.
+struct Picture {
+    int w, h;
+    std::vector<uint8_t> y, cb, cr;
+    Picture(int width, int height)
+        : w(width), h(height), y(size_t(w) * h), cb(size_t(w / 2) * (h / 2)), cr(cb.size()) {}
+    output::Yuv420Planes planes(int y0 = 0) {
+        return {y.data() + size_t(y0) * w, cb.data() + size_t(y0 / 2) * (w / 2),
+                cr.data() + size_t(y0 / 2) * (w / 2), w, w / 2, w / 2};
+    }
+};
+
+/// Largest |code - reference| over the three planes of `pic` against the float RGB `rgb`:
+/// luma per pixel, chroma from the mean colour of each 2x2 block (centre-sited).
+int worst_code_error(const Picture& pic, const std::vector<float>& rgb) {
+    int worst = 0;
+    const int w = pic.w;
+    auto px = [&](int x, int y, int c) { return double(rgb[(size_t(y) * w + x) * 3 + c]); };
+    for (int y = 0; y < pic.h; ++y)
+        for (int x = 0; x < w; ++x)
+            worst = std::max(worst, std::abs(pic.y[size_t(y) * w + x] -
+                                             code(bt709_limited(px(x, y, 0), px(x, y, 1), px(x, y, 2)).y)));
+    for (int j = 0; j < pic.h / 2; ++j)
+        for (int k = 0; k < w / 2; ++k) {
+            double m[3];
+            for (int c = 0; c < 3; ++c)
+                m[c] = (px(2 * k, 2 * j, c) + px(2 * k + 1, 2 * j, c) + px(2 * k, 2 * j + 1, c) +
+                        px(2 * k + 1, 2 * j + 1, c)) / 4.0;
+            const RefYuv ref = bt709_limited(m[0], m[1], m[2]);
+            const size_t i = size_t(j) * (w / 2) + k;
+            worst = std::max({worst, std::abs(pic.cb[i] - code(ref.cb)), std::abs(pic.cr[i] - code(ref.cr))});
+        }
+    return worst;
+}
+
+}  // namespace
+
+TEST_CASE("BT.709 limited range with centre-sited chroma from known colours", "[render][shading]") {
+    // Four columns red | blue | green | green over two rows: the first chroma sample is the mean
+    // of red and blue, the second pure green. The codes are the standard ones (white 235/128/128,
+    // black 16, red 63/102/240); full range (white 255), BT.601 weights (red Y' 81) or left-sited
+    // chroma (a [1 2 1] filter mixing blue into the second sample) would each miss them.
+    const float red[3] = {1, 0, 0}, blue[3] = {0, 0, 1}, green[3] = {0, 1, 0};
+    std::vector<float> rgb;
+    for (int y = 0; y < 2; ++y)
+        for (const float* c : {red, blue, green, green}) rgb.insert(rgb.end(), c, c + 3);
+    Picture pic(4, 2);
+    output::rgb_rows_to_yuv420(rgb.data(), 4, 2, pic.planes());
+    CHECK(std::vector<int>(pic.y.begin(), pic.y.begin() + 4) == std::vector<int>{63, 32, 173, 173});
+    CHECK(int(pic.cb[0]) == code(128.0 + 0.5 * (-224.0 * 0.2126 / 1.8556) + 0.5 * 112.0));  // 171
+    CHECK(int(pic.cr[0]) == code(128.0 + 0.5 * 112.0 + 0.5 * (-224.0 * 0.0722 / 1.5748)));  // 179
+    CHECK(int(pic.cb[1]) == code(128.0 - 224.0 * 0.7152 / 1.8556));                          // 42
+    CHECK(int(pic.cr[1]) == code(128.0 - 224.0 * 0.7152 / 1.5748));                          // 26
+    const float white[12] = {1, 1, 1, 1, 1, 1, 0, 0, 0, 0, 0, 0};
+    std::vector<float> grey(white, white + 12);
+    grey.insert(grey.end(), white, white + 12);
+    output::rgb_rows_to_yuv420(grey.data(), 4, 2, pic.planes());
+    CHECK(std::vector<int>(pic.y.begin(), pic.y.end()) ==
+          std::vector<int>{235, 235, 16, 16, 235, 235, 16, 16});
+    CHECK(std::vector<int>(pic.cb.begin(), pic.cb.end()) == std::vector<int>{128, 128});
+    CHECK(std::vector<int>(pic.cr.begin(), pic.cr.end()) == std::vector<int>{128, 128});
+}
+
+TEST_CASE("a Shader shades straight into YUV 4:2:0 within one code value of the reference",
+          "[render][shading]") {
+    // Shader::rows_yuv420 (the video path: no float RGB frame) against the double-precision
+    // BT.709 conversion of shade's float RGB, for grey, a ramp with alpha over the sky (the
+    // table held in Y'CbCr), relief (through rows) and drift's own shading; bands of even rows.
+    render::Frame f;
+    f.resize(38, 24);
+    for (int y = 0; y < f.height; ++y)
+        for (int x = 0; x < f.width; ++x)
+            f.data[size_t(y) * f.width + x] = std::sin(0.3f * x) * std::cos(0.2f * y) * 1.3f;
+    output::Shading grey, ramp, relief;
+    ramp.ramp = {{0.0, 1, 0, 0, 0}, {0.4, 0.2f, 0.8f, 0.1f, 0.6f}, {1.0, 0, 0, 1, 1}};
+    relief = ramp;
+    relief.relief = 3.0;
+    output::Shading drift = scenes::load_scene(scenes::resolve_scene("drift")).shading;
+    for (const output::Shading* sh : {&grey, &ramp, &relief, &drift}) {
+        std::vector<float> rgb;
+        output::shade(f, {-1.0, 1.0}, *sh, rgb);
+        const output::Shader shader({-1.0, 1.0}, *sh);
+        Picture pic(f.width, f.height);
+        const int bands[] = {0, 6, 8, 20, 24};
+        for (int b = 0; b < 4; ++b) shader.rows_yuv420(f, bands[b], bands[b + 1], pic.planes(bands[b]));
+        CHECK(worst_code_error(pic, rgb) <= 1);
+        // And rgb_rows_to_yuv420 of the same RGB (the writer's conversion of float frames).
+        Picture from_rgb(f.width, f.height);
+        output::rgb_rows_to_yuv420(rgb.data(), f.width, f.height, from_rgb.planes());
+        CHECK(worst_code_error(from_rgb, rgb) <= 1);
     }
 }
