@@ -15,6 +15,15 @@ std::mutex& fftw_planner_mutex() {
     return m;
 }
 
+int fast_fft_size(int x) {
+    for (int n = std::max(x, 1);; ++n) {
+        int m = n;
+        for (int p : {2, 3, 5, 7})
+            while (m % p == 0) m /= p;
+        if (m == 1) return n;
+    }
+}
+
 RealFft2d::RealFft2d(int rows, int cols, FftPlans plans) : m_rows(rows), m_cols(cols) {
     const std::string size = std::to_string(rows) + "x" + std::to_string(cols);
     const size_t nr = size_t(rows) * cols, nc = size_t(rows) * (cols / 2 + 1);
