@@ -9,3 +9,4 @@
 #include "kernels/shaping.h"   // distribution shaping (Lewis 1986 §4) and ITAM
 #include "kernels/shot_noise.h"  // the law of shot noise from its characteristic function
 #include "kernels/spectral.h"  // kernels from a spectrum, an autocorrelation, an exemplar
+#include "kernels/window_variance.h"  // the impulse population's scatter of a window's variance

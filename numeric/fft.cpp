@@ -15,6 +15,15 @@ std::mutex& fftw_planner_mutex() {
     return m;
 }
 
+int fast_fft_size(int x) {
+    for (int n = std::max(x, 1);; ++n) {
+        int m = n;
+        for (int p : {2, 3, 5, 7})
+            while (m % p == 0) m /= p;
+        if (m == 1) return n;
+    }
+}
+
 namespace {
 
 // Zero-filled FFTW buffers of nr reals and nc complex values (fftw_alloc_*: the same alignment

@@ -17,6 +17,10 @@ namespace impulse::numeric {
 /// thread-safe. Code that calls FFTW's planner itself must take this lock too.
 std::mutex& fftw_planner_mutex();
 
+/// The smallest n >= x whose only prime factors are 2, 3, 5 and 7: a size FFTW transforms fast
+/// (for zero-padded linear correlations).
+int fast_fft_size(int x);
+
 /// Which transforms a RealFft2d plans.
 enum class FftPlans { Forward, Inverse, Both };
 

@@ -13,6 +13,7 @@
 #include <numbers>
 
 #include "kernels/kernels.h"
+#include "numeric/fft.h"
 #include "numeric/gaussian.h"
 #include "output/output.h"
 #include "scenes/scenes.h"
@@ -249,7 +250,9 @@ std::vector<double> layer_autocovariance(const LayerSpectrum& L, double zoom, in
 /// r(l) = (w * w~)(l / fps) / int w^2 (design.md §1; 1 for a still layer), layers weighted by
 /// their variance. The frame mean follows r, periodogram bins and the frame variance follow r^2
 /// (Gaussian approximation). Advection by a flow moves the pattern without changing the power of
-/// a periodic frame and decorrelates the rest sooner, so this is exact or conservative with flows.
+/// a periodic frame; through a window (a crop) it brings new content in and the frame variance
+/// decorrelates sooner than its envelopes say, which these correlations do not model (the block
+/// means of `drift` in a 192^2 crop scatter about 3 times wider than the verdict assumes).
 TimeCorrelation scene_time_correlation(const Scene& scene, size_t n, size_t quarter) {
     std::vector<double> r(n, 0.0), r4(n, 0.0);
     double total = 0, total4 = 0;
@@ -324,13 +327,27 @@ DisplayEffects display_effects(const Theory& th, int bits, bool mapped, double l
     return d;
 }
 
+/// int A(u)^2 du of a layer's kernel in pixels over the analysed w x h window: the impulse
+/// population's scatter of a frame's variance per unit lambda E[a^4 w^4] (the derivation is in
+/// kernels/window_variance.h). Impulses of a random orientation average it over four angles
+/// (it depends on the angle only when the kernel is not small against the window).
+double population_integral(const LayerConfig& layer, double zoom, int w, int h) {
+    const kernels::Kernel k(layer.kernel);
+    const bool random_angle = layer.process.orientation != sim::OrientationMode::Fixed;
+    return kernels::window_population_integral(k, zoom, w, h,
+                                               isotropic(k) || !random_angle ? 1 : 4);
+}
+
 /// The layers' spectra summed on the DFT grid, with what the sampling errors need from each.
 struct LayerSums {
     std::vector<double> grid;                       ///< aliased S on the w x h DFT grid
     std::vector<std::vector<double>> layer_annuli;  ///< each layer's annulus means
     std::vector<double> c4;  ///< relative covariance of all bins from impulse-count fluctuations
     std::vector<double> acov;  ///< autocovariance rings (constant zoom)
-    double K4 = 0.0;           ///< fourth-cumulant term of Var(sample variance) times N
+    /// aliased S on a DFT grid padded beyond the window by the covariance's reach (2 R)
+    std::vector<double> padded;
+    int padded_rows = 0, padded_cols = 0;
+    double population = 0.0;   ///< fourth-cumulant term of Var(a frame's sample variance)
     double diff_var = 0.0;     ///< Var of a pixel's change between frames (no flow)
     bool diff_known = true, any_animated = false;
 };
@@ -343,6 +360,13 @@ LayerSums sum_layers(const Scene& scene, const AnalysisResult& R, double zoom, d
     LayerSums S;
     S.grid.assign(size_t(w) * h, quant);
     S.acov.assign(size_t(R.max_lag) + 1, 0.0);
+    int reach = 0;
+    for (const auto& layer : scene.layers)
+        reach = std::max(reach,
+                         int(std::ceil(2.0 * kernels::Kernel(layer.kernel).radius() * zoom)) + 2);
+    S.padded_rows = numeric::fast_fft_size(h + reach);
+    S.padded_cols = numeric::fast_fft_size(w + reach);
+    S.padded.assign(size_t(S.padded_rows) * S.padded_cols, quant);
     for (const auto& layer : scene.layers) {
         const auto& p = layer.process;
         const double ea2 = sim::amplitude_second_moment(p.amplitude);
@@ -358,9 +382,8 @@ LayerSums sum_layers(const Scene& scene, const AnalysisResult& R, double zoom, d
         // Cov(P(k), P(k')) gains lambda_px N E[a^4 w^4] |H|^2 |H'|^2 / N^2 = c S(k) S(k') for a
         // compound Poisson field: the relative covariance c below is shared by every bin.
         S.c4.push_back(ea4 * W4 / (ea2 * ea2 * W2 * W2 * lambda_px * N));
-        const kernels::Kernel k(layer.kernel);
-        S.K4 += g2 * g2 * lambda_px * ea4 * W4 * std::pow(layer.gain.value(0.0), 4) *
-                std::pow(k.integral_sq() * zoom * zoom, 2);
+        S.population += g2 * g2 * lambda_px * ea4 * W4 * std::pow(layer.gain.value(0.0), 4) *
+                        population_integral(layer, zoom, w, h);
         if (layer.flow)
             S.diff_known = false;
         else if (animated)
@@ -368,7 +391,10 @@ LayerSums sum_layers(const Scene& scene, const AnalysisResult& R, double zoom, d
                 2.0 * g2 * lv *
                 (1.0 - envelope_correlation(p.envelope, p.lifetime_s, 1.0 / scene.output.fps));
 
-        const LayerSpectrum ls = layer_spectrum(layer, zoom, std::max(w, h));
+        const LayerSpectrum ls =
+            layer_spectrum(layer, zoom, std::max(S.padded_rows, S.padded_cols));
+        const std::vector<double> pg = layer_grid(ls, S.padded_cols, S.padded_rows);
+        for (size_t i = 0; i < pg.size(); ++i) S.padded[i] += g2 * pg[i];
         std::vector<double> lg = layer_grid(ls, w, h);
         for (size_t i = 0; i < lg.size(); ++i) {
             lg[i] *= g2;
@@ -383,22 +409,62 @@ LayerSums sum_layers(const Scene& scene, const AnalysisResult& R, double zoom, d
     return S;
 }
 
+/// Var of a w x h frame's sample variance for a Gaussian field of the summed spectrum (the
+/// pairings of kernels/window_variance.h's derivation): 2 ||P C P||_F^2 / N^2 with C the pixels'
+/// covariance and P the centring projector, i.e. 2 / N^2 (sum_ij C_ij^2 - 2 / N sum_i r_i^2 +
+/// (sum_i r_i)^2 / N^2), r_i = sum_j C_ij. Exact for any kernel against the window, where the
+/// periodic 2 sum_k S(k)^2 / N^2 misses the power a wide kernel leaks from near k = 0 into the
+/// window's frequencies. C at integer lags is the inverse DFT of the aliased spectrum on the
+/// padded grid (periodic with a period beyond the window plus the reach 2R, so exact there), and
+/// r the indicator's circular correlation with it.
+double gaussian_frame_variance(const LayerSums& S, int w, int h) {
+    const int rows = S.padded_rows, cols = S.padded_cols;
+    const double norm = 1.0 / (double(rows) * cols);
+    numeric::RealFft2d cov(rows, cols, numeric::FftPlans::Inverse);
+    numeric::RealFft2d ind(rows, cols, numeric::FftPlans::Both);
+    for (int y = 0; y < h; ++y) std::fill_n(ind.real() + size_t(y) * cols, w, 1.0);
+    ind.forward();
+    const int hc = cov.half_cols();
+    for (int ky = 0; ky < rows; ++ky)
+        for (int kx = 0; kx < hc; ++kx) {
+            const double s = S.padded[size_t(ky) * cols + kx] * norm;
+            cov.spectrum()[size_t(ky) * hc + kx] = s;
+            ind.spectrum()[size_t(ky) * hc + kx] *= s;
+        }
+    cov.inverse();
+    ind.inverse();
+    const double N = double(w) * h;
+    double sum_sq = 0.0, sum_r = 0.0, sum_r2 = 0.0;
+    for (int dy = 1 - h; dy < h; ++dy)
+        for (int dx = 1 - w; dx < w; ++dx) {
+            const double c = cov.real()[size_t((dy + rows) % rows) * cols + (dx + cols) % cols];
+            sum_sq += double(w - std::abs(dx)) * (h - std::abs(dy)) * c * c;
+        }
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const double r = ind.real()[size_t(y) * cols + x];
+            sum_r += r;
+            sum_r2 += r * r;
+        }
+    return 2.0 * (sum_sq - 2.0 * sum_r2 / N + sum_r * sum_r / (N * N)) / (N * N);
+}
+
 /// Mean and variance against their sampling errors. Var(frame mean) = S(0) / N (the DC bin of
-/// the aliased spectrum); the sample variance over N pixels has Var = 2 sum S^2 / N^2 for a
-/// Gaussian field, plus the fourth cumulant lambda E[a^4] E[w^4] (int h^2)^2 / N of shot noise.
+/// the aliased spectrum); the sample variance over N pixels has the Gaussian field's
+/// gaussian_frame_variance plus the fourth cumulant lambda E[a^4 w^4] int A(u)^2 du of shot noise
+/// (kernels/window_variance.h; (int h^2)^2 / N for kernels small against the frame).
 void compare_one_point(TheoryComparison& T, const AnalysisResult& R, const Theory& th,
                        const LayerSums& S, const TimeCorrelation& tc, const DisplayEffects& d) {
     const double N = double(R.width) * R.height;
     T.sd_frame_mean = std::sqrt(S.grid[0] / N);
     T.sd_mean = T.sd_frame_mean / std::sqrt(tc.n_eff_mean);
     T.mean = th.mean + (T.mapped ? std::sqrt(th.variance) * d.cens.mean : 0.0);
-    double s2 = 0;
-    for (size_t i = 1; i < S.grid.size(); ++i) s2 += S.grid[i] * S.grid[i];
-    T.frame_variance_gaussian = 2.0 * s2 / (N * N);
-    T.frame_variance_population = S.K4 / N;
-    T.sd_frame_variance = std::sqrt(2.0 * s2 / (N * N) + S.K4 / N);
+    const double gaussian = gaussian_frame_variance(S, R.width, R.height);
+    T.frame_variance_gaussian = gaussian;
+    T.frame_variance_population = S.population;
+    T.sd_frame_variance = std::sqrt(gaussian + S.population);
     T.sd_variance =
-        std::sqrt(2.0 * s2 / (N * N) / tc.n_eff_variance + S.K4 / N / tc.n_eff_population);
+        std::sqrt(gaussian / tc.n_eff_variance + S.population / tc.n_eff_population);
     const double field_var = T.mapped ? th.variance * d.cens.variance : th.variance;
     // E[pooled sample variance] = sigma^2 - Var(pooled mean).
     T.variance = field_var + d.quant - T.sd_mean * T.sd_mean;

@@ -4,32 +4,35 @@
 # scene in a small window, analyse each sequence against the scene's theory (--scene) and count
 # the verdicts. The README's figures come from this script.
 #
-# Usage: scripts/calibrate_stationarity.sh [--impulse PATH] [--seeds N] [--crop WxH]
-#                                          [--frames A-B] [--no-scene] SCENE [--set key=value]...
+# Usage: scripts/calibrate_stationarity.sh [--impulse PATH] [--seeds N] [--first-seed S]
+#                                          [--crop WxH] [--frames A-B] [--no-scene] SCENE
+#                                          [--set key=value]...
 # e.g.   scripts/calibrate_stationarity.sh --seeds 24 --crop 192x192 --frames 0-239 drift
 # Prints one line per seed (seed, verdict, the three tests' statistics) and the counts. Frames go
-# to a temporary directory that is removed at the end.
+# to a temporary directory that is removed at the end. --first-seed S runs seeds S .. S + N - 1
+# (to split the seeds over several runs).
 set -euo pipefail
 
-impulse=impulse seeds=24 crop=192x192 frames=0-239 use_scene=1
+impulse=impulse seeds=24 first=1 crop=192x192 frames=0-239 use_scene=1
 while [[ $# -gt 0 ]]; do
     case "$1" in
         --impulse) impulse=$2; shift 2 ;;
         --seeds) seeds=$2; shift 2 ;;
+        --first-seed) first=$2; shift 2 ;;
         --crop) crop=$2; shift 2 ;;
         --frames) frames=$2; shift 2 ;;
         --no-scene) use_scene=0; shift ;;
         *) break ;;
     esac
 done
-[[ $# -ge 1 ]] || { echo "usage: $0 [--impulse PATH] [--seeds N] [--crop WxH] [--frames A-B] [--no-scene] SCENE [--set k=v]..." >&2; exit 2; }
+[[ $# -ge 1 ]] || { echo "usage: $0 [--impulse PATH] [--seeds N] [--first-seed S] [--crop WxH] [--frames A-B] [--no-scene] SCENE [--set k=v]..." >&2; exit 2; }
 scene=$1; shift
 sets=("$@")
 
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 declare -A count=()
-for ((seed = 1; seed <= seeds; ++seed)); do
+for ((seed = first; seed < first + seeds; ++seed)); do
     rm -f "$tmp"/f_*.exr
     "$impulse" render "$scene" --crop "$crop" --seed "$seed" --frames "$frames" -q \
         -o "$tmp/f_####.exr" "${sets[@]}"

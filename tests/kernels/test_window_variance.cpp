@@ -1,0 +1,204 @@
+// SPDX-License-Identifier: Apache-2.0
+// The impulse population's share of the scatter of a frame's sample variance
+// (kernels/window_variance.h): the FFT correlation against a direct sum over the window's
+// pixels, its limit (int h^2)^2 / N for kernels small against the window, and the variance of
+// simulated frames' sample variances against lambda E[m^4] int A^2 plus the Gaussian part.
+
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "kernels/kernels.h"
+
+namespace {
+
+using impulse::kernels::Kernel;
+using impulse::kernels::KernelParams;
+using impulse::kernels::KernelType;
+
+Kernel gaussian(double sigma) {
+    KernelParams p;
+    p.type = KernelType::Gaussian;
+    p.sigma = sigma;
+    p.radius = 3.0 * sigma;
+    return Kernel(p);
+}
+
+/// int A(u)^2 du by the definition: for each sub-pixel phase and each u of the integer grid
+/// that any pixel's kernel reaches, A(u) = (1/N) sum_i h(x_i - u)^2 - hbar(u)^2 summed over the
+/// pixels one by one (the taps h(t - phase) tabulated once per phase).
+double direct_integral(const Kernel& k, double zoom, int w, int h) {
+    const double R = k.radius() * zoom;
+    const int r = int(std::ceil(R)) + 1, s = impulse::kernels::window_population_phases(R, w, h);
+    const int taps = 2 * r + 1;
+    const double N = double(w) * h;
+    double total = 0.0;
+    for (int q = 0; q < s; ++q)
+        for (int p = 0; p < s; ++p) {
+            std::vector<double> g(size_t(taps) * taps);
+            for (int b = 0; b < taps; ++b)
+                for (int a = 0; a < taps; ++a)
+                    g[size_t(b) * taps + a] =
+                        k.evaluate((a - r - double(p) / s) / zoom, (b - r - double(q) / s) / zoom);
+            for (int my = -r; my < h + r; ++my)
+                for (int mx = -r; mx < w + r; ++mx) {
+                    double s1 = 0.0, s2 = 0.0;
+                    for (int y = std::max(0, my - r); y < std::min(h, my + r + 1); ++y)
+                        for (int x = std::max(0, mx - r); x < std::min(w, mx + r + 1); ++x) {
+                            const double v = g[size_t(y - my + r) * taps + (x - mx + r)];
+                            s1 += v;
+                            s2 += v * v;
+                        }
+                    const double A = s2 / N - (s1 / N) * (s1 / N);
+                    total += A * A;
+                }
+        }
+    return total / (double(s) * s);
+}
+
+/// The formula for kernels small against the window: (int h^2)^2 / N, pixel units.
+double small_kernel_limit(const Kernel& k, double zoom, int w, int h) {
+    const double i2 = k.integral_sq() * zoom * zoom;
+    return i2 * i2 / (double(w) * h);
+}
+
+}  // namespace
+
+TEST_CASE("window population integral: FFT correlation equals the direct sum over pixels",
+          "[kernels][stats]") {
+    // Kernels from a pixel and a half (four sub-pixel phases per axis) to wider than the window.
+    struct Case { double sigma, zoom; int w, h; };
+    for (const Case c : {Case{0.5, 1.0, 32, 32}, Case{1.5, 1.0, 32, 32}, Case{4.0, 1.0, 32, 24},
+                         Case{12.0, 1.0, 32, 32}, Case{20.0, 2.0, 24, 32}}) {
+        const Kernel k = gaussian(c.sigma);
+        const double fft = impulse::kernels::window_population_integral(k, c.zoom, c.w, c.h);
+        const double direct = direct_integral(k, c.zoom, c.w, c.h);
+        INFO("sigma " << c.sigma << " zoom " << c.zoom << ": FFT " << fft << ", direct " << direct);
+        CHECK(fft == Approx(direct).epsilon(1e-9));
+    }
+}
+
+TEST_CASE("window population integral: the small-kernel limit and far below it for wide kernels",
+          "[kernels][stats]") {
+    // A 256^2 window: the border strip a kernel overhangs is about 4 R / 256 of the area, so a
+    // kernel of sigma 1.5 pixels is within 3 % of (int h^2)^2 / N, below it. A kernel narrower
+    // than a pixel puts more into the pixel it lands on than between pixels: the lattice sum
+    // sum_n h^2(n - u) varies with the sub-pixel position u, and its mean square is
+    // (int h^2)^2 sum_k |FT(h^2)(k)|^2 / (int h^2)^2 = (int h^2)^2 theta^2,
+    // theta = sum_k exp(-2 pi^2 sigma^2 k^2) (Poisson summation, k over the integers), 1.80 for
+    // sigma 0.3 (8 phases per axis), 1 to 1e-19 for sigma 1.5.
+    for (double sigma : {0.3, 1.5}) {
+        const Kernel k = gaussian(sigma);
+        double theta = 0.0;
+        for (int j = -10; j <= 10; ++j)
+            theta += std::exp(-2.0 * std::numbers::pi * std::numbers::pi * sigma * sigma * j * j);
+        const double ratio = impulse::kernels::window_population_integral(k, 1.0, 256, 256) /
+                             (small_kernel_limit(k, 1.0, 256, 256) * theta * theta);
+        INFO("sigma " << sigma << ": ratio to (int h^2)^2 theta^2 / N " << ratio);
+        CHECK(ratio < 1.005);  // the truncation at 3 sigma moves theta by less
+        CHECK(ratio > 0.97);
+    }
+    // sigma 120 in drift's 192^2 analysis window: the frame mean takes most of each impulse (the
+    // calibration's finding: 183 times smaller than the small-kernel formula).
+    const Kernel wide = gaussian(120.0);
+    const double ratio = impulse::kernels::window_population_integral(wide, 1.0, 192, 192) /
+                         small_kernel_limit(wide, 1.0, 192, 192);
+    INFO("sigma 120 in 192^2: ratio " << ratio);
+    CHECK(ratio < 1.0 / 100.0);
+}
+
+namespace {
+
+/// Var(V) for Gaussian fields, 2 (lambda E[m^2])^2 int int Q^2 = 2 (lambda E[m^2])^2
+/// ||P C P||_F^2 / N^2 with C_ij = (h * h~)(x_i - x_j) and P the centring projector, expanded as
+/// sum C_ij^2 - (2 / N) sum_i r_i^2 + (sum_i r_i)^2 / N^2, r_i = sum_j C_ij. h * h~ is the
+/// untruncated Gaussian's pi sigma^2 exp(-tau^2 / (4 sigma^2)): the cut at 3 sigma holds
+/// exp(-9) = 1.2e-4 of int h^2, far below the test's tolerance (Kernel::autocorrelation's
+/// quadrature would take a minute for the 63^2 lags).
+double gaussian_part(const Kernel& k, int w, double lambda) {
+    const double sigma = k.params().sigma;
+    const int n = w * w;
+    std::vector<double> c(size_t(2 * w - 1) * (2 * w - 1));
+    for (int dy = -(w - 1); dy < w; ++dy)
+        for (int dx = -(w - 1); dx < w; ++dx)
+            c[size_t(dy + w - 1) * (2 * w - 1) + (dx + w - 1)] =
+                std::numbers::pi * sigma * sigma *
+                std::exp(-(dx * dx + dy * dy) / (4.0 * sigma * sigma));
+    double sum_sq = 0.0, sum_r2 = 0.0, sum_r = 0.0;
+    for (int i = 0; i < n; ++i) {
+        double r = 0.0;
+        for (int j = 0; j < n; ++j) {
+            const int dx = j % w - i % w, dy = j / w - i / w;
+            const double v = c[size_t(dy + w - 1) * (2 * w - 1) + (dx + w - 1)];
+            r += v;
+            sum_sq += v * v;
+        }
+        sum_r2 += r * r;
+        sum_r += r;
+    }
+    const double norm = sum_sq - 2.0 * sum_r2 / n + sum_r * sum_r / (double(n) * n);
+    return 2.0 * lambda * lambda * norm / (double(n) * n);
+}
+
+/// Sample variances (1/N normalisation) of `count` w x w frames of random-sign shot noise with
+/// intensity lambda per pixel^2, impulses in the window grown by the kernel's radius.
+std::vector<double> simulated_variances(const Kernel& k, int w, double lambda, int count,
+                                        unsigned seed) {
+    std::mt19937_64 rng(seed);
+    const double R = k.radius(), side = w - 1 + 2 * R;
+    std::poisson_distribution<int> impulses(lambda * side * side);
+    std::uniform_real_distribution<double> position(-R, w - 1 + R);
+    std::vector<double> out, f(size_t(w) * w);
+    for (int t = 0; t < count; ++t) {
+        std::fill(f.begin(), f.end(), 0.0);
+        for (int j = impulses(rng); j > 0; --j) {
+            const double px = position(rng), py = position(rng);
+            const double sign = (rng() & 1) ? 1.0 : -1.0;
+            for (int y = 0; y < w; ++y)
+                for (int x = 0; x < w; ++x)
+                    f[size_t(y) * w + x] += sign * k.evaluate(x - px, y - py);
+        }
+        double mean = 0.0, var = 0.0;
+        for (double v : f) mean += v / f.size();
+        for (double v : f) var += (v - mean) * (v - mean) / f.size();
+        out.push_back(var);
+    }
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("window population integral: simulated frames' variance scatter matches it",
+          "[kernels][stats]") {
+    // 32^2 frames of random-sign Gaussian impulses (E[m^2] = E[m^4] = 1), sparse enough that
+    // the population term is most of Var(V). The estimate of Var(V) from n frames has the
+    // standard error sqrt((m4 - s^4) / n) (m4: the fourth central moment of V, from the same
+    // frames); the closed form must lie within 4 of them. The small-kernel formula
+    // lambda (int h^2)^2 / N lies outside for both: 16 standard errors for sigma 3 (a 32^2
+    // window's border strip is wide against it), far more for sigma 24 (wider than the window).
+    const int w = 32, n = 20000;
+    struct Case { double sigma, lambda; };
+    for (const Case c : {Case{3.0, 4e-3}, Case{24.0, 6e-5}}) {
+        const Kernel k = gaussian(c.sigma);
+        const std::vector<double> v = simulated_variances(k, w, c.lambda, n, 18u);
+        double mean = 0.0;
+        for (double x : v) mean += x / n;
+        double s2 = 0.0, m4 = 0.0;
+        for (double x : v) {
+            s2 += (x - mean) * (x - mean) / (n - 1);
+            m4 += std::pow(x - mean, 4) / n;
+        }
+        const double se = std::sqrt((m4 - s2 * s2) / n);
+        const double gauss = gaussian_part(k, w, c.lambda);
+        const double theory =
+            gauss + c.lambda * impulse::kernels::window_population_integral(k, 1.0, w, w);
+        const double old_theory = gauss + c.lambda * small_kernel_limit(k, 1.0, w, w);
+        INFO("sigma " << c.sigma << ": Var(V) " << s2 << " +- " << se << ", closed form " << theory
+                      << " (Gaussian part " << gauss << "), small-kernel formula " << old_theory);
+        CHECK(std::abs(s2 - theory) < 4.0 * se);
+        CHECK(std::abs(s2 - old_theory) > 4.0 * se);
+    }
+}
