@@ -607,11 +607,7 @@ Stationarity stationarity_verdict(const std::vector<Image>& frames, const WrapTe
 /// keyframed); notes where it does not.
 void compare_with(const ClosedForm* theory, bool sum_of_layers, const TimeCorrelation& tc,
                   const DisplayMapping& dm, AnalysisResult& R) {
-    if (theory && !sum_of_layers)
-        R.notes.push_back(
-            "the scene composes its layers (blend, opacity, visible or warp, docs/scenes.md "
-            "\"Composition\"): the theory here covers sums of layers, so no comparison with it; "
-            "the display range still maps the values back");
+    if (theory && !sum_of_layers) R.notes.push_back(theory->not_covered());
     const bool keyframed = theory && theory->keyframed();
     if (keyframed)
         R.notes.push_back(

@@ -56,6 +56,8 @@ public:
     virtual std::pair<double, double> display_range() const = 0;
     /// The closed forms are those of a sum of layers: false for a scene composed otherwise.
     virtual bool sum_of_layers() const = 0;
+    /// Why sum_of_layers() is false, for the result's notes.
+    virtual std::string not_covered() const = 0;
     /// Some parameter varies in time: the statistics are not stationary by design.
     virtual bool keyframed() const = 0;
     /// The correlation of n frames in time (and of each quarter of them).

@@ -588,7 +588,7 @@ int run_info(const InfoOptions& opt) {
     bool sources = false;  // layers drawn by another synthesizer state their own theory
     for (const auto& l : scene.layers) keyframed = keyframed || l.keyframed(), sources = sources || l.source;
     std::printf("mean       %.6g\nvariance   %.6g (%s%s)\n", t.mean, t.variance,
-                scenes::is_sum_of_layers(scene) ? "Campbell's theorem"
+                scenes::is_sum_of_layers(scene) ? (sources ? "each layer's closed form, summed" : "Campbell's theorem")
                 : sources ? "each layer's closed form, composed: docs/scenes.md \"Composition\""
                           : "Campbell's theorem, layers composed: docs/scenes.md \"Composition\"",
                 keyframed ? ", at t = 0: layers are keyframed" : "");

@@ -95,8 +95,11 @@ struct LayerSpectrum {
     bool fixed_anisotropic = false;  ///< every impulse has the kernel's own, anisotropic shape
     RadialTable table;               ///< angular mean of S in value^2 px^2 at |k| cycles/px
     double far_alias = 0.0;          ///< images m with max(|mx|, |my|) in [2, 8], summed at k = 0
+    /// A source layer: S_tex = scale S_source (scale = gain^2), stated by the source.
+    const LayerSource* source = nullptr;
     /// S at (fx, fy) cycles per pixel, exact (orientation and aspect included), no aliasing.
     double exact(double fx, double fy) const {
+        if (source) return zoom * zoom * scale * source->power_spectrum_2d(fx * zoom, fy * zoom).value_or(0.0);
         return zoom * zoom * scale * kernel.power_spectrum(fx * zoom, fy * zoom);
     }
 };
@@ -171,10 +174,35 @@ LayerSpectrum layer_spectrum(const LayerConfig& layer, double zoom, int n_max) {
     return L;
 }
 
+/// A source layer's spectrum as the source states it (LayerSource::power_spectrum), scaled by the
+/// layer's gain: S_px(rho) = zoom^2 gain^2 S(rho zoom). Its nearest images (|m| <= 1 per axis)
+/// are added as independent power: the pixel lattice and the source's own (an fbm tile's
+/// samples) are taken as incommensurate (docs/scenes.md "Analysis of source layers").
+LayerSpectrum source_spectrum(const LayerConfig& layer, double zoom, int n_max) {
+    LayerSpectrum L{kernels::Kernel(layer.kernel), zoom, 0.0, true, false, {}, 0.0};
+    L.source = layer.source.get();
+    const double gain = layer.gain.value(0.0);
+    L.scale = gain * gain;
+    L.fixed_anisotropic = L.source->anisotropic_spectrum();
+    L.table.step = 1.0 / (8.0 * n_max);
+    const double rho_max = 1.0 + 0.5 * std::numbers::sqrt2 + 0.01;
+    const size_t n = static_cast<size_t>(std::ceil(rho_max / L.table.step)) + 3;
+    L.table.value.assign(n, 0.0);
+    tbb::parallel_for(size_t(0), n, [&](size_t i) {
+        L.table.value[i] =
+            zoom * zoom * L.scale * L.source->power_spectrum(double(i) * L.table.step * zoom).value_or(0.0);
+    });
+    return L;
+}
+
 /// The layer's expected periodogram on the DFT grid of a w x h frame (aliasing included).
 std::vector<double> layer_grid(const LayerSpectrum& L, int w, int h) {
     std::vector<double> g(size_t(w) * h);
-    const int m = L.aliasing ? 1 : 0;
+    // A source with an anisotropic spectrum (an fbm tile's lattice, the bilinear read's
+    // separable transfer) is evaluated exactly at every bin and image, two images out per axis:
+    // its aliased tails are anisotropic too, which the radial table would smear.
+    const bool all_exact = L.source && L.fixed_anisotropic;
+    const int m = L.aliasing ? (all_exact ? 2 : 1) : 0;
     const int side = std::min(w, h);
     tbb::parallel_for(0, h, [&](int ky) {
         const double fy = analysis::Periodogram::frequency(ky, h);
@@ -184,8 +212,9 @@ std::vector<double> layer_grid(const LayerSpectrum& L, int w, int h) {
             const bool exact = L.fixed_anisotropic && std::hypot(fx, fy) * side < kExactAnnuli;
             for (int my = -m; my <= m; ++my)
                 for (int mx = -m; mx <= m; ++mx)
-                    s += (exact && mx == 0 && my == 0) ? L.exact(fx, fy)
-                                                       : L.table(std::hypot(fx + mx, fy + my));
+                    s += all_exact || (exact && mx == 0 && my == 0)
+                             ? L.exact(fx + mx, fy + my)
+                             : L.table(std::hypot(fx + mx, fy + my));
             g[size_t(ky) * w + kx] = s + L.far_alias;
         }
     });
@@ -220,8 +249,25 @@ std::vector<double> annulus_means(std::vector<double> grid, int w, int h) {
     return analysis::radial_average(p).power;
 }
 
+/// A source layer's autocovariance at integer lags from its radial spectrum (the Hankel
+/// transform C(r) = int S(rho) J_0(2 pi rho r) 2 pi rho d rho over the tabulated band, in pixels).
+std::vector<double> source_autocovariance(const LayerSpectrum& L, int max_lag) {
+    std::vector<double> c(size_t(max_lag) + 1, 0.0);
+    const size_t n = L.table.value.size() - 3;
+    tbb::parallel_for(0, max_lag + 1, [&](int r) {
+        double a = 0;
+        for (size_t i = 0; i < n; ++i) {  // midpoint rule on the table's step
+            const double rho = (double(i) + 0.5) * L.table.step;
+            a += L.table(rho) * std::cyl_bessel_j(0.0, 2.0 * std::numbers::pi * rho * r) * rho;
+        }
+        c[size_t(r)] = 2.0 * std::numbers::pi * a * L.table.step;
+    });
+    return c;
+}
+
 /// Radial ring values of the theoretical autocovariance at integer lags 0..max_lag (pixels).
 std::vector<double> layer_autocovariance(const LayerSpectrum& L, double zoom, int max_lag) {
+    if (L.source) return source_autocovariance(L, max_lag);
     std::vector<double> c(size_t(max_lag) + 1, 0.0);
     const kernels::Kernel& k = L.kernel;
     const bool iso = isotropic(k);
@@ -352,11 +398,42 @@ struct LayerSums {
     bool diff_known = true, any_animated = false;
 };
 
+/// A layer's spectrum on the DFT grid (`ls`) and on the padded grid (`padded_ls`, tabulated for
+/// its size), its annuli and autocovariance, added to S.
+void add_layer_spectrum(const Scene& scene, const LayerSpectrum& ls, const LayerSpectrum& padded_ls,
+                        const AnalysisResult& R, double zoom, double g2, LayerSums& S) {
+    const int w = R.width, h = R.height;
+    const std::vector<double> pg = layer_grid(padded_ls, S.padded_cols, S.padded_rows);
+    for (size_t i = 0; i < pg.size(); ++i) S.padded[i] += g2 * pg[i];
+    std::vector<double> lg = layer_grid(ls, w, h);
+    for (size_t i = 0; i < lg.size(); ++i) {
+        lg[i] *= g2;
+        S.grid[i] += lg[i];
+    }
+    S.layer_annuli.push_back(
+        annulus_means(R.periodogram.window == "hann" ? hann_smooth(lg, w, h) : lg, w, h));
+    if (scene.camera.zoom.is_constant()) {
+        const auto ac = layer_autocovariance(ls, zoom, R.max_lag);
+        for (size_t r = 0; r < ac.size(); ++r) S.acov[r] += g2 * ac[r];
+    }
+}
+
+/// A source layer (one that states its spectrum: is_sum_of_layers): Gaussian in the sampling
+/// errors (no impulse-count term; the fourth cumulant of solid noise is left out, see
+/// docs/scenes.md "Analysis of source layers"), and its change between frames not stated.
+void add_source_layer(const Scene& scene, const LayerConfig& layer, const AnalysisResult& R,
+                      double zoom, double g2, LayerSums& S) {
+    S.c4.push_back(0.0);
+    S.diff_known = false;
+    add_layer_spectrum(scene, source_spectrum(layer, zoom, std::max(R.width, R.height)),
+                       source_spectrum(layer, zoom, std::max(S.padded_rows, S.padded_cols)), R,
+                       zoom, g2, S);
+}
+
 LayerSums sum_layers(const Scene& scene, const AnalysisResult& R, double zoom, double g2,
                      double quant) {
     const int w = R.width, h = R.height;
     const double N = double(w) * h;
-    const bool hann = R.periodogram.window == "hann";
     LayerSums S;
     S.grid.assign(size_t(w) * h, quant);
     S.acov.assign(size_t(R.max_lag) + 1, 0.0);
@@ -368,6 +445,10 @@ LayerSums sum_layers(const Scene& scene, const AnalysisResult& R, double zoom, d
     S.padded_cols = numeric::fast_fft_size(w + reach);
     S.padded.assign(size_t(S.padded_rows) * S.padded_cols, quant);
     for (const auto& layer : scene.layers) {
+        if (layer.source) {
+            add_source_layer(scene, layer, R, zoom, g2, S);
+            continue;
+        }
         const auto& p = layer.process;
         const double ea2 = sim::amplitude_second_moment(p.amplitude);
         const double ea4 = sim::amplitude_fourth_moment(p.amplitude);
@@ -393,18 +474,7 @@ LayerSums sum_layers(const Scene& scene, const AnalysisResult& R, double zoom, d
 
         const LayerSpectrum ls =
             layer_spectrum(layer, zoom, std::max(S.padded_rows, S.padded_cols));
-        const std::vector<double> pg = layer_grid(ls, S.padded_cols, S.padded_rows);
-        for (size_t i = 0; i < pg.size(); ++i) S.padded[i] += g2 * pg[i];
-        std::vector<double> lg = layer_grid(ls, w, h);
-        for (size_t i = 0; i < lg.size(); ++i) {
-            lg[i] *= g2;
-            S.grid[i] += lg[i];
-        }
-        S.layer_annuli.push_back(annulus_means(hann ? hann_smooth(lg, w, h) : lg, w, h));
-        if (scene.camera.zoom.is_constant()) {
-            const auto ac = layer_autocovariance(ls, zoom, R.max_lag);
-            for (size_t r = 0; r < ac.size(); ++r) S.acov[r] += g2 * ac[r];
-        }
+        add_layer_spectrum(scene, ls, ls, R, zoom, g2, S);
     }
     return S;
 }
@@ -578,6 +648,19 @@ public:
         return {m.lo, m.hi};
     }
     bool sum_of_layers() const override { return is_sum_of_layers(m_scene); }
+    std::string not_covered() const override {
+        for (size_t i = 0; i < m_scene.layers.size(); ++i) {
+            const LayerConfig& l = m_scene.layers[i];
+            if (!l.source || l.source->no_spectrum_reason().empty()) continue;
+            return "layer[" + std::to_string(i) + "] (source \"" + std::string(l.source->kind()) +
+                   "\"): " + l.source->no_spectrum_reason() +
+                   ": the sampling errors of mean and variance need the spectrum, so no "
+                   "comparison with theory (docs/scenes.md \"Analysis of source layers\")";
+        }
+        return "the scene composes its layers (blend, opacity, visible or warp, docs/scenes.md "
+               "\"Composition\"): the theory here covers sums of layers, so no comparison with it; "
+               "the display range still maps the values back";
+    }
     bool keyframed() const override {
         bool k = false;
         for (const auto& l : m_scene.layers) k = k || l.keyframed();

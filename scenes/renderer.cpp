@@ -175,7 +175,8 @@ bool is_sum_of_layers(const Scene& scene) {
     for (const auto& l : scene.layers) {
         const Composition& c = l.compose;
         if (!c.visible || c.blend != Blend::Add || !c.opacity.is_constant() ||
-            c.opacity.value(0.0) != 1.0 || c.warp || l.source)
+            c.opacity.value(0.0) != 1.0 || c.warp ||
+            (l.source && !l.source->no_spectrum_reason().empty()))
             return false;
     }
     return true;

@@ -290,8 +290,9 @@ LayerMoments layer_moments(const LayerConfig& layer, double t_s = 0.0);
 /// alpha range in the Gaussian approximation, see docs/scenes.md "Composition"). Sums add means
 /// and variances.
 Theory scene_theory(const Scene& scene, double t_s = 0.0);
-/// True when the frame is the plain sum of impulse layers (every layer visible, added at opacity
-/// 1, unwarped, no source layer): what the spectral theory of `impulse analyze` covers.
+/// True when the frame is the plain sum of layers (every layer visible, added at opacity 1,
+/// unwarped; source layers only where they state a spectrum, LayerSource::no_spectrum_reason):
+/// what the spectral theory of `impulse analyze` covers.
 bool is_sum_of_layers(const Scene& scene);
 
 /// Linear water waves of wavenumber k (radians per unit) under `gravity` over `depth` (<= 0:

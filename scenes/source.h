@@ -6,8 +6,10 @@
 // from another synthesizer (subdivision, fBm, solid noise). Composition, shading, marginal
 // shaping, warps, orientation and analysis take a source's layer as they take any other.
 
+#include <cmath>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -65,6 +67,16 @@ public:
         (void)k_cycles;
         return std::nullopt;
     }
+    /// S(kx, ky) (cycles per texture unit) where the source states it; the radial one by
+    /// default. Analysis evaluates it where annuli hold too few DFT bins for the radial mean to
+    /// stand for an anisotropic spectrum (an fbm tile's square lattice of frequencies).
+    virtual std::optional<double> power_spectrum_2d(double kx, double ky) const {
+        return power_spectrum(std::hypot(kx, ky));
+    }
+    /// Whether the spectrum depends on direction (then power_spectrum_2d is used at low k).
+    virtual bool anisotropic_spectrum() const { return false; }
+    /// Why power_spectrum states nothing, for analysis notes ("" where it states a spectrum).
+    virtual std::string no_spectrum_reason() const { return "the source states no spectrum"; }
 };
 
 }  // namespace impulse::scenes

@@ -8,6 +8,9 @@
 // tile's edges so it stays continuous.
 
 #include <cmath>
+#include <mutex>
+#include <numbers>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -32,6 +35,7 @@ public:
         for (float& v : m_grid.values) v = static_cast<float>(v - mean);
         m_variance = m_grid.periodic ? synth::fourier_fbm_variance(o)
                                      : synth::fbm_tile_variance(o.hurst, o.size);
+        m_hurst = o.hurst;
     }
     std::string_view kind() const override { return "fbm"; }
     void add(const numeric::View& v, double, numeric::Frame& out) const override { m_grid.add(v, out); }
@@ -42,11 +46,64 @@ public:
     }
     Theory theory(double) const override { return {0.0, m_variance}; }
     double correlation_length() const override { return 8.0 * m_grid.cell; }
+    std::optional<double> power_spectrum(double k) const override {
+        if (!m_grid.periodic) return std::nullopt;
+        // Radial mean over a quarter turn (the spectrum has the square lattice's symmetry).
+        const int n = 64;
+        double sum = 0.0;
+        for (int i = 0; i < n; ++i) {
+            const double a = 0.5 * std::numbers::pi * (i + 0.5) / n;
+            sum += spectrum(k * std::cos(a), k * std::sin(a));
+        }
+        return sum / n;
+    }
+    std::optional<double> power_spectrum_2d(double kx, double ky) const override {
+        if (!m_grid.periodic) return std::nullopt;
+        return spectrum(kx, ky);
+    }
+    bool anisotropic_spectrum() const override { return true; }
+    std::string no_spectrum_reason() const override {
+        return m_grid.periodic ? ""
+                               : "an incremental or exact fbm layer is fBm in its tile (stationary "
+                                 "increments, not a stationary field): it has no power spectrum "
+                                 "and its variance depends on where a frame sits in the tile";
+    }
 
 private:
+    /// sum |m|^{-(2H+2)} over the n x n lattice of the tile's frequencies (DC excluded), the
+    /// normaliser of the Fourier method's line variances (Kaplan & Kuo eq. 14).
+    static double line_sum(int n, double hurst) {
+        double sum = 0.0;
+        for (int y = -n / 2 + 1; y <= n / 2; ++y)
+            for (int x = -n / 2 + 1; x <= n / 2; ++x)
+                if (x != 0 || y != 0) sum += std::pow(double(x) * x + double(y) * y, -(hurst + 1.0));
+        return sum;
+    }
+    /// The Fourier method's spectrum as the layer draws it (docs/fbm.md "As a layer"): line m of
+    /// the tile (side L = n cell) has variance v_m = R(0) |m|^{-(2H+2)} / sum |m'|^{-(2H+2)}, the
+    /// lattice folded into the samples' band; spread over its cell of the frequency plane that is
+    /// a density v_m L^2 (exact at the lines, which are the DFT bins of a frame spanning one
+    /// tile). The bilinear read multiplies it by the tent's transfer sinc^4(kx c) sinc^4(ky c).
+    double spectrum(double kx, double ky) const {
+        const double L = m_grid.cell * m_grid.n, half = 0.5 * m_grid.n;
+        const auto fold = [&](double q) { return q - double(m_grid.n) * std::round(q / m_grid.n); };
+        const double qx = fold(kx * L), qy = fold(ky * L), q2 = qx * qx + qy * qy;
+        if (q2 < 0.25 || std::abs(qx) > half || std::abs(qy) > half) return 0.0;  // no DC line
+        // The normaliser only analysis needs: summed on first use, not when a scene loads.
+        std::call_once(m_once, [&] { m_line_sum = line_sum(m_grid.n, m_hurst); });
+        const double line = m_variance * std::pow(q2, -(m_hurst + 1.0)) / m_line_sum;
+        const auto sinc = [](double x) {
+            return x == 0.0 ? 1.0 : std::sin(std::numbers::pi * x) / (std::numbers::pi * x);
+        };
+        const double t = sinc(kx * m_grid.cell) * sinc(ky * m_grid.cell);
+        return line * L * L * std::pow(t, 4);
+    }
+
     SampleGrid m_grid;
     LazyPyramid m_pyramid;
-    double m_variance = 0.0;
+    double m_variance = 0.0, m_hurst = 0.5;
+    mutable std::once_flag m_once;
+    mutable double m_line_sum = 1.0;
 };
 
 }  // namespace

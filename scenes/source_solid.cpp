@@ -47,6 +47,10 @@ public:
         if (!m_slice) return std::nullopt;
         return (*m_slice)(k_cycles);
     }
+    std::string no_spectrum_reason() const override {
+        return m_slice ? "" : "4-D solid noise states its variance only (the slice spectrum is "
+                              "derived for 3-D noise)";
+    }
 
 private:
     synth::SolidNoise m_noise;

@@ -55,6 +55,15 @@ public:
     }
     Theory theory(double) const override { return {0.0, m_variance}; }
     double correlation_length() const override { return m_length; }
+    /// No spectrum: the construction's covariance departs from the specified model by more than
+    /// the analysis resolves (in 2-D up to about 0.1 R(0) at short lags, and a variance of about
+    /// 0.93 R(0), docs/subdivision.md), so the model's spectrum would report a disagreement that
+    /// is the method's, not the frames'.
+    std::string no_spectrum_reason() const override {
+        return "a subdivision layer's covariance is the specified model's only approximately "
+               "(docs/subdivision.md: up to about 0.1 R(0) apart at short lags in 2-D), so no "
+               "spectrum is stated";
+    }
 
 private:
     SampleGrid m_grid;
