@@ -392,6 +392,33 @@ struct Encoder {
     void setup(const std::string& final_path, const VideoOptions& o, const CodecSpec& spec);
 };
 
+/// The encoder's private options for `spec` (preset and crf for H.264, the 4444 profile for
+/// ProRes, FFV1 version 3, VP9 constant quality); some are fields of `c`.
+AVDictionary* codec_options(const CodecSpec& spec, const VideoOptions& o, AVCodecContext* c) {
+    AVDictionary* codec_opts = nullptr;
+    switch (spec.codec) {
+        case VideoCodec::H264:
+            av_dict_set(&codec_opts, "preset", o.preset.c_str(), 0);
+            av_dict_set_int(&codec_opts, "crf", o.crf, 0);
+            break;
+        case VideoCodec::ProRes:
+            av_dict_set(&codec_opts, "profile", "4444", 0);
+            break;
+        case VideoCodec::FFV1:
+            // Version 3: slices (so it can use threads) and per-slice CRCs, the archival setup.
+            c->level = 3;
+            break;
+        case VideoCodec::VP9:
+            // Constant quality: crf with b:v 0 (libvpx reads bit_rate 0 as "no target").
+            av_dict_set_int(&codec_opts, "crf", o.crf, 0);
+            c->bit_rate = 0;
+            break;
+        case VideoCodec::Auto:
+            break;
+    }
+    return codec_opts;
+}
+
 void Encoder::setup(const std::string& final_path, const VideoOptions& o,
                               const CodecSpec& spec) {
     path = final_path;
@@ -449,27 +476,7 @@ void Encoder::setup(const std::string& final_path, const VideoOptions& o,
     if (yuv420) c->chroma_sample_location = AVCHROMA_LOC_CENTER;
     if (format->oformat->flags & AVFMT_GLOBALHEADER) c->flags |= AV_CODEC_FLAG_GLOBAL_HEADER;
 
-    AVDictionary* codec_opts = nullptr;
-    switch (spec.codec) {
-        case VideoCodec::H264:
-            av_dict_set(&codec_opts, "preset", o.preset.c_str(), 0);
-            av_dict_set_int(&codec_opts, "crf", o.crf, 0);
-            break;
-        case VideoCodec::ProRes:
-            av_dict_set(&codec_opts, "profile", "4444", 0);
-            break;
-        case VideoCodec::FFV1:
-            // Version 3: slices (so it can use threads) and per-slice CRCs, the archival setup.
-            c->level = 3;
-            break;
-        case VideoCodec::VP9:
-            // Constant quality: crf with b:v 0 (libvpx reads bit_rate 0 as "no target").
-            av_dict_set_int(&codec_opts, "crf", o.crf, 0);
-            c->bit_rate = 0;
-            break;
-        case VideoCodec::Auto:
-            break;
-    }
+    AVDictionary* codec_opts = codec_options(spec, o, c);
     err = avcodec_open2(c, codec, &codec_opts);
     av_dict_free(&codec_opts);
     if (err < 0) throw_av(path, std::string("cannot open encoder ") + spec.encoder, err);
