@@ -71,7 +71,8 @@ class Server:
 
     def stop(self):
         self.proc.send_signal(signal.SIGTERM)
-        return self.proc.wait(timeout=10)
+        # A frame being rendered finishes first: seconds under the sanitizers.
+        return self.proc.wait(timeout=60)
 
 
 @pytest.fixture
