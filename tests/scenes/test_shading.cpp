@@ -9,6 +9,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <tuple>
 
 #include "output/output.h"
 #include "render/render.h"
@@ -68,19 +69,35 @@ TEST_CASE("shading maps the field through the ramp and composites alpha over the
     CHECK(rgb[3] == Approx(0.5f).margin(1e-6));
 }
 
-TEST_CASE("a Shader shades any band of rows exactly as shade does", "[render][shading]") {
-    // The video path shades a frame band by band (output::Shader) into the encoder's input; its
-    // pixels must be shade's, bit for bit, for every shading (grey, ramp with alpha, relief,
-    // whose central differences reach into the neighbouring rows of a band).
+namespace {
+
+/// A smooth w x h test field spanning about [-1.3, 1.3].
+render::Frame wave_frame(int w, int h) {
     render::Frame f;
-    f.resize(37, 23);
+    f.resize(w, h);
     for (int y = 0; y < f.height; ++y)
         for (int x = 0; x < f.width; ++x)
             f.data[size_t(y) * f.width + x] = std::sin(0.3f * x) * std::cos(0.2f * y) * 1.3f;
+    return f;
+}
+
+/// Grey, a ramp with alpha, and the same ramp with relief.
+std::tuple<output::Shading, output::Shading, output::Shading> three_shadings() {
     output::Shading grey, ramp, relief;
     ramp.ramp = {{0.0, 1, 0, 0, 0}, {0.4, 0.2f, 0.8f, 0.1f, 0.6f}, {1.0, 0, 0, 1, 1}};
     relief = ramp;
     relief.relief = 3.0;
+    return {grey, ramp, relief};
+}
+
+}  // namespace
+
+TEST_CASE("a Shader shades any band of rows exactly as shade does", "[render][shading]") {
+    // The video path shades a frame band by band (output::Shader) into the encoder's input; its
+    // pixels must be shade's, bit for bit, for every shading (grey, ramp with alpha, relief,
+    // whose central differences reach into the neighbouring rows of a band).
+    const render::Frame f = wave_frame(37, 23);
+    const auto [grey, ramp, relief] = three_shadings();
     for (const output::Shading* sh : {&grey, &ramp, &relief}) {
         std::vector<float> whole;
         output::shade(f, {-1.0, 1.0}, *sh, whole);
@@ -177,16 +194,9 @@ TEST_CASE("a Shader shades straight into YUV 4:2:0 within one code value of the 
     // Shader::rows_yuv420 (the video path: no float RGB frame) against the double-precision
     // BT.709 conversion of shade's float RGB, for grey, a ramp with alpha over the sky (the
     // table held in Y'CbCr), relief (through rows) and drift's own shading; bands of even rows.
-    render::Frame f;
-    f.resize(38, 24);
-    for (int y = 0; y < f.height; ++y)
-        for (int x = 0; x < f.width; ++x)
-            f.data[size_t(y) * f.width + x] = std::sin(0.3f * x) * std::cos(0.2f * y) * 1.3f;
-    output::Shading grey, ramp, relief;
-    ramp.ramp = {{0.0, 1, 0, 0, 0}, {0.4, 0.2f, 0.8f, 0.1f, 0.6f}, {1.0, 0, 0, 1, 1}};
-    relief = ramp;
-    relief.relief = 3.0;
-    output::Shading drift = scenes::load_scene(scenes::resolve_scene("drift")).shading;
+    const render::Frame f = wave_frame(38, 24);
+    const auto [grey, ramp, relief] = three_shadings();
+    const output::Shading drift = scenes::load_scene(scenes::resolve_scene("drift")).shading;
     for (const output::Shading* sh : {&grey, &ramp, &relief, &drift}) {
         std::vector<float> rgb;
         output::shade(f, {-1.0, 1.0}, *sh, rgb);
