@@ -7,7 +7,11 @@
 // `--size` and `--set` do (kBudget): every scene renders frames 0 and 1 at 64x48, and one whose
 // estimated impulses, memory or perspective pixel evaluations exceed the small limits below is
 // refused with BudgetError by the Renderer before any work (scenes/renderer.cpp), so an input
-// cannot buy a long run with a large size or density. Keep it at >= 100 executions a second.
+// cannot buy a long run with a large size or density. The memory limit also bounds the caches a
+// flow builds before the first frame (a curl-noise or stream-function potential lattice, a node
+// every scale / 8 over the region the impulses move in: 16 MiB is ~600 thousand nodes); a
+// mutated curl scale used to build lattices of up to 1e8 nodes, seconds under the sanitizers.
+// Keep it at >= 100 executions a second.
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -24,7 +28,7 @@ namespace {
 const std::vector<std::string> kBudget = {
     "output.size=[64, 48]",
     "limits.max_impulses=20000",
-    "limits.max_memory_mib=64",
+    "limits.max_memory_mib=16",
     "limits.max_pixel_evaluations=2000000",
 };
 

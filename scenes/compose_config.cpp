@@ -30,6 +30,9 @@ public:
         return m_flow->velocity_bounds(region);
     }
     void prepare(const numeric::Box& region) override { m_flow->prepare(region); }
+    double cache_bytes(const numeric::Box& region) const override {
+        return m_flow ? m_flow->cache_bytes(region) : 0.0;
+    }
 
 private:
     std::unique_ptr<sim::Flow> m_flow;

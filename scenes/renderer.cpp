@@ -233,7 +233,24 @@ struct Renderer::State {
     void update_marginal(size_t i, double tl);
     /// Refuses a frame buffer of `pixels` beyond limits.max_memory_mib.
     void check_buffer(double pixels, const std::string& what) const;
+    /// The texture-space boxes layer i's impulses are asked for at most over the animation
+    /// (the widest view, a warp's reach): what the budget estimates measure.
+    numeric::Region estimate_region(size_t i) const;
 };
+
+numeric::Region Renderer::State::estimate_region(size_t i) const {
+    // The largest view over the animation bounds the birth region (zoom keys are extrema).
+    double min_zoom = 1e300;
+    for (const auto& k : scene.camera.zoom.keys) min_zoom = std::min(min_zoom, k.second);
+    render::View v = scene.camera.view(scene.output.width, scene.output.height, 0.0);
+    v.scale = 1.0 / min_zoom;
+    numeric::Region box = camera->estimate_region(i, v);
+    // A warp reads the layer up to its largest displacement beyond the view: about 5 sd of
+    // the sources over a frame of a million pixels, 6 sd taken.
+    const Composition& c = scene.layers[i].compose;
+    if (c.warp) box = box.expanded(6.0 * c.warp->amount.max_abs());
+    return box;
+}
 
 Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
     State& S = *m_state;
@@ -330,16 +347,8 @@ double Renderer::estimated_impulses() const {
         // A hidden layer no frame reads (a flow's stream function only) is never rendered; a
         // source layer draws no impulses.
         if (!S.rendered[i] || S.scene.layers[i].source) continue;
-        // The largest view over the animation bounds the birth region (zoom keys are extrema).
-        double min_zoom = 1e300;
-        for (const auto& k : S.scene.camera.zoom.keys) min_zoom = std::min(min_zoom, k.second);
-        render::View v = S.scene.camera.view(S.scene.output.width, S.scene.output.height, 0.0);
-        v.scale = 1.0 / min_zoom;
-        numeric::Region box = S.camera->estimate_region(i, v);
+        const numeric::Region box = S.estimate_region(i);
         const Composition& c = S.scene.layers[i].compose;
-        // A warp reads the layer up to its largest displacement beyond the view: about 5 sd of
-        // the sources over a frame of a million pixels, 6 sd taken.
-        if (c.warp) box = box.expanded(6.0 * c.warp->amount.max_abs());
         n += in_layer(S.scene, i, [&] {
             return sim::expected_impulses(S.sims[i].config(), S.sims[i].birth_region(box));
         });
@@ -369,6 +378,11 @@ double Renderer::estimated_memory_mib() const {
     //    its lookahead full).
     // ~120 bytes of state per impulse (two generations of the live set plus the prepared arrays).
     double bytes = pixels * 26.0 + estimated_impulses() * 120.0;
+    // A flow's caches (a curl-noise or stream-function potential lattice) over the region its
+    // layer's impulses are integrated in.
+    for (size_t i = 0; i < S.sims.size(); ++i)
+        if (S.rendered[i] && !S.scene.layers[i].source)
+            bytes += in_layer(S.scene, i, [&] { return S.sims[i].flow_cache_bytes(S.estimate_region(i)); });
     // Composition: a frame per layer that is not simply added; a warped layer's grown frame
     // (margin as in estimated_impulses) and its two displacement frames.
     for (const auto& l : S.scene.layers) {

@@ -201,11 +201,21 @@ public:
         m_hy = m_layout->cell_y / kNodesPerCell;
     }
 
+    /// Nodes of the lattice that covers `region` (scale / 8 apart, the stencil's border).
+    double lattice_nodes(const Box& region) const {
+        return ((region.x1 - region.x0) / m_hx + 6.0) * ((region.y1 - region.y0) / m_hy + 6.0);
+    }
+
+    double cache_bytes(const Box& region) const override {
+        // 8 bytes a node and ~4 for the cells' impulses generated to fill it; a rebuild for a
+        // view that moved grows the lattice by a quarter on every side (prepare): 1.5^2.
+        return 2.25 * 12.0 * lattice_nodes(region);
+    }
+
     void prepare(const Box& region) override {
         // The lattice covers the region with nodes scale / 8 apart: refuse one too large for
         // memory (a small scale over a perspective view's region) before allocating it.
-        const double nodes = ((region.x1 - region.x0) / m_hx + 6.0) *
-                             ((region.y1 - region.y0) / m_hy + 6.0);
+        const double nodes = lattice_nodes(region);
         if (!(nodes <= kMaxNodes)) {
             std::ostringstream s;
             s << "curl flow: scale = " << m_config.cell_size << " over a region of "
@@ -420,6 +430,12 @@ std::array<double, 4> FlowSum::velocity_bounds(const Box& region) const {
 
 void FlowSum::prepare(const Box& region) {
     for (auto& f : m_terms) f->prepare(region);
+}
+
+double FlowSum::cache_bytes(const Box& region) const {
+    double bytes = 0.0;
+    for (const auto& f : m_terms) bytes += f->cache_bytes(region);
+    return bytes;
 }
 
 std::unique_ptr<Flow> make_uniform_flow(Keyframed vx, Keyframed vy) {

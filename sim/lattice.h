@@ -40,6 +40,12 @@ public:
     const Layout& layout() const { return m_layout; }
     double hx() const { return m_hx; }
     double hy() const { return m_hy; }
+    /// Bytes prepare(region) allocates: 8 a node over the region grown by a quarter on every
+    /// side (1.5^2), with the stencil's border.
+    double cache_bytes(const Box& region) const {
+        return 2.25 * 8.0 * ((region.x1 - region.x0) / m_hx + 6.0) *
+               ((region.y1 - region.y0) / m_hy + 6.0);
+    }
 
     /// Caches the nodes an evaluation anywhere in `region` reads (grown by a quarter on every
     /// side, so a slowly moving view rarely rebuilds). Single-threaded.
@@ -147,6 +153,7 @@ template <class Contribution>
 class LatticeStreamFlow : public Flow {
 public:
     void prepare(const Box& region) override { m_lattice.prepare(region, m_contribution); }
+    double cache_bytes(const Box& region) const override { return m_lattice.cache_bytes(region); }
 
     void add(double t, size_t n, const double* x, const double* y, double* vx, double* vy, double*,
              double* curl) const override {

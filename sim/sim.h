@@ -84,6 +84,12 @@ public:
     /// Called (single-threaded) before a frame is integrated over `region`; lets a flow build
     /// caches. Default: nothing.
     virtual void prepare(const Box& region) { (void)region; }
+    /// Bytes prepare(region) may hold at most, for the memory budget (limits.max_memory_mib):
+    /// checked at load, before any cache is built. Default: none.
+    virtual double cache_bytes(const Box& region) const {
+        (void)region;
+        return 0.0;
+    }
 };
 
 /// Sum of flow primitives (scene `[[layer.flow]]` list).
@@ -97,6 +103,7 @@ public:
     double max_speed(const Box& region) const override;
     std::array<double, 4> velocity_bounds(const Box& region) const override;
     void prepare(const Box& region) override;
+    double cache_bytes(const Box& region) const override;
 
 private:
     std::vector<std::unique_ptr<Flow>> m_terms;
@@ -402,6 +409,9 @@ public:
     Region birth_region(const Region& view) const;
     /// Travel bound (max speed * lifetime) for `view`, in texture units.
     double travel_bound(const Box& view) const;
+    /// Bytes the flow's caches may hold for `view` (Flow::cache_bytes over the region
+    /// impulses_at prepares the flow for); 0 for a still process or no flow.
+    double flow_cache_bytes(const Region& view) const;
     const ProcessConfig& config() const;
     /// Forget the cached state (the next call integrates from birth).
     void reset();

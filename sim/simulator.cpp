@@ -183,6 +183,12 @@ LayerSimulator::LayerSimulator(LayerSimulator&&) noexcept = default;
 const ProcessConfig& LayerSimulator::config() const { return m_state->config; }
 void LayerSimulator::reset() { m_state->valid = false; }
 double LayerSimulator::travel_bound(const Box& view) const { return m_state->travel(view); }
+double LayerSimulator::flow_cache_bytes(const Region& view) const {
+    const State& S = *m_state;
+    if (!S.flow || S.config.lifetime_s <= 0 || view.empty()) return 0.0;
+    // The region impulses_at prepares the flow for.
+    return S.flow->cache_bytes(birth_region(view).bounds().expanded(S.travel(view.bounds()) + 1.0));
+}
 Box LayerSimulator::birth_region(const Box& view) const {
     return m_state->birth_region(view);
 }

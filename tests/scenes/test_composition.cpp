@@ -669,6 +669,42 @@ source = 0
     CHECK(scenes::Renderer(f).estimated_impulses() < 0.5 * scenes::Renderer(g).estimated_impulses());
 }
 
+namespace {
+std::string curl_scene(double scale, double max_memory_mib) {
+    std::ostringstream s;
+    s << "[output]\nsize = [64, 48]\nframes = 2\n[limits]\nmax_memory_mib = " << max_memory_mib
+      << "\n[[layer]]\nseed = 3\nlifetime = 1.0\n[layer.kernel]\nradius = 12.0\n"
+      << "[[layer.flow]]\ntype = \"curl\"\nscale = " << scale << "\nspeed = 20.0\n";
+    return s.str();
+}
+double estimated_mib(double scale) {
+    return scenes::Renderer(scenes::load_scene_string(curl_scene(scale, 1e6), "curl.toml"))
+        .estimated_memory_mib();
+}
+}  // namespace
+
+TEST_CASE("composition: a curl flow's potential lattice counts in the memory budget",
+          "[scenes][compose][errors]") {
+    // The lattice holds a node every scale / 8 over the region the impulses move in (the view
+    // plus the kernel and the flow's reach, ~370 units across here): 27 bytes a node with the
+    // cells and the growth of a rebuild. Scale 0.5 needs ~14 M nodes, hundreds of MiB, before a
+    // frame is drawn: refused at load with the estimate. Scale 60 (~2500 nodes) renders.
+    const double tiny = estimated_mib(0.5), coarse = estimated_mib(60.0);
+    CHECK(tiny - coarse > 200.0);                          // uncounted: equal estimates
+    CHECK(estimated_mib(1.0) - coarse == Approx((tiny - coarse) / 4.0).epsilon(0.01));  // 1 / scale^2
+    try {
+        scenes::Renderer r(scenes::load_scene_string(curl_scene(0.5, 60.0), "curl.toml"));
+        FAIL("no error");
+    } catch (const BudgetError& e) {
+        CHECK_THAT(std::string(e.what()), Contains("curl.toml:") && Contains("MiB") &&
+                                              Contains("limits.max_memory_mib"));
+    }
+    scenes::Renderer fine(scenes::load_scene_string(curl_scene(60.0, 60.0), "curl.toml"));
+    Frame f;
+    fine.render(1, f);
+    CHECK(std::isfinite(f.data[0]));
+}
+
 TEST_CASE("composition: a warp beyond the memory budget is refused with its size",
           "[scenes][compose][errors]") {
     const std::string text = warp_scene("warp = { source = [\"wx\", \"wy\"], amount = 2000.0 }") +
