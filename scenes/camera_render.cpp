@@ -23,8 +23,12 @@ CameraPipeline::CameraPipeline(const Scene& scene, const std::vector<kernels::Ke
     m_aa = c.antialias_options();
     // Levels below a quarter of the cut-off are never drawn (faded out).
     m_pyramid_params.min_sd_fraction = std::min(1e-3, 0.25 * m_aa.cutoff);
-    for (const auto& k : kernels) {
-        m_pyramids.push_back(std::make_unique<kernels::KernelPyramid>(k, m_pyramid_params));
+    // A source layer draws no impulses: no kernel pyramid (it filters its own tile, the
+    // source's GridPyramid), none of the ~2 MiB a default kernel's levels take.
+    for (size_t i = 0; i < kernels.size(); ++i) {
+        m_pyramids.push_back(scene.layers[i].source ? nullptr
+                                                    : std::make_unique<kernels::KernelPyramid>(
+                                                          kernels[i], m_pyramid_params));
         m_workspaces.push_back(std::make_unique<render::PerspectiveWorkspace>());
     }
     m_class_pyramids.resize(kernels.size());

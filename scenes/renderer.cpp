@@ -119,6 +119,26 @@ Theory source_theory(const LayerConfig& layer, double t) {
     return {layer.mean.value(t) + gain * s.mean, gain * gain * s.variance};
 }
 
+/// Bytes the source layers hold (Renderer::estimated_memory_mib): each source's tile, its
+/// pyramid under a perspective camera when the layer is drawn in camera space (`rendered`) and
+/// its buffers per frame (LayerSource::memory_bytes), a second frame where the gain is not 1
+/// (Renderer::State::raw), and under a perspective camera the pixels' footprints, made once for
+/// all source layers (two doubles and four floats a pixel: PixelFootprints).
+double source_bytes(const Scene& s, const std::vector<bool>& rendered, double pixels) {
+    const bool perspective = s.camera.type == CameraConfig::Type::Perspective;
+    double bytes = 0.0;
+    bool footprints = false;
+    for (size_t i = 0; i < s.layers.size(); ++i) {
+        const LayerConfig& l = s.layers[i];
+        if (!l.source) continue;
+        bytes += l.source->memory_bytes(pixels, perspective && rendered[i]);
+        if (!(l.gain.is_constant() && l.gain.value(0.0) == 1.0)) bytes += pixels * 4.0;
+        footprints = footprints || (perspective && rendered[i]);
+    }
+    if (footprints) bytes += pixels * double(2 * sizeof(double) + 4 * sizeof(float));
+    return bytes;
+}
+
 }  // namespace
 
 Theory layer_theory(const LayerConfig& layer, double t_s) {
@@ -323,9 +343,11 @@ Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
     const double mib = estimated_memory_mib();
     if (mib > S.scene.limits.max_memory_mib) {
         std::ostringstream s;
-        s << S.scene.path << ": the scene needs an estimated " << mib
-          << " MiB per frame, over the budget of " << S.scene.limits.max_memory_mib
-          << " MiB (limits.max_memory_mib)";
+        const double pixels = double(S.scene.output.width) * S.scene.output.height;
+        const double sources = source_bytes(S.scene, S.rendered, pixels) / (1024.0 * 1024.0);
+        s << S.scene.path << ": the scene needs an estimated " << mib << " MiB per frame";
+        if (sources > 0.0) s << " (" << sources << " MiB of it the source layers' tiles, pyramids and buffers)";
+        s << ", over the budget of " << S.scene.limits.max_memory_mib << " MiB (limits.max_memory_mib)";
         throw BudgetError(s.str());
     }
     // An empirical F_x is measured once, on a calibration render at frame 0 (frame independent).
@@ -376,19 +398,21 @@ double Renderer::estimated_memory_mib() const {
     //    the RGB passes through in bands of rows): at most 10, plus the encoder's own frames,
     //    which are not counted (x264 holds ~190 MiB at 3840x2160 for a short clip, more with
     //    its lookahead full).
-    // ~120 bytes of state per impulse (two generations of the live set plus the prepared arrays).
-    double bytes = pixels * 26.0 + estimated_impulses() * 120.0;
+    // ~120 bytes of state per impulse (two generations of the live set plus the prepared arrays);
+    // what source layers hold (their tiles and pyramids).
+    double bytes = pixels * 26.0 + estimated_impulses() * 120.0 + source_bytes(S.scene, S.rendered, pixels);
     // A flow's caches (a curl-noise or stream-function potential lattice) over the region its
     // layer's impulses are integrated in.
     for (size_t i = 0; i < S.sims.size(); ++i)
         if (S.rendered[i] && !S.scene.layers[i].source)
             bytes += in_layer(S.scene, i, [&] { return S.sims[i].flow_cache_bytes(S.estimate_region(i)); });
-    // Composition: a frame per layer that is not simply added; a warped layer's grown frame
-    // (margin as in estimated_impulses) and its two displacement frames.
+    // Composition: a frame per layer that is not simply added (a source layer's field is always
+    // drawn into its own); a warped layer's grown frame (margin as in estimated_impulses) and its
+    // two displacement frames.
     for (const auto& l : S.scene.layers) {
         const Composition& c = l.compose;
         if (c.blend != Blend::Add || !(c.opacity.is_constant() && c.opacity.value(0) == 1.0) ||
-            l.marginal || c.warp)
+            l.marginal || c.warp || l.source)
             bytes += pixels * 4.0;
         if (c.warp) {
             const double m = 2.0 * (6.0 * c.warp->amount.max_abs() * S.scene.camera.zoom.max_abs() + 2.0);

@@ -36,6 +36,13 @@ struct PixelFootprints {
     double cutoff = 0.01;       ///< fade to the mean below this fraction of the sd (0: none)
 };
 
+/// The pixel lattice of an orthographic view, where the closed form of a scene samples a source
+/// (scenes/closed_form.cpp).
+struct PixelLattice {
+    double scale = 1.0;       ///< texture units per pixel (1 / zoom)
+    double x = 0.5, y = 0.5;  ///< the texture point of pixel (0, 0)'s centre
+};
+
 /// A field f(x, t) of texture space x and time t, stated by a synthesizer. Implementations are
 /// immutable once built and thread-safe.
 class LayerSource {
@@ -56,6 +63,13 @@ public:
                                  numeric::Frame& out) const {
         (void)pixels, (void)dx, (void)dy, (void)t_s, (void)out;
     }
+    /// Bytes the source holds to draw frames of `pixels` pixels: its realised tile, the
+    /// pyramid a perspective camera builds on first use (`perspective`) and its buffers per
+    /// frame; what limits.max_memory_mib counts for it (Renderer::estimated_memory_mib).
+    virtual double memory_bytes(double pixels, bool perspective) const {
+        (void)pixels, (void)perspective;
+        return 0.0;
+    }
     /// Closed-form mean and variance of f at t_s (before the layer's gain and mean).
     virtual Theory theory(double t_s) const = 0;
     /// A length over which f is correlated (texture units, > 0): the spacing of the lattices on
@@ -72,6 +86,16 @@ public:
     /// stand for an anisotropic spectrum (an fbm tile's square lattice of frequencies).
     virtual std::optional<double> power_spectrum_2d(double kx, double ky) const {
         return power_spectrum(std::hypot(kx, ky));
+    }
+    /// The expected periodogram density of f(., t_s) sampled at the pixel centres of `lattice`
+    /// (value^2 px^2 at (fx, fy) cycles per pixel, every alias of the pixel lattice included),
+    /// where the source states it; nullopt otherwise, and the closed form adds the nearest
+    /// images of power_spectrum_2d as power. A field on a lattice of its own (an fbm tile's
+    /// samples) states it: where the two lattices are commensurate its images add coherently.
+    virtual std::optional<double> sampled_spectrum(double fx, double fy, const PixelLattice& lattice,
+                                                   double t_s) const {
+        (void)fx, (void)fy, (void)lattice, (void)t_s;
+        return std::nullopt;
     }
     /// Whether the spectrum depends on direction (then power_spectrum_2d is used at low k).
     virtual bool anisotropic_spectrum() const { return false; }

@@ -44,9 +44,26 @@ public:
     }
     Theory theory(double t_s) const override { return m_inner->theory(t_s); }
     double correlation_length() const override { return m_inner->correlation_length(); }
+    double memory_bytes(double pixels, bool perspective) const override {
+        return m_inner->memory_bytes(pixels, perspective);
+    }
     std::optional<double> power_spectrum(double k_cycles) const override {
         return m_inner->power_spectrum(k_cycles);
     }
+    std::optional<double> power_spectrum_2d(double kx, double ky) const override {
+        return m_inner->power_spectrum_2d(kx, ky);
+    }
+    /// The inner source's on the lattice moved by -d(t_s): the drift changes the phase of a
+    /// tile's samples against the pixels.
+    std::optional<double> sampled_spectrum(double fx, double fy, const PixelLattice& lattice,
+                                           double t_s) const override {
+        PixelLattice moved = lattice;
+        moved.x -= m_vx.integral(t_s);
+        moved.y -= m_vy.integral(t_s);
+        return m_inner->sampled_spectrum(fx, fy, moved, t_s);
+    }
+    bool anisotropic_spectrum() const override { return m_inner->anisotropic_spectrum(); }
+    std::string no_spectrum_reason() const override { return m_inner->no_spectrum_reason(); }
 
 private:
     std::shared_ptr<const LayerSource> m_inner;

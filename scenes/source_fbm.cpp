@@ -45,6 +45,9 @@ public:
         m_pyramid.get(m_grid).add(px, dx, dy, out);
     }
     Theory theory(double) const override { return {0.0, m_variance}; }
+    double memory_bytes(double, bool perspective) const override {
+        return m_grid.bytes() + (perspective ? GridPyramid::bytes(m_grid.n) : 0.0);
+    }
     double correlation_length() const override { return 8.0 * m_grid.cell; }
     std::optional<double> power_spectrum(double k) const override {
         if (!m_grid.periodic) return std::nullopt;
@@ -60,6 +63,33 @@ public:
     std::optional<double> power_spectrum_2d(double kx, double ky) const override {
         if (!m_grid.periodic) return std::nullopt;
         return spectrum(kx, ky);
+    }
+    /// At p = a / b pixels per sample (b <= kMaxCoherentDenominator) the images of each line
+    /// are summed coherently at the lattice's phase (coherent_images); nullopt otherwise, where
+    /// they are incoherent and the closed form sums spectrum()'s images as power.
+    std::optional<double> sampled_spectrum(double fx, double fy, const PixelLattice& px,
+                                           double) const override {
+        if (!m_grid.periodic) return std::nullopt;
+        const double p = m_grid.cell / px.scale;  // pixels per sample
+        const std::optional<int> b = lattice_denominator(p);
+        if (!b) return std::nullopt;
+        // Pixel 0's centre in pixels from sample 0, modulo a pixel (a whole pixel turns every
+        // image of a bin alike).
+        const auto phase = [&](double x) {
+            const double u = x / px.scale - p * m_grid.offset;
+            return u - std::floor(u);
+        };
+        const auto ax = coherent_images(fx, p, *b, phase(px.x));
+        const auto ay = coherent_images(fy, p, *b, phase(px.y));
+        // Class c of images is line (nu + c) n p of the tile; its density in pixel units is its
+        // variance times (n p)^2 (a line per frequency cell of a tile of n p pixels).
+        const double np = m_grid.n * p;
+        double s = 0.0;
+        for (int cy = 0; cy < *b; ++cy)
+            for (int cx = 0; cx < *b; ++cx)
+                s += line_variance((fx + cx) * np, (fy + cy) * np) * std::norm(ax[size_t(cx)]) *
+                     std::norm(ay[size_t(cy)]);
+        return s * np * np;
     }
     bool anisotropic_spectrum() const override { return true; }
     std::string no_spectrum_reason() const override {
@@ -85,18 +115,24 @@ private:
     /// a density v_m L^2 (exact at the lines, which are the DFT bins of a frame spanning one
     /// tile). The bilinear read multiplies it by the tent's transfer sinc^4(kx c) sinc^4(ky c).
     double spectrum(double kx, double ky) const {
-        const double L = m_grid.cell * m_grid.n, half = 0.5 * m_grid.n;
-        const auto fold = [&](double q) { return q - double(m_grid.n) * std::round(q / m_grid.n); };
-        const double qx = fold(kx * L), qy = fold(ky * L), q2 = qx * qx + qy * qy;
-        if (q2 < 0.25 || std::abs(qx) > half || std::abs(qy) > half) return 0.0;  // no DC line
-        // The normaliser only analysis needs: summed on first use, not when a scene loads.
-        std::call_once(m_once, [&] { m_line_sum = line_sum(m_grid.n, m_hurst); });
-        const double line = m_variance * std::pow(q2, -(m_hurst + 1.0)) / m_line_sum;
+        const double L = m_grid.cell * m_grid.n;
+        const double line = line_variance(kx * L, ky * L);
         const auto sinc = [](double x) {
             return x == 0.0 ? 1.0 : std::sin(std::numbers::pi * x) / (std::numbers::pi * x);
         };
         const double t = sinc(kx * m_grid.cell) * sinc(ky * m_grid.cell);
         return line * L * L * std::pow(t, 4);
+    }
+    /// v_m of the line nearest (qx, qy) cycles per tile, folded into the samples' band (0 at DC).
+    double line_variance(double qx, double qy) const {
+        const double half = 0.5 * m_grid.n;
+        const auto fold = [&](double q) { return q - double(m_grid.n) * std::round(q / m_grid.n); };
+        qx = fold(qx), qy = fold(qy);
+        const double q2 = qx * qx + qy * qy;
+        if (q2 < 0.25 || std::abs(qx) > half || std::abs(qy) > half) return 0.0;  // no DC line
+        // The normaliser only analysis needs: summed on first use, not when a scene loads.
+        std::call_once(m_once, [&] { m_line_sum = line_sum(m_grid.n, m_hurst); });
+        return m_variance * std::pow(q2, -(m_hurst + 1.0)) / m_line_sum;
     }
 
     SampleGrid m_grid;

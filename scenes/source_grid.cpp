@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "render/render.h"
 
@@ -21,9 +22,12 @@ constexpr int kMaxTapHalf = 8;  // at most 2 * 8 + 1 taps along the major axis, 
 // The grid halved: every level-(l+1) sample is a weighted sum of the level-l samples around its
 // position, along x then along y, with the grid's own fold at the edges.
 SampleGrid halve(const SampleGrid& g) {
-    SampleGrid h = g;
+    SampleGrid h;  // not a copy of g: its values would keep g's capacity
     h.n = std::max(1, g.n / 2);
     h.cell = 2.0 * g.cell;
+    h.offset = g.offset;
+    h.periodic = g.periodic;
+    h.mean = g.mean;
     const bool centres = g.offset != 0.0;
     // Offset 0: level-(l+1) sample i sits on level-l sample 2i ([1 2 1] / 4); offset 0.5: between
     // samples 2i and 2i + 1 ([1 3 3 1] / 8).
@@ -51,6 +55,36 @@ double mean_square(const std::vector<float>& v) {
 
 }  // namespace
 
+std::optional<int> lattice_denominator(double p) {
+    for (int b = 1; b <= kMaxCoherentDenominator; ++b) {
+        const double a = p * b;
+        if (std::abs(a - std::round(a)) <= 1e-9 * a) return b;
+    }
+    return std::nullopt;
+}
+
+std::array<std::complex<double>, kMaxCoherentDenominator> coherent_images(double nu, double p, int b,
+                                                                          double phi) {
+    std::array<std::complex<double>, kMaxCoherentDenominator> A{};
+    // tri((k / b - phi) / p) > 0 for b (phi - p) < k < b (phi + p).
+    const int64_t k0 = int64_t(std::ceil(b * (phi - p))), k1 = int64_t(std::floor(b * (phi + p)));
+    for (int c = 0; c < b; ++c) {
+        const double w = 2.0 * std::numbers::pi * (nu + c) / b;
+        const std::complex<double> step = std::polar(1.0, w);
+        std::complex<double> z = std::polar(1.0, w * double(k0)), sum = 0.0;
+        for (int64_t k = k0; k <= k1; ++k, z *= step)
+            sum += std::max(0.0, 1.0 - std::abs(double(k) / b - phi) / p) * z;
+        A[size_t(c)] = sum / (b * p);
+    }
+    return A;
+}
+
+double GridPyramid::bytes(int n) {
+    // Levels 1, 2, ... hold 1/4, 1/16, ... of the grid (1/3 in all) besides the copy of level 0;
+    // the first halving's rows (n x n/2) and its result (n/2 x n/2) beside level 0: 7/4.
+    return 4.0 * double(n) * double(n) * 7.0 / 4.0;
+}
+
 GridPyramid::GridPyramid(const SampleGrid& grid) {
     levels.push_back(grid);
     while (levels.back().n > 1) levels.push_back(halve(levels.back()));
@@ -58,11 +92,15 @@ GridPyramid::GridPyramid(const SampleGrid& grid) {
     // level-0 cells^2: 1/2 for [1 2 1] / 4, 3/4 for [1 3 3 1] / 8) and read bilinearly (a tent
     // of half-width 2^l: variance 4^l / 6).
     const double step = grid.offset != 0.0 ? 0.75 : 0.5;
-    const double ms0 = mean_square(grid.values);
+    // The sd each level keeps is about the grid's mean (which every level keeps: the filters sum
+    // to 1 and wrap or mirror), so the top level, the mean itself, keeps none.
+    const double m2 = grid.mean * grid.mean;
+    const double var0 = mean_square(grid.values) - m2;
     for (size_t l = 0; l < levels.size(); ++l) {
         const double q = std::pow(4.0, double(l));
         variance.push_back(step * (q - 1.0) / 3.0 + q / 6.0);
-        sd_fraction.push_back(ms0 > 0.0 ? std::sqrt(mean_square(levels[l].values) / ms0) : 0.0);
+        const double var_l = std::max(0.0, mean_square(levels[l].values) - m2);
+        sd_fraction.push_back(var0 > 0.0 ? std::sqrt(var_l / var0) : 0.0);
     }
 }
 
@@ -112,24 +150,29 @@ double GridPyramid::filtered(double X, double Y, double var_major, double var_mi
     const double lambda = level_for(var_minor, var_major);
     const int lo = int(std::floor(lambda)), hi = std::min(lo + 1, int(levels.size()) - 1);
     const double a = lambda - lo;
-    // The remaining sd, log-linear between levels, fades the field to its (zero) mean as the
-    // impulse layers' kernels do (docs/perspective.md §6).
+    // The remaining sd, log-linear between levels, fades the field to the grid's own mean (what
+    // the top level, one sample, holds: the mean the near pixels average to) as the impulse
+    // layers' kernels fade to theirs (docs/perspective.md §6).
     const double sd = std::exp((1.0 - a) * std::log(std::max(sd_fraction[size_t(lo)], 1e-300)) +
                                a * std::log(std::max(sd_fraction[size_t(hi)], 1e-300)));
     const double fade = cutoff > 0.0 ? render::fade_weight(sd, cutoff) : 1.0;
-    if (fade == 0.0) return 0.0;
+    const double mean = levels.front().mean;
+    if (fade == 0.0) return mean;
     double v = level_value(lo, X, Y, ex, ey, var_major - variance[size_t(lo)]);
     if (a > 0.0 && hi != lo)
         v = (1.0 - a) * v + a * level_value(hi, X, Y, ex, ey, var_major - variance[size_t(hi)]);
-    return fade * v;
+    return mean + fade * (v - mean);
 }
 
 void GridPyramid::add(const PixelFootprints& px, double dx, double dy, numeric::Frame& out) const {
-    const double cell = levels.front().cell, c = px.filter_sd_px / cell;
+    const double cell = levels.front().cell, c = px.filter_sd_px / cell, mean = levels.front().mean;
     tbb::parallel_for(0, px.height, [&](int j) {
         for (int i = 0; i < px.width; ++i) {
             const size_t p = size_t(j) * px.width + i;
-            if (!(px.s_major[p] > 0.0f)) continue;  // the ray misses the plane: the mean
+            if (!(px.s_major[p] > 0.0f)) {  // the ray misses the plane: the mean faded to
+                if (mean != 0.0) out.data[p] = static_cast<float>(out.data[p] + mean);
+                continue;
+            }
             const double sM = c * px.s_major[p], sm = c * px.s_minor[p];
             const double v = filtered((px.x[p] - dx) / cell, (px.y[p] - dy) / cell, sM * sM,
                                       sm * sm, px.ex[p], px.ey[p], px.cutoff);

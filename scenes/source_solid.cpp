@@ -41,6 +41,10 @@ public:
         for (size_t k = 0; k < values.size(); ++k) out.data[k] += values[k];
     }
     Theory theory(double) const override { return {0.0, m_noise.theory().variance}; }
+    /// The points of a view and their values, made per frame by `add`.
+    double memory_bytes(double pixels, bool) const override {
+        return pixels * double(sizeof(synth::SolidPoint) + sizeof(float));
+    }
     double correlation_length() const override { return m_noise.kernel().radius(); }
     /// The slice's 2-D spectrum (projection-slice); 4-D noise states its variance only.
     std::optional<double> power_spectrum(double k_cycles) const override {

@@ -43,6 +43,12 @@ public:
         m_grid.periodic = true;
         const synth::Field f = synth::synthesize(acf, o, 0, 0, n, n, true);
         m_grid.values.assign(f.values.begin(), f.values.end());
+        // The tile keeps its own mean (a draw of the field's, 0 +- its sampling error), so its
+        // samples keep the model's variance R(0); a perspective view fades to that mean, which
+        // its near pixels average to, not to the layer's stated 0 (docs/perspective.md §8).
+        double sum = 0.0;  // in a fixed order
+        for (float v : m_grid.values) sum += v;
+        m_grid.mean = sum / double(m_grid.values.size());
         m_variance = acf.R(0.0, 0.0);
         m_length = detail::correlation_length(acf, m_grid);
     }
@@ -54,6 +60,9 @@ public:
         m_pyramid.get(m_grid).add(px, dx, dy, out);
     }
     Theory theory(double) const override { return {0.0, m_variance}; }
+    double memory_bytes(double, bool perspective) const override {
+        return m_grid.bytes() + (perspective ? GridPyramid::bytes(m_grid.n) : 0.0);
+    }
     double correlation_length() const override { return m_length; }
     /// No spectrum: the construction's covariance departs from the specified model by more than
     /// the analysis resolves (in 2-D up to about 0.1 R(0) at short lags, and a variance of about
