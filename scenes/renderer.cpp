@@ -282,10 +282,8 @@ Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
         const auto& src = S.scene.layers[i].source;
         if (src && S.rendered[i] && S.scene.camera.type == CameraConfig::Type::Perspective &&
             !src->perspective())
-            throw SceneError(S.scene.path + ": layer[" + std::to_string(i) + "]: a " +
-                             std::string(src->kind()) +
-                             " layer is seen through an orthographic camera only (fbm and "
-                             "subdivision layers also through a perspective one)");
+            throw SceneError(S.scene.path + ": layer[" + std::to_string(i) + "]: " +
+                             src->no_perspective_reason());
     }
     S.camera = std::make_unique<detail::CameraPipeline>(S.scene, S.kernels);
     if (S.scene.camera.sea.enabled) {

@@ -38,6 +38,7 @@ public:
         m_inner->add(moved, t_s, out);
     }
     bool perspective() const override { return m_inner->perspective(); }
+    std::string no_perspective_reason() const override { return m_inner->no_perspective_reason(); }
     void add_perspective(const PixelFootprints& px, double dx, double dy, double t_s,
                          numeric::Frame& out) const override {
         m_inner->add_perspective(px, dx + m_vx.integral(t_s), dy + m_vy.integral(t_s), t_s, out);
