@@ -550,7 +550,13 @@ void Renderer::State::raw(size_t i, const Pass& pass, const render::View& v, Spa
         const bool perspective = space == Space::Camera &&
                                  scene.camera.type == CameraConfig::Type::Perspective;
         auto draw = [&](render::Frame& to) {
-            if (perspective) return camera->add_source(*layer.source, pass.t, tl, to);
+            if (perspective) {
+                try {
+                    return camera->add_source(*layer.source, pass.t, tl, to);
+                } catch (const BudgetError& e) {  // the source's estimate, named by layer
+                    throw BudgetError(scene.path + ": layer[" + std::to_string(i) + "]: " + e.what());
+                }
+            }
             layer.source->add(v, tl, to);
         };
         if (gain == 1.0) return draw(out);

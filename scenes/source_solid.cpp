@@ -46,9 +46,9 @@ std::vector<std::array<int64_t, 2>> slice_columns(const numeric::Region& region,
     }
     if (count > kMaxSliceImpulses) {
         std::ostringstream s;
-        s << std::setprecision(3) << "solid layer: a perspective frame needs about " << count
-          << " impulses, over " << kMaxSliceImpulses
-          << " (raise camera.cutoff or the kernel radius)";
+        s << std::setprecision(3) << "a perspective frame of the solid slice needs about "
+          << count << " impulses, over " << kMaxSliceImpulses
+          << " (raise camera.cutoff or layer.solid.radius)";
         throw BudgetError(s.str());
     }
     for (const numeric::Box& b : region.boxes) {

@@ -323,6 +323,15 @@ TEST_CASE("a 4-D gaussian solid layer in perspective has the same bits on one th
     CHECK(rms(all) > 0.1);
 }
 
+TEST_CASE("a perspective frame of a solid slice over the impulse budget is refused with the estimate",
+          "[scenes][source][solid][errors]") {
+    // R = 0.05 texture units, a twentieth of a pixel near the camera: 6.6e8 impulses.
+    REQUIRE_THROWS_WITH(
+        test::render_scene_text(solid_camera(40.0, 15.0, 320, 180) + solid_layer(0.05), 0, "p.toml"),
+        Catch::Contains("p.toml: layer[0]: a perspective frame of the solid slice needs about") &&
+            Catch::Contains("raise camera.cutoff or layer.solid.radius"));
+}
+
 TEST_CASE("solid layers other than gaussian are refused under a perspective camera",
           "[scenes][source][errors]") {
     for (const char* kernel : {"cosine", "spectrum"}) {
