@@ -186,7 +186,7 @@ kernels::KernelParams read_solid_design(Reader& t, bool acf, double density, dou
 
 std::shared_ptr<const LayerSource> read_solid_source(std::optional<Reader> t, uint64_t seed,
                                                      const std::filesystem::path& base,
-                                                     double zoom) {
+                                                     double zoom, bool perspective) {
     synth::SolidParams p;
     p.kernel.radius = 16.0;
     p.seed = seed;
@@ -210,8 +210,9 @@ std::shared_ptr<const LayerSource> read_solid_source(std::optional<Reader> t, ui
             p.kernel.radius = t->number("radius", 16.0, [](double r) { return r >= 1e-3 && r <= 1e6; },
                                         "a kernel radius in [1e-3, 1e6] texture units");
             p.kernel.sigma = p.kernel.radius / 3.0;
-            // Point samples of a kernel spanning few pixels alias (the slice is not band-limited).
-            if (p.kernel.radius * zoom < 2.0)
+            // Point samples of a kernel spanning few pixels alias (the slice is not band-limited);
+            // a perspective camera filters a gaussian by the footprint and refuses the others.
+            if (p.kernel.radius * zoom < 2.0 && !perspective)
                 t->warn("radius", "radius = " + num(p.kernel.radius) + " texture units is " +
                                       num(p.kernel.radius * zoom) + " pixels at zoom " + num(zoom) +
                                       ", under 2: the slice aliases (its spectrum reaches past the "
