@@ -76,8 +76,10 @@ namespace {
 
 // Each pixel centre's texture point and footprint (docs/perspective.md §1); s_major = 0 where
 // the ray misses the plane or the point is too far for doubles to place.
-PixelFootprints pixel_footprints(const render::PerspectiveView& view, const render::AntiAlias& aa) {
+PixelFootprints pixel_footprints(const render::PerspectiveView& view,
+                                 const render::PixelCoords& coords, const render::AntiAlias& aa) {
     PixelFootprints px;
+    px.view = &view, px.coords = &coords, px.aa = aa;
     const auto& cam = view.camera();
     px.width = cam.width, px.height = cam.height;
     const size_t n = size_t(px.width) * px.height;
@@ -106,7 +108,7 @@ PixelFootprints pixel_footprints(const render::PerspectiveView& view, const rend
 void CameraPipeline::add_source(const LayerSource& source, double t, double t_layer,
                                 render::Frame& out) {
     prepare(t);
-    if (m_footprints.width == 0) m_footprints = pixel_footprints(*m_view, m_aa);
+    if (m_footprints.width == 0) m_footprints = pixel_footprints(*m_view, m_coords, m_aa);
     source.add_perspective(m_footprints, 0.0, 0.0, t_layer, out);
 }
 

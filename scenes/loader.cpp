@@ -336,7 +336,8 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base, Out
         Reader& r = layers[i];
         LayerConfig L;
         if (r.has("source") && r.choice("source", detail::kLayerSourceNames, 0) != 0) {
-            read_source_layer(r, i, global_seed, base, s.limits, s.camera.zoom.min(), compose, L);
+            read_source_layer(r, i, global_seed, base, s.limits, s.camera.zoom.min(),
+                              s.camera.type == CameraConfig::Type::Perspective, compose, L);
             s.layers.push_back(std::move(L));
             continue;
         }

@@ -50,10 +50,10 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
 /// `vy` (texture units per second; absent: 0).
 std::pair<numeric::Keyframed, numeric::Keyframed> read_uniform_velocity(Reader& flow);
 /// A [[layer]] drawn by another synthesizer (source = "fbm", "subdivision", "solid"); `zoom`:
-/// the camera's smallest zoom (pixels per texture unit).
+/// the camera's smallest zoom (pixels per texture unit); `perspective`: the camera is one.
 void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const std::filesystem::path& base,
-                       const Limits& limits, double zoom, CompositionReader& compose,
-                       LayerConfig& L);
+                       const Limits& limits, double zoom, bool perspective,
+                       CompositionReader& compose, LayerConfig& L);
 /// A volume scene's [volume] and [preview] tables (scenes/volume_config.cpp); `fps` and the
 /// preview size come from [output].
 std::shared_ptr<const VolumeSceneConfig> read_volume_scene(Reader& top, uint64_t global_seed,

@@ -319,10 +319,8 @@ Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
         const auto& src = S.scene.layers[i].source;
         if (src && S.rendered[i] && S.scene.camera.type == CameraConfig::Type::Perspective &&
             !src->perspective())
-            throw SceneError(S.scene.path + ": layer[" + std::to_string(i) + "]: a " +
-                             std::string(src->kind()) +
-                             " layer is seen through an orthographic camera only (fbm and "
-                             "subdivision layers also through a perspective one)");
+            throw SceneError(S.scene.path + ": layer[" + std::to_string(i) + "]: " +
+                             src->no_perspective_reason());
     }
     S.camera = std::make_unique<detail::CameraPipeline>(S.scene, S.kernels);
     if (S.scene.camera.sea.enabled) {
@@ -590,7 +588,13 @@ void Renderer::State::raw(size_t i, const Pass& pass, const render::View& v, Spa
         const bool perspective = space == Space::Camera &&
                                  scene.camera.type == CameraConfig::Type::Perspective;
         auto draw = [&](render::Frame& to) {
-            if (perspective) return camera->add_source(*layer.source, pass.t, tl, to);
+            if (perspective) {
+                try {
+                    return camera->add_source(*layer.source, pass.t, tl, to);
+                } catch (const BudgetError& e) {  // the source's estimate, named by layer
+                    throw BudgetError(scene.path + ": layer[" + std::to_string(i) + "]: " + e.what());
+                }
+            }
             layer.source->add(v, tl, to);
         };
         if (gain == 1.0) return draw(out);

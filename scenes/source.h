@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "numeric/frame.h"
+#include "render/render.h"
 
 namespace impulse::scenes {
 
@@ -34,6 +35,12 @@ struct PixelFootprints {
     std::vector<float> s_major, s_minor, ex, ey;
     double filter_sd_px = 0.5;  ///< the pixel filter's sd in pixels (camera.filter)
     double cutoff = 0.01;       ///< fade to the mean below this fraction of the sd (0: none)
+    /// The camera, its pixel coordinates and anti-aliasing options these footprints come from
+    /// (kept alive by the caller): for sources drawn as impulses through
+    /// render::accumulate_perspective (solid noise, docs/perspective.md §10).
+    const render::PerspectiveView* view = nullptr;
+    const render::PixelCoords* coords = nullptr;
+    render::AntiAlias aa;
 };
 
 /// The pixel lattice of an orthographic view, where the closed form of a scene samples a source
@@ -56,6 +63,10 @@ public:
     virtual void add(const numeric::View& view, double t_s, numeric::Frame& out) const = 0;
     /// Whether add_perspective draws this source (a perspective camera refuses it otherwise).
     virtual bool perspective() const { return false; }
+    /// Why a perspective camera refuses this source, one line ("" where it draws it).
+    virtual std::string no_perspective_reason() const {
+        return "a " + std::string(kind()) + " layer is seen through an orthographic camera only";
+    }
     /// Adds f(x - (dx, dy), t_s) filtered by each pixel's footprint (a Gaussian of sd
     /// filter_sd_px pixels) to `out` (sized to the pixels), faded to the mean where the footprint
     /// leaves less than `cutoff` of the sd, as impulse layers are. Pure, like `add`.

@@ -38,6 +38,7 @@ public:
         m_inner->add(moved, t_s, out);
     }
     bool perspective() const override { return m_inner->perspective(); }
+    std::string no_perspective_reason() const override { return m_inner->no_perspective_reason(); }
     void add_perspective(const PixelFootprints& px, double dx, double dy, double t_s,
                          numeric::Frame& out) const override {
         m_inner->add_perspective(px, dx + m_vx.integral(t_s), dy + m_vy.integral(t_s), t_s, out);
@@ -107,8 +108,8 @@ std::shared_ptr<const LayerSource> with_flow(Reader& r, const std::string& kind,
 /// mean, gain, marginal and
 /// composition; the impulse process's keys are refused (scenes/source.h).
 void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path& base,
-                       const Limits& limits, double zoom, detail::CompositionReader& compose,
-                       LayerConfig& L) {
+                       const Limits& limits, double zoom, bool perspective,
+                       detail::CompositionReader& compose, LayerConfig& L) {
     const std::string kind(detail::kLayerSourceNames[r.choice("source", detail::kLayerSourceNames, 0)]);
     for (std::string_view key : {"kernel", "density", "amplitude", "period", "lifetime", "envelope",
                                  "loop", "integrator", "substeps", "jacobian", "orientation",
@@ -124,7 +125,8 @@ void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path
     if (kind == "fbm") {
         L.source = detail::read_fbm_source(r.table(kind), L.process.seed, limits.max_memory_mib);
     } else if (kind == "solid") {
-        L.source = detail::read_solid_source(r.table(kind), L.process.seed, base, zoom);
+        L.source = detail::read_solid_source(r.table(kind), L.process.seed, base, zoom,
+                                             perspective);
     } else {
         std::optional<Reader> t = r.table(kind);
         if (!t)

@@ -34,8 +34,10 @@ std::shared_ptr<const LayerSource> read_subdivision_source(Reader* subdivision, 
 /// A slice of solid noise from its [layer.solid] table (absent: the defaults) and the layer's
 /// seed; `base` resolves a designed kernel's table, `zoom` (the camera's smallest, pixels per
 /// unit) sets a designed kernel's default nyquist 0.5 zoom and the aliasing warning of an
-/// analytic kernel under 2 pixels. Throws SceneError at the key.
+/// analytic kernel under 2 pixels (not given under a perspective camera, which filters the
+/// gaussian kernel by the footprint and refuses the others). Throws SceneError at the key.
 std::shared_ptr<const LayerSource> read_solid_source(std::optional<Reader> solid, uint64_t seed,
-                                                     const std::filesystem::path& base, double zoom);
+                                                     const std::filesystem::path& base, double zoom,
+                                                     bool perspective);
 
 }  // namespace impulse::scenes::detail

@@ -311,3 +311,74 @@ std::vector<float> SolidNoise::grid(int width, int height, int depth, const Soli
 }
 
 }  // namespace impulse::synth
+
+namespace impulse::synth {
+namespace {
+
+constexpr size_t kSliceColumns = 256;  // columns whose impulses one task generates
+
+/// The impulses of column (cx, cy) within one radius of the plane at (zc, tc) (cell units):
+/// cells cz = floor(zc) - 1 .. floor(zc) + 1 (and ct alike) are the only ones that reach it.
+template <int D>
+void slice_column(const numeric::CounterRng& rng, double m, const std::array<int64_t, 2>& col,
+                  double zc, double tc, double R, SliceImpulses& out) {
+    const int64_t z0 = int64_t(std::floor(zc)), t0 = int64_t(std::floor(tc));
+    std::array<std::vector<float>, D> u;
+    std::vector<float> a;
+    for (int64_t cz = z0 - 1; cz <= z0 + 1; ++cz)
+        for (int64_t ct = t0 - 1; ct <= (D == 4 ? t0 + 1 : t0 - 1); ++ct) {
+            for (auto& v : u) v.clear();
+            a.clear();
+            std::array<int64_t, D> cell;
+            cell[0] = col[0], cell[1] = col[1], cell[2] = cz;
+            if constexpr (D == 4) cell[3] = ct;
+            generate_cell<D>(rng, cell, m, u, a);
+            for (size_t j = 0; j < a.size(); ++j) {
+                const double dz = (double(cz) - zc) + double(u[2][j]);
+                double d2 = dz * dz;
+                if constexpr (D == 4) {
+                    const double dt = (double(ct) - tc) + double(u[3][j]);
+                    d2 += dt * dt;
+                }
+                if (!(d2 < 1.0)) continue;  // h(r) = 0 for r >= R: it adds nothing to the plane
+                out.x.push_back((double(col[0]) + double(u[0][j])) * R);
+                out.y.push_back((double(col[1]) + double(u[1][j])) * R);
+                out.a.push_back(a[j]);
+                out.d2.push_back(static_cast<float>(d2 * R * R));
+            }
+        }
+}
+
+}  // namespace
+
+void SolidNoise::slice_impulses(const std::vector<std::array<int64_t, 2>>& columns, double z,
+                                double t, SliceImpulses& out, int component) const {
+    if (m_params.metric != std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 1})
+        throw ValueError("slice_impulses: expected the identity metric");
+    if (component < 0 || component > 2)
+        throw ValueError("component = " + std::to_string(component) + ": expected 0, 1 or 2");
+    const double R = m_kernel.radius(), zc = z / R, tc = t / R;
+    if (!(std::abs(zc) < 1e15 && std::abs(tc) < 1e15))
+        throw ValueError("slice_impulses: z or t beyond 1e15 cells");
+    const numeric::CounterRng rng =
+        numeric::CounterRng(m_params.seed, kSolidStream).keyed(component);
+    const double m = m_params.density / unit_ball_volume(m_params.dims);
+    // Chunks of columns in parallel, joined in column order: the same list for any thread count.
+    std::vector<SliceImpulses> parts((columns.size() + kSliceColumns - 1) / kSliceColumns);
+    tbb::parallel_for(size_t(0), parts.size(), [&](size_t k) {
+        const size_t end = std::min(columns.size(), (k + 1) * kSliceColumns);
+        for (size_t c = k * kSliceColumns; c < end; ++c) {
+            if (m_params.dims == 3) slice_column<3>(rng, m, columns[c], zc, tc, R, parts[k]);
+            else slice_column<4>(rng, m, columns[c], zc, tc, R, parts[k]);
+        }
+    });
+    out = SliceImpulses{};
+    for (const SliceImpulses& p : parts) {
+        out.x.insert(out.x.end(), p.x.begin(), p.x.end());
+        out.y.insert(out.y.end(), p.y.begin(), p.y.end());
+        out.a.insert(out.a.end(), p.a.begin(), p.a.end());
+        out.d2.insert(out.d2.end(), p.d2.begin(), p.d2.end());
+    }
+}
+
+}  // namespace impulse::synth

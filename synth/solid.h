@@ -81,6 +81,15 @@ struct SolidTheory {
     double amplitude_moment2 = 1.0 / 3.0;  ///< E[a^2] of the uniform amplitudes
 };
 
+/// The impulses that reach a plane z = const (and t = const in 4-D), as impulses of that plane:
+/// the slice is sum_i a_i h(sqrt(|x - x_i|^2 + d2_i)) (docs/solid.md "Slices in perspective").
+struct SliceImpulses {
+    std::vector<double> x, y;  ///< position in the plane, texture units
+    std::vector<float> a;      ///< amplitude, uniform in [-1, 1]
+    std::vector<float> d2;     ///< squared distance from the plane (dz^2 + dt^2), units^2, < R^2
+    size_t size() const { return a.size(); }
+};
+
 /// Sparse-convolution solid noise. Immutable after construction, thread-safe.
 class SolidNoise {
 public:
@@ -111,6 +120,13 @@ public:
     /// grouping); otherwise slabs of point batches.
     std::vector<float> grid(int width, int height, int depth, const SolidPoint& origin,
                             double spacing = 1.0, int component = 0) const;
+
+    /// The impulses of the cells (cx, cy, cz[, ct]) (side R, texture units) of the given columns
+    /// (cx, cy) that lie within R of the plane z (and t, 4-D), in the order of `columns`, then of
+    /// cz (and ct) ascending, then of the draw: the impulses evaluate() sums, so a slice drawn
+    /// from them has the same realisation. Identity metric only (ValueError otherwise).
+    void slice_impulses(const std::vector<std::array<int64_t, 2>>& columns, double z, double t,
+                        SliceImpulses& out, int component = 0) const;
 
     /// Bytes a batch of n points (or a grid of n samples) needs, for budgets.
     static double batch_bytes(double n);
