@@ -436,6 +436,7 @@ struct FrameLags {
 };
 
 constexpr size_t kDenseLags = 24;
+constexpr double kLagWork = 4e9;  ///< operations for the Gaussian term over all lags
 
 /// The displacement in pixels of a layer's uniform flows over d frames, averaged over the
 /// analysed frames' start times (exact for constant velocities; a keyframed wind is taken at its
@@ -467,6 +468,18 @@ FrameLags frame_lags(const Scene& scene, const AnalysisResult& R, double zoom) {
          d = d < kDenseLags ? d + 1 : std::max(d + 1, size_t(1.1 * double(d))))
         F.lags.push_back(d);
     if (F.lags.back() != n - 1) F.lags.push_back(n - 1);
+    // Each lag costs about 4 corners x (2w - 1)(2h - 1) lags x components: large windows keep
+    // every k-th lag (and the last) so the total stays within kLagWork operations.
+    const double per_lag = 4.0 * (2.0 * R.width - 1.0) * (2.0 * R.height - 1.0) *
+                           double(scene.layers.size() + 1);
+    const size_t keep = std::max<size_t>(8, size_t(kLagWork / per_lag));
+    if (F.lags.size() > keep) {
+        const size_t k = (F.lags.size() + keep - 1) / keep;
+        std::vector<size_t> thinned;
+        for (size_t i = 0; i < F.lags.size(); i += k) thinned.push_back(F.lags[i]);
+        if (thinned.back() != n - 1) thinned.push_back(n - 1);
+        F.lags = std::move(thinned);
+    }
     for (const auto& layer : scene.layers) {
         std::vector<std::array<double, 2>> shifts;
         for (size_t d : F.lags) {
