@@ -312,20 +312,20 @@ double variance_from_differences(const std::vector<double>& v, const std::vector
     return s / (double(n - L) * 2.0 * std::max(1.0 - r, 1e-3));
 }
 
-/// The scene's when its theory holds (the Gaussian and population parts of a frame's variance,
-/// decorrelating as the field squared and as the impulse population); its envelopes with the
+/// The scene's when its theory holds (the covariance of the frame variances in time, both parts
+/// through the window: TheoryComparison::frame_variance_covariance); its envelopes with the
 /// variance from the frames when the scene is keyframed (the slower of the two correlations);
 /// otherwise an AR(1) correlation with the frames' integrated time and the variance about a line.
 LevelModel level_model(const std::vector<double>& v, const TimeCorrelation& tc,
                        const TheoryComparison* theory) {
     const size_t n = v.size();
     LevelModel m;
-    if (theory && !tc.r2.empty() &&
-        theory->frame_variance_gaussian + theory->frame_variance_population > 0) {
-        const double g = theory->frame_variance_gaussian, p = theory->frame_variance_population;
-        m.variance = g + p;
+    if (theory && theory->frame_variance_covariance.size() >= n &&
+        theory->frame_variance_covariance[0] > 0) {
+        const std::vector<double>& cov = theory->frame_variance_covariance;
+        m.variance = cov[0];
         m.rho.resize(n);
-        for (size_t l = 0; l < n; ++l) m.rho[l] = (g * tc.r2[l] + p * tc.r4[l]) / (g + p);
+        for (size_t l = 0; l < n; ++l) m.rho[l] = cov[l] / cov[0];
         m.source = "scene theory";
         return m;
     }

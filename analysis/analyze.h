@@ -75,6 +75,10 @@ struct TheoryComparison {
     /// in time as the field's correlation squared) and the impulse population's (fourth
     /// cumulant, as the envelope's fourth power).
     double frame_variance_gaussian = 0.0, frame_variance_population = 0.0;
+    /// Cov(V_t, V_{t+l}) of the frame variances at lags l = 0..frames-1: both parts, each
+    /// decorrelating with its layers' envelopes and with the uniform flows that carry new
+    /// content through the window (docs/stationarity.md).
+    std::vector<double> frame_variance_covariance;
 };
 
 /// Stationarity over time (sequences and videos with enough frames).

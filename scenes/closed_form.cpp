@@ -9,8 +9,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <array>
 #include <cstdio>
 #include <numbers>
+#include <optional>
 
 #include "kernels/kernels.h"
 #include "numeric/fft.h"
@@ -314,8 +316,8 @@ std::vector<double> layer_autocovariance(const LayerSpectrum& L, double zoom, in
 /// their variance. The frame mean follows r, periodogram bins and the frame variance follow r^2
 /// (Gaussian approximation). Advection by a flow moves the pattern without changing the power of
 /// a periodic frame; through a window (a crop) it brings new content in and the frame variance
-/// decorrelates sooner than its envelopes say, which these correlations do not model (the block
-/// means of `drift` in a 192^2 crop scatter about 3 times wider than the verdict assumes).
+/// decorrelates sooner than its envelopes say: the level test takes that from
+/// frame_variance_covariance (docs/stationarity.md), these correlations serve the spectra.
 TimeCorrelation scene_time_correlation(const Scene& scene, size_t n, size_t quarter) {
     std::vector<double> r(n, 0.0), r4(n, 0.0);
     double total = 0, total4 = 0;
@@ -390,27 +392,20 @@ DisplayEffects display_effects(const Theory& th, int bits, bool mapped, double l
     return d;
 }
 
-/// int A(u)^2 du of a layer's kernel in pixels over the analysed w x h window: the impulse
-/// population's scatter of a frame's variance per unit lambda E[a^4 w^4] (the derivation is in
-/// kernels/window_variance.h). Impulses of a random orientation average it over four angles
-/// (it depends on the angle only when the kernel is not small against the window).
-double population_integral(const LayerConfig& layer, double zoom, int w, int h) {
-    const kernels::Kernel k(layer.kernel);
-    const bool random_angle = layer.process.orientation != sim::OrientationMode::Fixed;
-    return kernels::window_population_integral(k, zoom, w, h,
-                                               isotropic(k) || !random_angle ? 1 : 4);
-}
-
 /// The layers' spectra summed on the DFT grid, with what the sampling errors need from each.
 struct LayerSums {
     std::vector<double> grid;                       ///< aliased S on the w x h DFT grid
     std::vector<std::vector<double>> layer_annuli;  ///< each layer's annulus means
     std::vector<double> c4;  ///< relative covariance of all bins from impulse-count fluctuations
     std::vector<double> acov;  ///< autocovariance rings (constant zoom)
-    /// aliased S on a DFT grid padded beyond the window by the covariance's reach (2 R)
-    std::vector<double> padded;
+    /// each layer's aliased S on a DFT grid padded beyond the window by the covariance's reach
+    /// (2 R) and the largest displacement of a layer over the frames (frame_variance_covariance)
+    std::vector<std::vector<double>> padded;
     int padded_rows = 0, padded_cols = 0;
+    double quant = 0.0;        ///< white quantisation noise, new in every frame
     double population = 0.0;   ///< fourth-cumulant term of Var(a frame's sample variance)
+    /// Cov(V_0, V_d) at the lags of FrameLags: the population term (per lag, summed over layers)
+    std::vector<double> population_lags;
     double diff_var = 0.0;     ///< Var of a pixel's change between frames (no flow)
     bool diff_known = true, any_animated = false;
 };
@@ -420,8 +415,9 @@ struct LayerSums {
 void add_layer_spectrum(const Scene& scene, const LayerSpectrum& ls, const LayerSpectrum& padded_ls,
                         const AnalysisResult& R, double zoom, double g2, LayerSums& S) {
     const int w = R.width, h = R.height;
-    const std::vector<double> pg = layer_grid(padded_ls, S.padded_cols, S.padded_rows);
-    for (size_t i = 0; i < pg.size(); ++i) S.padded[i] += g2 * pg[i];
+    std::vector<double> pg = layer_grid(padded_ls, S.padded_cols, S.padded_rows);
+    for (double& v : pg) v *= g2;
+    S.padded.push_back(std::move(pg));
     std::vector<double> lg = layer_grid(ls, w, h);
     for (size_t i = 0; i < lg.size(); ++i) {
         lg[i] *= g2;
@@ -447,21 +443,114 @@ void add_source_layer(const Scene& scene, const LayerConfig& layer, const Analys
                        R, zoom, g2, S);
 }
 
+/// The lags (frames) at which the covariance of the frame variances is evaluated: every lag up
+/// to kDenseLags, then 10 % apart up to n - 1 (it varies on the scale of the lifetimes and of
+/// the window's crossing time; linear in between), and each layer's rigid displacement over them.
+struct FrameLags {
+    std::vector<size_t> lags;
+    std::vector<std::vector<std::array<double, 2>>> shift;  ///< [layer][lag index], pixels
+    double max_shift = 0.0;  ///< largest |component| over layers and lags
+};
+
+constexpr size_t kDenseLags = 24;
+constexpr double kLagWork = 4e9;  ///< operations for the Gaussian term over all lags
+
+/// The displacement in pixels of a layer's uniform flows over d frames, averaged over the
+/// analysed frames' start times (exact for constant velocities; a keyframed wind is taken at its
+/// mean displacement over the frames, docs/stationarity.md).
+std::array<double, 2> layer_displacement(const LayerConfig& layer, double fps, double zoom,
+                                         long long first, size_t n, size_t d) {
+    std::array<double, 2> s{0.0, 0.0};
+    for (const auto& [vx, vy] : layer.uniform_flows) {
+        if (vx.is_constant() && vy.is_constant()) {
+            s[0] += vx.value(0.0) * double(d) / fps;
+            s[1] += vy.value(0.0) * double(d) / fps;
+            continue;
+        }
+        const size_t starts = n - d;
+        for (size_t j = 0; j < starts; ++j) {
+            const double t0 = double(first + static_cast<long long>(j)) / fps;
+            const double t1 = t0 + double(d) / fps;
+            s[0] += (vx.integral(t1) - vx.integral(t0)) / double(starts);
+            s[1] += (vy.integral(t1) - vy.integral(t0)) / double(starts);
+        }
+    }
+    return {s[0] * zoom, s[1] * zoom};
+}
+
+FrameLags frame_lags(const Scene& scene, const AnalysisResult& R, double zoom) {
+    FrameLags F;
+    const size_t n = size_t(std::max(R.frames, 1));
+    for (size_t d = 0; d < n;
+         d = d < kDenseLags ? d + 1 : std::max(d + 1, size_t(1.1 * double(d))))
+        F.lags.push_back(d);
+    if (F.lags.back() != n - 1) F.lags.push_back(n - 1);
+    // Each lag costs about 4 corners x (2w - 1)(2h - 1) lags x components: large windows keep
+    // every k-th lag (and the last) so the total stays within kLagWork operations.
+    const double per_lag = 4.0 * (2.0 * R.width - 1.0) * (2.0 * R.height - 1.0) *
+                           double(scene.layers.size() + 1);
+    const size_t keep = std::max<size_t>(8, size_t(kLagWork / per_lag));
+    if (F.lags.size() > keep) {
+        const size_t k = (F.lags.size() + keep - 1) / keep;
+        std::vector<size_t> thinned;
+        for (size_t i = 0; i < F.lags.size(); i += k) thinned.push_back(F.lags[i]);
+        if (thinned.back() != n - 1) thinned.push_back(n - 1);
+        F.lags = std::move(thinned);
+    }
+    for (const auto& layer : scene.layers) {
+        std::vector<std::array<double, 2>> shifts;
+        for (size_t d : F.lags) {
+            const auto s = layer_displacement(layer, scene.output.fps, zoom, R.first_frame, n, d);
+            F.max_shift = std::max({F.max_shift, std::abs(s[0]), std::abs(s[1])});
+            shifts.push_back(s);
+        }
+        F.shift.push_back(std::move(shifts));
+    }
+    return F;
+}
+
+/// An impulse layer's population term of Cov(V_0, V_d) at the lags of F, per unit of its
+/// coefficient lambda E[a^4] W4 gain^4: the envelopes' overlap r4(d) times int A(u) A(u + s_d) du
+/// (kernels/window_variance.h). Impulses of a random orientation average it over four angles.
+std::vector<double> population_lags(const Scene& scene, const LayerConfig& layer, size_t index,
+                                    const FrameLags& F, double zoom, int w, int h) {
+    const kernels::Kernel k(layer.kernel);
+    const bool random_angle = layer.process.orientation != sim::OrientationMode::Fixed;
+    std::vector<double> v = kernels::window_population_correlation(
+        k, zoom, w, h, isotropic(k) || !random_angle ? 1 : 4, F.shift[index]);
+    const auto& p = layer.process;
+    for (size_t i = 0; i < v.size(); ++i)
+        if (p.lifetime_s > 0)
+            v[i] *= envelope_correlation(p.envelope, p.lifetime_s,
+                                         double(F.lags[i]) / scene.output.fps, 2);
+    return v;
+}
+
+/// The largest reach of a layer's covariance in pixels (2 R, plus a margin).
+int covariance_reach(const Scene& scene, double zoom) {
+    int reach = 0;
+    for (const auto& layer : scene.layers)
+        reach = std::max(reach,
+                         int(std::ceil(2.0 * kernels::Kernel(layer.kernel).radius() * zoom)) + 2);
+    return reach;
+}
+
 LayerSums sum_layers(const Scene& scene, const AnalysisResult& R, double zoom, double g2,
-                     double quant) {
+                     double quant, const FrameLags& F) {
     const int w = R.width, h = R.height;
     const double N = double(w) * h;
     LayerSums S;
     S.grid.assign(size_t(w) * h, quant);
     S.acov.assign(size_t(R.max_lag) + 1, 0.0);
-    int reach = 0;
-    for (const auto& layer : scene.layers)
-        reach = std::max(reach,
-                         int(std::ceil(2.0 * kernels::Kernel(layer.kernel).radius() * zoom)) + 2);
-    S.padded_rows = numeric::fast_fft_size(h + reach);
-    S.padded_cols = numeric::fast_fft_size(w + reach);
-    S.padded.assign(size_t(S.padded_rows) * S.padded_cols, quant);
-    for (const auto& layer : scene.layers) {
+    S.quant = quant;
+    S.population_lags.assign(F.lags.size(), 0.0);
+    const int reach = covariance_reach(scene, zoom);
+    // Beyond a displacement of the window plus the reach two frames share nothing.
+    const int shift = int(std::ceil(std::min(F.max_shift, 1e7))) + 1;
+    S.padded_rows = numeric::fast_fft_size(h + reach + std::min(shift, h + reach));
+    S.padded_cols = numeric::fast_fft_size(w + reach + std::min(shift, w + reach));
+    for (size_t li = 0; li < scene.layers.size(); ++li) {
+        const LayerConfig& layer = scene.layers[li];
         if (layer.source) {
             add_source_layer(scene, layer, R, zoom, g2, S);
             continue;
@@ -480,78 +569,103 @@ LayerSums sum_layers(const Scene& scene, const AnalysisResult& R, double zoom, d
         // Cov(P(k), P(k')) gains lambda_px N E[a^4 w^4] |H|^2 |H'|^2 / N^2 = c S(k) S(k') for a
         // compound Poisson field: the relative covariance c below is shared by every bin.
         S.c4.push_back(ea4 * W4 / (ea2 * ea2 * W2 * W2 * lambda_px * N));
-        S.population += g2 * g2 * lambda_px * ea4 * W4 * std::pow(layer.gain.value(0.0), 4) *
-                        population_integral(layer, zoom, w, h);
+        const double coefficient =
+            g2 * g2 * lambda_px * ea4 * W4 * std::pow(layer.gain.value(0.0), 4);
+        const std::vector<double> pop = population_lags(scene, layer, li, F, zoom, w, h);
+        for (size_t i = 0; i < pop.size(); ++i) S.population_lags[i] += coefficient * pop[i];
+        S.population += coefficient * pop[0];
         if (layer.flow)
             S.diff_known = false;
         else if (animated)
             S.diff_var +=
                 2.0 * g2 * lv *
                 (1.0 - envelope_correlation(p.envelope, p.lifetime_s, 1.0 / scene.output.fps));
-
-        const LayerSpectrum ls =
-            layer_spectrum(layer, zoom, std::max(S.padded_rows, S.padded_cols));
+        // One table for both grids, at the window's resolution: the padded grid serves only lags
+        // within the window plus the displacement, which 8 table points per window bin resolve
+        // (a table at the padded grid's bins made `analyze --scene` 4x slower, issue 18).
+        const LayerSpectrum ls = layer_spectrum(layer, zoom, std::max(w, h));
         add_layer_spectrum(scene, ls, ls, R, zoom, g2, S);
     }
     return S;
 }
 
-/// Var of a w x h frame's sample variance for a Gaussian field of the summed spectrum (the
-/// pairings of kernels/window_variance.h's derivation): 2 ||P C P||_F^2 / N^2 with C the pixels'
-/// covariance and P the centring projector, i.e. 2 / N^2 (sum_ij C_ij^2 - 2 / N sum_i r_i^2 +
-/// (sum_i r_i)^2 / N^2), r_i = sum_j C_ij. Exact for any kernel against the window, where the
-/// periodic 2 sum_k S(k)^2 / N^2 misses the power a wide kernel leaks from near k = 0 into the
-/// window's frequencies. C at integer lags is the inverse DFT of the aliased spectrum on the
-/// padded grid (periodic with a period beyond the window plus the reach 2R, so exact there), and
-/// r the indicator's circular correlation with it.
-double gaussian_frame_variance(const LayerSums& S, int w, int h) {
-    const int rows = S.padded_rows, cols = S.padded_cols;
-    const double norm = 1.0 / (double(rows) * cols);
-    numeric::RealFft2d cov(rows, cols, numeric::FftPlans::Inverse);
-    numeric::RealFft2d ind(rows, cols, numeric::FftPlans::Both);
-    for (int y = 0; y < h; ++y) std::fill_n(ind.real() + size_t(y) * cols, w, 1.0);
-    ind.forward();
-    const int hc = cov.half_cols();
-    for (int ky = 0; ky < rows; ++ky)
-        for (int kx = 0; kx < hc; ++kx) {
-            const double s = S.padded[size_t(ky) * cols + kx] * norm;
-            cov.spectrum()[size_t(ky) * hc + kx] = s;
-            ind.spectrum()[size_t(ky) * hc + kx] *= s;
+/// A layer's field correlation in time over d frames: its envelopes' overlap (1 for still and
+/// source layers, which only move).
+double field_correlation(const Scene& scene, const LayerConfig& layer, size_t d) {
+    const auto& p = layer.process;
+    if (layer.source || !(p.lifetime_s > 0)) return 1.0;
+    return envelope_correlation(p.envelope, p.lifetime_s, double(d) / scene.output.fps);
+}
+
+/// The Gaussian part of Cov(V_0, V_d) at lag index i of F: each layer's covariance scaled by
+/// its field correlation and moved by its displacement (the quantisation noise, last component,
+/// only at d = 0); a layer moved beyond the window plus the reach shares nothing.
+double gaussian_lag(const kernels::WindowCovariance& wc, const Scene& scene, const FrameLags& F,
+                    size_t i, int w, int h, int reach) {
+    const size_t L = scene.layers.size(), d = F.lags[i];
+    std::vector<double> weight(L + 1, d == 0 ? 1.0 : 0.0);
+    std::vector<std::array<double, 2>> s(L + 1, {0.0, 0.0});
+    for (size_t l = 0; l < L; ++l) {
+        weight[l] = field_correlation(scene, scene.layers[l], d);
+        s[l] = F.shift[l][i];
+        if (std::abs(s[l][0]) >= w + reach || std::abs(s[l][1]) >= h + reach) weight[l] = 0.0;
+    }
+    return wc.gaussian_term(std::span<const double>(weight),
+                            std::span<const std::array<double, 2>>(s));
+}
+
+/// Cov(V_t, V_{t+d}) of the frame variances at lags d = 0..n-1 (docs/stationarity.md): the
+/// Gaussian part at the lags of F by WindowCovariance plus the population part of S, linear in
+/// between. `gaussian0` receives the Gaussian part at d = 0.
+std::vector<double> frame_variance_covariance(const LayerSums& S, const Scene& scene,
+                                              const FrameLags& F, const AnalysisResult& R,
+                                              double zoom, double& gaussian0) {
+    const int w = R.width, h = R.height;
+    kernels::WindowCovariance wc(w, h, S.padded_rows, S.padded_cols);
+    for (const auto& grid : S.padded) wc.add(grid);
+    wc.add(std::vector<double>(size_t(S.padded_rows) * S.padded_cols, S.quant));
+    const int reach = covariance_reach(scene, zoom);
+    std::vector<double> at(F.lags.size());
+    tbb::parallel_for(size_t(0), F.lags.size(), [&](size_t i) {
+        at[i] = gaussian_lag(wc, scene, F, i, w, h, reach) + S.population_lags[i];
+    });
+    gaussian0 = at[0] - S.population_lags[0];
+    const size_t n = size_t(std::max(R.frames, 1));
+    std::vector<double> cov(n);
+    for (size_t i = 0; i + 1 < F.lags.size(); ++i)
+        for (size_t d = F.lags[i]; d < F.lags[i + 1]; ++d) {
+            const double u = double(d - F.lags[i]) / double(F.lags[i + 1] - F.lags[i]);
+            cov[d] = (1.0 - u) * at[i] + u * at[i + 1];
         }
-    cov.inverse();
-    ind.inverse();
-    const double N = double(w) * h;
-    double sum_sq = 0.0, sum_r = 0.0, sum_r2 = 0.0;
-    for (int dy = 1 - h; dy < h; ++dy)
-        for (int dx = 1 - w; dx < w; ++dx) {
-            const double c = cov.real()[size_t((dy + rows) % rows) * cols + (dx + cols) % cols];
-            sum_sq += double(w - std::abs(dx)) * (h - std::abs(dy)) * c * c;
-        }
-    for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) {
-            const double r = ind.real()[size_t(y) * cols + x];
-            sum_r += r;
-            sum_r2 += r * r;
-        }
-    return 2.0 * (sum_sq - 2.0 * sum_r2 / N + sum_r * sum_r / (N * N)) / (N * N);
+    cov[n - 1] = at.back();
+    return cov;
+}
+
+/// Var of the mean of n values whose covariance at lag l is cov[l].
+double variance_of_mean(const std::vector<double>& cov) {
+    const double n = double(cov.size());
+    double v = cov[0];
+    for (size_t l = 1; l < cov.size(); ++l) v += 2.0 * (1.0 - double(l) / n) * cov[l];
+    return std::max(v, 0.0) / n;
 }
 
 /// Mean and variance against their sampling errors. Var(frame mean) = S(0) / N (the DC bin of
 /// the aliased spectrum); the sample variance over N pixels has the Gaussian field's
-/// gaussian_frame_variance plus the fourth cumulant lambda E[a^4 w^4] int A(u)^2 du of shot noise
-/// (kernels/window_variance.h; (int h^2)^2 / N for kernels small against the frame).
+/// 2 ||P C P||^2 / N^2 plus the fourth cumulant lambda E[a^4 w^4] int A(u)^2 du of shot noise
+/// (kernels/window_variance.h; (int h^2)^2 / N for kernels small against the frame), and over the
+/// frames the covariance of frame_variance_covariance.
 void compare_one_point(TheoryComparison& T, const AnalysisResult& R, const Theory& th,
-                       const LayerSums& S, const TimeCorrelation& tc, const DisplayEffects& d) {
+                       const LayerSums& S, const TimeCorrelation& tc, const DisplayEffects& d,
+                       const std::vector<double>& cov, double gaussian) {
     const double N = double(R.width) * R.height;
     T.sd_frame_mean = std::sqrt(S.grid[0] / N);
     T.sd_mean = T.sd_frame_mean / std::sqrt(tc.n_eff_mean);
     T.mean = th.mean + (T.mapped ? std::sqrt(th.variance) * d.cens.mean : 0.0);
-    const double gaussian = gaussian_frame_variance(S, R.width, R.height);
     T.frame_variance_gaussian = gaussian;
     T.frame_variance_population = S.population;
+    T.frame_variance_covariance = cov;
     T.sd_frame_variance = std::sqrt(gaussian + S.population);
-    T.sd_variance =
-        std::sqrt(gaussian / tc.n_eff_variance + S.population / tc.n_eff_population);
+    T.sd_variance = std::sqrt(variance_of_mean(cov));
     const double field_var = T.mapped ? th.variance * d.cens.variance : th.variance;
     // E[pooled sample variance] = sigma^2 - Var(pooled mean).
     T.variance = field_var + d.quant - T.sd_mean * T.sd_mean;
@@ -630,8 +744,11 @@ TheoryComparison compare_with_theory(const Scene& scene, const std::string& path
 
     const DisplayEffects d = display_effects(th, R.bits, mapped, lo, hi);
     const double g2 = d.cens.gain * d.cens.gain;
-    LayerSums S = sum_layers(scene, R, T.zoom, g2, d.quant);
-    compare_one_point(T, R, th, S, tc, d);
+    const FrameLags F = frame_lags(scene, R, T.zoom);
+    LayerSums S = sum_layers(scene, R, T.zoom, g2, d.quant, F);
+    double gaussian = 0.0;
+    const std::vector<double> cov = frame_variance_covariance(S, scene, F, R, T.zoom, gaussian);
+    compare_one_point(T, R, th, S, tc, d, cov, gaussian);
     if (zoom_constant) {
         // Autocovariance rings: Campbell's theorem with h * h~, less Var(frame mean) (every frame
         // is measured about its own mean), plus the white quantisation noise at lag 0.

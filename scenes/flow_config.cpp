@@ -29,9 +29,10 @@ std::pair<numeric::Keyframed, numeric::Keyframed> read_uniform_velocity(Reader& 
     return {vx, vy};
 }
 
-std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& process,
-                                      const fs::path& base, detail::CompositionReader& compose,
-                                      size_t index) {
+std::shared_ptr<sim::Flow> read_flows(
+    Reader& layer, const sim::ProcessConfig& process, const fs::path& base,
+    detail::CompositionReader& compose, size_t index,
+    std::vector<std::pair<numeric::Keyframed, numeric::Keyframed>>* uniform) {
     auto list = layer.tables("flow");
     if (list.empty()) return nullptr;
     if (process.lifetime_s <= 0)
@@ -60,6 +61,7 @@ std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& p
         switch (type) {
             case 0: {  // uniform
                 const auto [vx, vy] = read_uniform_velocity(f);
+                if (uniform) uniform->push_back({vx, vy});
                 sum->push(sim::make_uniform_flow(vx, vy));
                 break;
             }

@@ -277,7 +277,7 @@ void read_impulse_layer(Reader& r, size_t i, uint64_t global_seed, const fs::pat
     } catch (const ValueError& e) {  // combinations the per-key checks cannot see
         r.fail(r.node("kernel"), "kernel", e.what());
     }
-    L.flow = read_flows(r, p, base, compose, i);
+    L.flow = read_flows(r, p, base, compose, i, &L.uniform_flows);
     detail::read_marginal(r, L, base);
     detail::read_scale(r, base, L);  // after the marginal, which it cannot shape
     check_positive_amplitudes(r, L, s.camera.type == CameraConfig::Type::Perspective);

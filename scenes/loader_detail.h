@@ -42,10 +42,12 @@ kernels::KernelParams read_kernel(std::optional<Reader> r, Reader& layer,
 kernels::DesignedKernel read_design(Reader& r, bool acf, const std::filesystem::path& base,
                                     kernels::DesignOptions o);
 /// The layer's [[layer.flow]] tables summed into one flow (null without any); type "layer"
-/// flows are handed to `compose` (another layer's field, set by the renderer).
-std::shared_ptr<sim::Flow> read_flows(Reader& layer, const sim::ProcessConfig& process,
-                                      const std::filesystem::path& base,
-                                      CompositionReader& compose, size_t index);
+/// flows are handed to `compose` (another layer's field, set by the renderer). `uniform`, when
+/// given, receives the velocities of the uniform terms.
+std::shared_ptr<sim::Flow> read_flows(
+    Reader& layer, const sim::ProcessConfig& process, const std::filesystem::path& base,
+    CompositionReader& compose, size_t index,
+    std::vector<std::pair<numeric::Keyframed, numeric::Keyframed>>* uniform = nullptr);
 /// The velocity of a `type = "uniform"` flow table: `velocity = [vx, vy]` or keyframed `vx`,
 /// `vy` (texture units per second; absent: 0).
 std::pair<numeric::Keyframed, numeric::Keyframed> read_uniform_velocity(Reader& flow);

@@ -163,6 +163,10 @@ struct LayerConfig {
     numeric::Keyframed mean = 0.0;      ///< constant added to the layer
     numeric::Keyframed gain = 1.0;      ///< amplitude scale
     std::shared_ptr<sim::Flow> flow;  ///< null: no motion
+    /// The velocities (vx, vy in texture units per second, keyframed) of the uniform terms among
+    /// the layer's [[layer.flow]] tables: they carry the whole layer rigidly, which the analysis'
+    /// time correlation through a window follows (docs/stationarity.md); other terms are not in it.
+    std::vector<std::pair<numeric::Keyframed, numeric::Keyframed>> uniform_flows;
     /// Distribution shaping g = F_y^-1(F_x(.)) of the layer's values (Lewis 1986 §4); null:
     /// none. Built with F_x per marginal_cdf at t = 0; the Renderer rebuilds it per frame when
     /// marginal_keys or the unshaped layer's law vary in time.
