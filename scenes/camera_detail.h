@@ -3,6 +3,7 @@
 // Cameras and orientation fields in scene files, and the camera-dependent part of rendering a
 // layer (internal to impulse::scenes).
 
+#include <array>
 #include <filesystem>
 #include <functional>
 #include <map>
@@ -38,8 +39,14 @@ void read_sea(Reader& sea, CameraConfig& c, int width, int height);
 /// below the deck, at pitch -pitch, with no sea of its own.
 CameraConfig mirror_camera(const CameraConfig& c);
 
+/// The mirror camera's picture size for a frame of width x height: sea.mirror_resolution of the
+/// height rounded up, at least mirror_min_height rows and at most the frame's, and at least as
+/// wide as the frame's view (apply_sea scales to it).
+std::array<int, 2> mirror_size(const SeaConfig& sea, int width, int height);
+
 /// Replaces the pixels of `field` below `camera`'s horizon by the sea: the mirror camera's
-/// field `mirror` looked up along each pixel's ray reflected at the wave normal, as
+/// field `mirror` (of any size from mirror_size: the same fov, so scaled about its centre)
+/// looked up bilinearly along each pixel's ray reflected at the wave normal, as
 /// mean + F (mirror - mean), F the Schlick reflectance. Deterministic (per pixel, + - * / sqrt
 /// sin cos, rows in parallel).
 void apply_sea(const render::PerspectiveCamera& camera, const SeaConfig& sea, double filter_px,

@@ -326,6 +326,8 @@ Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
     if (S.scene.camera.sea.enabled) {
         Scene m = S.scene;
         m.camera = detail::mirror_camera(S.scene.camera);
+        const auto size = detail::mirror_size(S.scene.camera.sea, m.output.width, m.output.height);
+        m.output.width = size[0], m.output.height = size[1];
         m.transform = output::FieldTransform{};  // applied once, to the sea and sky together
         S.mirror = std::make_unique<Renderer>(std::move(m));
     }

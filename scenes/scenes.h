@@ -45,6 +45,12 @@ struct SeaConfig {
     double wavelength = 6.0;    ///< longest wave, texture units, > 0; 8 waves down to 0.08 of it
     double wind_deg = 0.0;      ///< direction the waves travel, degrees on the plane (as heading)
     float color[3] = {0.02f, 0.09f, 0.15f};  ///< the water's colour where it reflects little
+    /// The mirror camera's picture: its height as a fraction of the frame's, in [1/8, 1], but
+    /// no fewer rows than mirror_min_height (nor more than the frame's). The reflection is seen
+    /// through waves and a reflectance of 0.02-0.3, so at 1080p half size (a quarter of the
+    /// pixels, looked up bilinearly) does not show; in small frames the mirror's own pixels would.
+    double mirror_resolution = 0.5;
+    int mirror_min_height = 540;  ///< rows, >= 1
 };
 
 /// [camera]: an orthographic (default) or perspective view of the texture plane, and the

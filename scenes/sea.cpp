@@ -92,6 +92,14 @@ float bilinear(const render::Frame& m, double px, double py) {
     return static_cast<float>(top + fy * (bottom - top));
 }
 
+/// The mirror camera's picture and its principal point and scale: a mirror camera of `scale`
+/// times the frame's height has focal length scale f (the same fov), so a ray that the frame's
+/// camera would image at (a, b) from its centre is imaged at (cx + scale a, cy - scale b).
+struct MirrorImage {
+    const render::Frame& frame;
+    double cx, cy, scale;
+};
+
 /// Row j of the sea: every pixel's ray reflected at the wave normal and looked up in `mirror`.
 /// Ray d = f F + a R + b U in the camera's frame (F forward, R right, U up; a, b pixel offsets
 /// from the principal point): it meets the sea at horizontal distance depth / (-d_z) * d_h,
@@ -102,7 +110,7 @@ float bilinear(const render::Frame& m, double px, double py) {
 /// mirror pixel is (a, -b), the pixel mirrored about the centre row.
 void sea_row(const Frame3& g, const render::PerspectiveCamera& cam, const SeaConfig& sea,
              const std::array<Wave, kWaves>& waves, double filter_px, double t, double mean,
-             const render::Frame& mirror, int j, float* row) {
+             const MirrorImage& mirror, int j, float* row) {
     const double b = g.cy - (j + 0.5);
     // d in (forward-horizontal, right, up) components, before normalising.
     const double dF = g.f * g.cp - b * g.sp, dZ = g.f * g.sp + b * g.cp;
@@ -147,7 +155,8 @@ void sea_row(const Frame3& g, const render::PerspectiveCamera& cam, const SeaCon
         float m = static_cast<float>(mean);
         if (wF > 0.0) {
             const double mu = g.f * r1 / wF, mv = g.f * (r0 * g.sp + r2 * g.cp) / wF;
-            m = bilinear(mirror, g.cx + mu, g.cy - mv);
+            m = bilinear(mirror.frame, mirror.cx + mirror.scale * mu,
+                         mirror.cy - mirror.scale * mv);
         }
         row[i] = static_cast<float>(mean + F * (m - mean));
     }
@@ -193,8 +202,21 @@ void read_sea(Reader& r, CameraConfig& c, int width, int height) {
             r.fail(nullptr, "sea", m.str());
         }
     }
+    s.mirror_resolution = r.number(
+        "mirror_resolution", s.mirror_resolution, [](double v) { return v >= 0.125 && v <= 1.0; },
+        "a fraction in [0.125, 1] of the frame's size");
+    s.mirror_min_height =
+        static_cast<int>(r.integer("mirror_min_height", s.mirror_min_height, 1, 32768));
     (void)width, (void)height;
     r.finish();
+}
+
+std::array<int, 2> mirror_size(const SeaConfig& sea, int width, int height) {
+    // Rounded up, and as wide as the frame's view at that height (the same rays at the edges).
+    const int scaled = int(std::ceil(sea.mirror_resolution * height - 1e-9));
+    const int h = std::clamp(std::max(scaled, sea.mirror_min_height), 1, height);
+    const int w = std::max(1, int(std::ceil(double(width) * h / height - 1e-9)));
+    return {w, h};
 }
 
 CameraConfig mirror_camera(const CameraConfig& c) {
@@ -212,8 +234,10 @@ void apply_sea(const render::PerspectiveCamera& camera, const SeaConfig& sea, do
     // Rows from the first below the horizon: b < -f tan p, with b = cy - (j + 0.5).
     const double horizon = g.cy + g.f * g.sp / g.cp - 0.5;
     const int first = std::clamp(int(std::floor(horizon)), 0, field.height);
+    const MirrorImage image{mirror, 0.5 * mirror.width, 0.5 * mirror.height,
+                            double(mirror.height) / camera.height};
     tbb::parallel_for(first, field.height, [&](int j) {
-        sea_row(g, camera, sea, waves, filter_px, t_s, mean, mirror, j,
+        sea_row(g, camera, sea, waves, filter_px, t_s, mean, image, j,
                 field.data.data() + size_t(j) * field.width);
     });
 }
