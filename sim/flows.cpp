@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "sim/curl_detail.h"
+#include "sim/lattice.h"
 #include "sim/layout.h"
 #include "numeric/rng.h"
 #include "sim/sim.h"
@@ -202,9 +203,7 @@ public:
     }
 
     /// Nodes of the lattice that covers `region` (scale / 8 apart, the stencil's border).
-    double lattice_nodes(const Box& region) const {
-        return ((region.x1 - region.x0) / m_hx + 6.0) * ((region.y1 - region.y0) / m_hy + 6.0);
-    }
+    double lattice_nodes(const Box& region) const { return detail::lattice_nodes(region, m_hx, m_hy); }
 
     double cache_bytes(const Box& region) const override {
         // 8 bytes a node and ~4 for the cells' impulses generated to fill it; a rebuild for a

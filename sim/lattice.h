@@ -20,6 +20,12 @@
 
 namespace impulse::sim::detail {
 
+/// Nodes of a lattice of spacing (hx, hy) covering `region` with a bicubic stencil's border
+/// (the count the potential lattices allocate and the memory budget counts).
+inline double lattice_nodes(const Box& region, double hx, double hy) {
+    return ((region.x1 - region.x0) / hx + 6.0) * ((region.y1 - region.y0) / hy + 6.0);
+}
+
 using numeric::catmull_rom;
 
 /// The gradient and Laplacian of the interpolated potential at a point.
@@ -43,8 +49,7 @@ public:
     /// Bytes prepare(region) allocates: 8 a node over the region grown by a quarter on every
     /// side (1.5^2), with the stencil's border.
     double cache_bytes(const Box& region) const {
-        return 2.25 * 8.0 * ((region.x1 - region.x0) / m_hx + 6.0) *
-               ((region.y1 - region.y0) / m_hy + 6.0);
+        return 2.25 * 8.0 * lattice_nodes(region, m_hx, m_hy);
     }
 
     /// Caches the nodes an evaluation anywhere in `region` reads (grown by a quarter on every
