@@ -615,7 +615,10 @@ int run_info(const InfoOptions& opt) {
                         std::string(kernels::to_string(l.marginal->target().params().type)).c_str(),
                         std::string(kernels::kSourceCdfNames[size_t(l.marginal_cdf)]).c_str());
     }
-    std::printf("impulses   ~%.3g per frame, ~%.0f MiB\n", r.estimated_impulses(), r.estimated_memory_mib());
+    std::printf("impulses   ~%.3g per frame, ~%.0f MiB", r.estimated_impulses(), r.estimated_memory_mib());
+    if (const double steps = r.estimated_flow_steps(); steps > 0)
+        std::printf(", ~%.3g flow steps for the first frame", steps);
+    std::printf("\n");
     return 0;
 }
 

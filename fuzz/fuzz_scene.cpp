@@ -9,8 +9,12 @@
 // refused with BudgetError by the Renderer before any work (scenes/renderer.cpp), so an input
 // cannot buy a long run with a large size or density. The memory limit also bounds the caches a
 // flow builds before the first frame (a curl-noise or stream-function potential lattice, a node
-// every scale / 8 over the region the impulses move in: 16 MiB is ~600 thousand nodes); a
-// mutated curl scale used to build lattices of up to 1e8 nodes, seconds under the sanitizers.
+// every scale / 8 over the region the impulses move in: 8 MiB is ~300 thousand nodes; a mutated
+// curl scale used to build lattices of up to 1e8 nodes, seconds under the sanitizers) and a
+// designed kernel's spectral grids (47 bytes a node: 8 MiB fits 256^2, not 512^2; a ridges-like
+// design at 2048^2 took 10-14 s). The flow-step limit bounds the walk that places a flowing
+// scene's first-frame impulses (each moved from its birth, ~3.5 us a step under the sanitizers:
+// 50 000 steps is ~0.2 s; a clouds-like scene needs 3e7).
 // Keep it at >= 100 executions a second.
 #include <cstddef>
 #include <cstdint>
@@ -28,8 +32,9 @@ namespace {
 const std::vector<std::string> kBudget = {
     "output.size=[64, 48]",
     "limits.max_impulses=20000",
-    "limits.max_memory_mib=16",
+    "limits.max_memory_mib=8",
     "limits.max_pixel_evaluations=2000000",
+    "limits.max_flow_steps=50000",
 };
 
 /// Whether rendering fits the budget beyond what the limits bound: an anti-aliased camera

@@ -592,6 +592,16 @@ void report_grid_spectrum(DesignReport& rep, numeric::RealFft2d& fwd,
     rep.spectrum_error = den2 > 0 ? std::sqrt(num2 / den2) : 0.0;
 }
 
+/// Refuses (BudgetError) an N x N design grid beyond `max_bytes` (0: no bound), before any of it
+/// is allocated: a narrow lobe needs a long kernel and so a large grid (up to 2048^2, ~190 MiB).
+void require_design_budget(const Spectrum& sp, int N, double max_bytes) {
+    if (max_bytes <= 0.0 || grid_design_bytes(N) <= max_bytes) return;
+    constexpr double kMiB = 1024.0 * 1024.0;
+    throw BudgetError(sp.name + ": the design needs a " + std::to_string(N) + "^2 grid (" +
+                      num(std::ceil(grid_design_bytes(N) / kMiB)) +
+                      " MiB), over the budget of " + num(max_bytes / kMiB) + " MiB");
+}
+
 DesignedKernel design_grid(const Spectrum& sp, const DesignOptions& o) {
     const double K = o.nyquist, kp = (1.0 - o.rolloff) * K;
     // Grid spacing 1/(4K): the samples carry frequencies up to 2K, twice the designed band, so
@@ -609,6 +619,7 @@ DesignedKernel design_grid(const Spectrum& sp, const DesignOptions& o) {
                          std::to_string(kMaxN) + "^2 at nyquist = " + num(K) + ")");
     bool checked = false;
     for (;;) {
+        require_design_budget(sp, N, o.max_bytes);
         const double dk = 1.0 / (N * d);
         numeric::RealFft2d inv(N, N, numeric::FftPlans::Inverse);
         const std::vector<double> target = grid_amplitude(sp, K, kp, N, d, !checked, inv);
@@ -1101,12 +1112,15 @@ void validate(const DesignOptions& o) {
     require(o.energy > 0 && o.energy < 1, "energy", o.energy, "a fraction in (0, 1), e.g. 0.99");
     require(o.radius >= 0, "radius", o.radius, "a radius > 0 (texture units)");
     require(o.max_radius > 0, "max_radius", o.max_radius, "a radius > 0");
+    require(o.max_bytes >= 0, "max_bytes", o.max_bytes, "a size >= 0 (0: no bound)");
     if (o.dims != 2 && o.dims != 3)
         throw ValueError("dims = " + std::to_string(o.dims) + ": expected 2 or 3");
     if (o.radius > o.max_radius)
         throw ValueError("radius = " + num(o.radius) +
                          ": expected <= max_radius = " + num(o.max_radius));
 }
+
+double grid_design_bytes(int N) { return 47.0 * double(N) * double(N); }
 
 DesignedKernel kernel_from_spectrum(const Spectrum& spectrum, const DesignOptions& options) {
     validate(options);

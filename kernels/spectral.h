@@ -189,6 +189,10 @@ struct DesignOptions {
     DesignWindow window = DesignWindow::Hann;
     /// Refuse kernels needing a larger radius (texture units).
     double max_radius = 1024.0;
+    /// > 0: refuse (BudgetError) an angle-dependent design whose working arrays would take more
+    /// bytes (grid_design_bytes(N) for its N x N FFT grid; a scene's limits.max_memory_mib).
+    /// 0: no bound beyond the largest grid.
+    double max_bytes = 0.0;
     /// 2: a kernel of the plane, S a 2-D density (int S d^2k = R(0)). 3: a radial kernel of
     /// space for solid noise (synth/solid.h), S a 3-D density (int S d^3k = R(0)), designed by the
     /// 3-D radial transform h(r) = (2 / r) int_0^nyquist sqrt(S) T sin(2 pi k r) k dk; the
@@ -230,6 +234,12 @@ struct DesignedKernel {
 
 /// Throws ValueError naming the first invalid option.
 void validate(const DesignOptions& options);
+
+/// Peak bytes an angle-dependent design holds on an N x N grid: two real FFTs (the inverse that
+/// makes the kernel, the forward that reports its spectrum; N^2 reals and N (N/2 + 1) complex
+/// values each, 16 N^2 bytes), the half-plane target (4 N^2), the kernel h (8 N^2) and, on the
+/// first grid, the pass-band samples checked for negative S (about 3 N^2): 47 N^2.
+double grid_design_bytes(int N);
 
 /// Kernel whose |H|^2 is S (Lewis 1986 §3): h = F^-1[sqrt(S) T(k)], T the roll-off. Isotropic S:
 /// radial profile by the inverse Hankel transform h(r) = 2 pi int_0^nyquist sqrt(S) T J0(2 pi

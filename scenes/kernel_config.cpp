@@ -212,6 +212,10 @@ kernels::DesignedKernel read_design(Reader& r, bool acf, const fs::path& base,
     } catch (const Error& e) {
         const std::string prefix =
             source == "expression" ? "expression \"" + r.string("expression", "") + "\"" : "";
+        if (dynamic_cast<const BudgetError*>(&e))
+            r.fail(sn, source,
+                   detail_of(e, prefix) +
+                       " (limits.max_memory_mib; lower nyquist or energy, or raise the limit)");
         // Radius problems belong to the radius or energy key when one was given.
         const std::string what = e.what();
         if (what.find("radius") != std::string::npos && (radius_node || energy_node))
@@ -227,7 +231,8 @@ namespace {
 /// A designed kernel: `spectrum`, `autocorrelation` or `exemplar` (kernels/spectral.h). Library
 /// errors (ValueError, IoError) are reported at the key whose value caused them.
 kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Reader& layer,
-                                           const fs::path& base, std::vector<KernelKey>& keys) {
+                                           const fs::path& base, std::vector<KernelKey>& keys,
+                                           double max_memory_mib) {
     namespace K = kernels;
     const std::string tname(type);
     auto path_of = [&](const toml::node* n, const std::string& rel) {
@@ -285,6 +290,7 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
         K::DesignOptions o;
         o.window = window;
         o.radius = radius;
+        o.max_bytes = max_memory_mib * 1024.0 * 1024.0;
         K::DesignedKernel d = read_design(r, type == "autocorrelation", base, o);
         // Scale so the layer's spectrum is S itself: lambda E[a^2] |H|^2 = S with this layer's
         // lambda = density / (pi R^2) (the aspect squeeze changes lambda and int h^2 by inverse
@@ -336,9 +342,11 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
 
 /// The [layer.kernel] table; keyframed fields go to `keys` (their values at t = 0 into the
 /// result). `pyramid`: the camera anti-aliases through a kernel pyramid, built once per layer,
-/// so only the orientation (a rotation of every impulse) may vary in time.
+/// so only the orientation (a rotation of every impulse) may vary in time. A design's working
+/// memory is held to `max_memory_mib` (limits.max_memory_mib).
 kernels::KernelParams read_kernel(std::optional<Reader> r, Reader& layer, const fs::path& base,
-                                  std::vector<KernelKey>& keys, bool pyramid) {
+                                  std::vector<KernelKey>& keys, bool pyramid,
+                                  double max_memory_mib) {
     namespace K = kernels;
     K::KernelParams k;
     if (!r) return k;
@@ -350,7 +358,7 @@ kernels::KernelParams read_kernel(std::optional<Reader> r, Reader& layer, const 
         if (!v.is_constant()) keys.push_back({member, v});
     };
     if (type >= K::kKernelTypeNames.size()) {
-        k = read_designed_kernel(*r, kSceneKernelTypes[type], layer, base, keys);
+        k = read_designed_kernel(*r, kSceneKernelTypes[type], layer, base, keys, max_memory_mib);
     } else {
         k.type = static_cast<K::KernelType>(type);
         field("radius", &K::KernelParams::radius, k.radius, kPositive,

@@ -212,6 +212,8 @@ void read_limits(Reader& l, Limits& limits) {
     limits.max_memory_mib = l.number("max_memory_mib", limits.max_memory_mib, kPositive, "MiB > 0");
     limits.max_pixel_evaluations = l.number(
         "max_pixel_evaluations", limits.max_pixel_evaluations, kPositive, "a count > 0");
+    limits.max_flow_steps =
+        l.number("max_flow_steps", limits.max_flow_steps, kPositive, "a count > 0");
     l.finish();
 }
 
@@ -238,7 +240,8 @@ void read_impulse_layer(Reader& r, size_t i, uint64_t global_seed, const fs::pat
                         const Scene& s, detail::CompositionReader& compose,
                         std::vector<LayerConfig>& twins, LayerConfig& L) {
     const bool pyramid = s.camera.type == CameraConfig::Type::Perspective || s.camera.antialiased();
-    L.kernel = read_kernel(r.table("kernel"), r, base, L.kernel_keys, pyramid);
+    L.kernel = read_kernel(r.table("kernel"), r, base, L.kernel_keys, pyramid,
+                           s.limits.max_memory_mib);
     if (!r.has("kernel")) r.node("kernel");
     sim::ProcessConfig& p = L.process;
     p.layer = static_cast<uint32_t>(i);

@@ -31,10 +31,11 @@ uint64_t mix_seed(uint64_t global, uint64_t layer);
 
 /// The [layer.kernel] table; keyframed fields go to `keys` (their values at t = 0 into the
 /// result). `pyramid`: the camera anti-aliases through a kernel pyramid, built once per layer,
-/// so only the orientation (a rotation of every impulse) may vary in time.
+/// so only the orientation (a rotation of every impulse) may vary in time. A design's working
+/// memory is held to `max_memory_mib` (limits.max_memory_mib).
 kernels::KernelParams read_kernel(std::optional<Reader> r, Reader& layer,
                                   const std::filesystem::path& base, std::vector<KernelKey>& keys,
-                                  bool pyramid);
+                                  bool pyramid, double max_memory_mib);
 /// The design keys of a `spectrum` or `autocorrelation` kernel in table `r` (energy, nyquist,
 /// rolloff, max_radius; one of model, expression, table and the model's parameters) and the
 /// design in o.dims dimensions (2: [layer.kernel]; 3: [layer.solid]); o.radius and o.window are

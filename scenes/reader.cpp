@@ -110,6 +110,7 @@ std::string structural_reason(std::string_view path) {
         {"limits.max_impulses", "a limit is checked once, when the scene loads"},
         {"limits.max_memory_mib", "a limit is checked once, when the scene loads"},
         {"limits.max_pixel_evaluations", "a limit holds for the whole render"},
+        {"limits.max_flow_steps", "a limit is checked once, when the scene loads"},
         {"camera.center", "a pair is fixed: keyframe center_x and center_y"},
         {"camera.position", "a pair is fixed: keyframe position_x and position_y"},
         {"camera.filter", "the anti-aliasing pyramid and its fade are set up once per scene"},

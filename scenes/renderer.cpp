@@ -256,7 +256,31 @@ struct Renderer::State {
     /// The texture-space boxes layer i's impulses are asked for at most over the animation
     /// (the widest view, a warp's reach): what the budget estimates measure.
     numeric::Region estimate_region(size_t i) const;
+    /// The sum of `f(simulator, region)` over what a frame simulates: each rendered impulse
+    /// layer over its estimate region, and the orientation source it samples where its
+    /// impulses are.
+    template <class F>
+    double sum_simulated(F f) const;
 };
+
+template <class F>
+double Renderer::State::sum_simulated(F f) const {
+    double n = 0.0;
+    for (size_t i = 0; i < sims.size(); ++i) {
+        // A hidden layer no frame reads (a flow's stream function only) is never rendered; a
+        // source layer draws no impulses.
+        if (!rendered[i] || scene.layers[i].source) continue;
+        const numeric::Region box = estimate_region(i);
+        const Composition& c = scene.layers[i].compose;
+        n += in_layer(scene, i, [&] { return f(sims[i], box); });
+        if (c.orientation && !scene.layers[c.orientation->source].source) {
+            const size_t j = c.orientation->source;
+            const numeric::Region near = box.expanded(scene.layers[i].kernel.radius);
+            n += in_layer(scene, j, [&] { return f(sims[j], near); });
+        }
+    }
+    return n;
+}
 
 numeric::Region Renderer::State::estimate_region(size_t i) const {
     // The largest view over the animation bounds the birth region (zoom keys are extrema).
@@ -340,6 +364,15 @@ Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
           << " (limits.max_impulses; lower density or size, or raise the limit)";
         throw BudgetError(s.str());
     }
+    const double steps = estimated_flow_steps();
+    if (steps > S.scene.limits.max_flow_steps) {
+        std::ostringstream s;
+        s << S.scene.path << ": the first frame needs an estimated " << steps
+          << " flow steps (each impulse moved from its birth), over the budget of "
+          << S.scene.limits.max_flow_steps
+          << " (limits.max_flow_steps; lower lifetime, fps, substeps or density, or raise the limit)";
+        throw BudgetError(s.str());
+    }
     const double mib = estimated_memory_mib();
     if (mib > S.scene.limits.max_memory_mib) {
         std::ostringstream s;
@@ -363,28 +396,15 @@ const Scene& Renderer::scene() const { return m_state->scene; }
 const sim::Impulses& Renderer::impulses(size_t layer) const { return m_state->impulses.at(layer); }
 
 double Renderer::estimated_impulses() const {
-    const State& S = *m_state;
-    double n = 0.0;
-    for (size_t i = 0; i < S.sims.size(); ++i) {
-        // A hidden layer no frame reads (a flow's stream function only) is never rendered; a
-        // source layer draws no impulses.
-        if (!S.rendered[i] || S.scene.layers[i].source) continue;
-        const numeric::Region box = S.estimate_region(i);
-        const Composition& c = S.scene.layers[i].compose;
-        n += in_layer(S.scene, i, [&] {
-            return sim::expected_impulses(S.sims[i].config(), S.sims[i].birth_region(box));
-        });
-        // The orientation source sampled where this layer's impulses are.
-        if (c.orientation && !S.scene.layers[c.orientation->source].source) {
-            const size_t j = c.orientation->source;
-            n += in_layer(S.scene, j, [&] {
-                return sim::expected_impulses(
-                    S.sims[j].config(),
-                    S.sims[j].birth_region(box.expanded(S.scene.layers[i].kernel.radius)));
-            });
-        }
-    }
-    return n;
+    return m_state->sum_simulated([](const sim::LayerSimulator& sim, const numeric::Region& r) {
+        return sim::expected_impulses(sim.config(), sim.birth_region(r));
+    });
+}
+
+double Renderer::estimated_flow_steps() const {
+    return m_state->sum_simulated([](const sim::LayerSimulator& sim, const numeric::Region& r) {
+        return sim.first_frame_steps(r);
+    });
 }
 
 double Renderer::estimated_memory_mib() const {

@@ -94,6 +94,9 @@ struct Limits {
     /// Pixel evaluations of a perspective frame's near field, per layer (the sum of its
     /// impulses' pixel boxes), checked on every frame before they are evaluated.
     double max_pixel_evaluations = 1e10;
+    /// Flow integration steps of the first frame, all layers (Renderer::estimated_flow_steps):
+    /// each impulse is moved from its birth, so a long lifetime at a high rate is slow to start.
+    double max_flow_steps = 1e10;
 };
 
 /// How a layer enters the picture: its blend onto the result of the layers before it
@@ -330,6 +333,9 @@ public:
     /// Estimated live impulses per frame over all layers, and peak memory in MiB.
     double estimated_impulses() const;
     double estimated_memory_mib() const;
+    /// Estimated flow integration steps of the first frame over all layers (each impulse moved
+    /// from its birth: LayerSimulator::first_frame_steps); limits.max_flow_steps bounds it.
+    double estimated_flow_steps() const;
     /// Value mapping for display: output.range, else the transform's range, else mean +- 3
     /// standard deviations; with keyframed layers the widest such range over the output's
     /// frames (scene_theory at the first and last frame, every key time inside, one lifetime

@@ -412,6 +412,11 @@ public:
     /// Bytes the flow's caches may hold for `view` (Flow::cache_bytes over the region
     /// impulses_at prepares the flow for); 0 for a still process or no flow.
     double flow_cache_bytes(const Region& view) const;
+    /// Flow integration steps the first frame of `view` takes: each impulse held for its birth
+    /// region (expected_impulses) is integrated from its birth, on average lifetime / 2 of
+    /// fps * substeps steps a second, plus one frame; 0 for a still process or no flow. (Later
+    /// frames move each impulse by one frame: `substeps` steps.)
+    double first_frame_steps(const Region& view) const;
     const ProcessConfig& config() const;
     /// Forget the cached state (the next call integrates from birth).
     void reset();

@@ -189,6 +189,14 @@ double LayerSimulator::flow_cache_bytes(const Region& view) const {
     // The region impulses_at prepares the flow for.
     return S.flow->cache_bytes(birth_region(view).bounds().expanded(S.travel(view.bounds()) + 1.0));
 }
+double LayerSimulator::first_frame_steps(const Region& view) const {
+    const State& S = *m_state;
+    if (!S.flow || S.config.lifetime_s <= 0 || view.empty()) return 0.0;
+    const double steps_per_s = 1.0 / S.dt;
+    return expected_impulses(S.config, birth_region(view)) *
+           (0.5 * S.config.lifetime_s + 1.0 / S.timing.fps) * steps_per_s;
+}
+
 Box LayerSimulator::birth_region(const Box& view) const {
     return m_state->birth_region(view);
 }

@@ -705,6 +705,43 @@ TEST_CASE("composition: a curl flow's potential lattice counts in the memory bud
     CHECK(std::isfinite(f.data[0]));
 }
 
+namespace {
+std::string flow_scene(const std::string& flow, int substeps, double max_flow_steps) {
+    std::ostringstream s;
+    s << "[output]\nsize = [64, 48]\nframes = 2\nfps = 24\n[limits]\nmax_flow_steps = "
+      << max_flow_steps << "\n[[layer]]\nseed = 3\nlifetime = 2.0\nsubsteps = " << substeps
+      << "\n[layer.kernel]\nradius = 12.0\n" << flow;
+    return s.str();
+}
+double estimated_steps(const std::string& flow, int substeps) {
+    return scenes::Renderer(scenes::load_scene_string(flow_scene(flow, substeps, 1e10), "f.toml"))
+        .estimated_flow_steps();
+}
+}  // namespace
+
+TEST_CASE("composition: a first frame's flow steps are held to limits.max_flow_steps",
+          "[scenes][compose][errors]") {
+    // Every live impulse is moved from its birth: ~(lifetime / 2) fps substeps steps each.
+    const std::string curl = "[[layer.flow]]\ntype = \"curl\"\nscale = 40.0\nspeed = 20.0\n";
+    const double one = estimated_steps(curl, 1);
+    CHECK(estimated_steps(curl, 2) == Approx(2.0 * one).epsilon(1e-12));  // steps, not impulses
+    CHECK(estimated_steps("", 1) == 0.0);                                  // no flow: no steps
+    const double n = scenes::Renderer(scenes::load_scene_string(flow_scene(curl, 1, 1e10), "f.toml"))
+                         .estimated_impulses();
+    CHECK(one == Approx(n * (0.5 * 2.0 + 1.0 / 24.0) * 24.0).epsilon(1e-12));
+    try {
+        scenes::Renderer r(scenes::load_scene_string(flow_scene(curl, 1, 0.999 * one), "f.toml"));
+        FAIL("no error");
+    } catch (const BudgetError& e) {
+        CHECK_THAT(std::string(e.what()), Contains("f.toml:") && Contains("flow steps") &&
+                                              Contains("limits.max_flow_steps"));
+    }
+    scenes::Renderer fine(scenes::load_scene_string(flow_scene(curl, 1, 1.001 * one), "f.toml"));
+    Frame f;
+    fine.render(1, f);
+    CHECK(std::isfinite(f.data[0]));
+}
+
 TEST_CASE("composition: a warp beyond the memory budget is refused with its size",
           "[scenes][compose][errors]") {
     const std::string text = warp_scene("warp = { source = [\"wx\", \"wy\"], amount = 2000.0 }") +
