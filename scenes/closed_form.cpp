@@ -616,14 +616,17 @@ double gaussian_lag(const kernels::WindowCovariance& wc, const Scene& scene, con
 
 /// Cov(V_t, V_{t+d}) of the frame variances at lags d = 0..n-1 (docs/stationarity.md): the
 /// Gaussian part at the lags of F by WindowCovariance plus the population part of S, linear in
-/// between. `gaussian0` receives the Gaussian part at d = 0.
+/// between. `gaussian0` receives the Gaussian part at d = 0, `frame_mean_var` Var(frame mean)
+/// for a window the field does not wrap around (1/N^2 sum_ij C_ij).
 std::vector<double> frame_variance_covariance(const LayerSums& S, const Scene& scene,
                                               const FrameLags& F, const AnalysisResult& R,
-                                              double zoom, double& gaussian0) {
+                                              double zoom, double& gaussian0,
+                                              double& frame_mean_var) {
     const int w = R.width, h = R.height;
     kernels::WindowCovariance wc(w, h, S.padded_rows, S.padded_cols);
     for (const auto& grid : S.padded) wc.add(grid);
     wc.add(std::vector<double>(size_t(S.padded_rows) * S.padded_cols, S.quant));
+    frame_mean_var = wc.frame_mean_variance();
     const int reach = covariance_reach(scene, zoom);
     std::vector<double> at(F.lags.size());
     tbb::parallel_for(size_t(0), F.lags.size(), [&](size_t i) {
@@ -650,15 +653,16 @@ double variance_of_mean(const std::vector<double>& cov) {
 }
 
 /// Mean and variance against their sampling errors. Var(frame mean) = S(0) / N (the DC bin of
-/// the aliased spectrum); the sample variance over N pixels has the Gaussian field's
+/// the aliased spectrum) for frames periodic over the window, else `frame_mean_var`
+/// ((1/N^2) sum_ij C_ij: docs/stationarity.md); the sample variance over N pixels has the Gaussian field's
 /// 2 ||P C P||^2 / N^2 plus the fourth cumulant lambda E[a^4 w^4] int A(u)^2 du of shot noise
 /// (kernels/window_variance.h; (int h^2)^2 / N for kernels small against the frame), and over the
 /// frames the covariance of frame_variance_covariance.
 void compare_one_point(TheoryComparison& T, const AnalysisResult& R, const Theory& th,
                        const LayerSums& S, const TimeCorrelation& tc, const DisplayEffects& d,
-                       const std::vector<double>& cov, double gaussian) {
+                       const std::vector<double>& cov, double gaussian, double frame_mean_var) {
     const double N = double(R.width) * R.height;
-    T.sd_frame_mean = std::sqrt(S.grid[0] / N);
+    T.sd_frame_mean = std::sqrt(R.periodogram.periodic ? S.grid[0] / N : frame_mean_var);
     T.sd_mean = T.sd_frame_mean / std::sqrt(tc.n_eff_mean);
     T.mean = th.mean + (T.mapped ? std::sqrt(th.variance) * d.cens.mean : 0.0);
     T.frame_variance_gaussian = gaussian;
@@ -669,6 +673,7 @@ void compare_one_point(TheoryComparison& T, const AnalysisResult& R, const Theor
     const double field_var = T.mapped ? th.variance * d.cens.variance : th.variance;
     // E[pooled sample variance] = sigma^2 - Var(pooled mean).
     T.variance = field_var + d.quant - T.sd_mean * T.sd_mean;
+    T.expected_frame_variance = field_var + d.quant - T.sd_frame_mean * T.sd_frame_mean;
     // Where the theory fixes a frame's mean exactly (S(0) = 0: a frame of whole fbm tiles at a
     // whole number of pixels per sample) the frame agrees to the rounding of its float values,
     // taken as 1e-6 of the sd (each value is rounded to 2^-24 of itself).
@@ -746,9 +751,10 @@ TheoryComparison compare_with_theory(const Scene& scene, const std::string& path
     const double g2 = d.cens.gain * d.cens.gain;
     const FrameLags F = frame_lags(scene, R, T.zoom);
     LayerSums S = sum_layers(scene, R, T.zoom, g2, d.quant, F);
-    double gaussian = 0.0;
-    const std::vector<double> cov = frame_variance_covariance(S, scene, F, R, T.zoom, gaussian);
-    compare_one_point(T, R, th, S, tc, d, cov, gaussian);
+    double gaussian = 0.0, frame_mean_var = 0.0;
+    const std::vector<double> cov =
+        frame_variance_covariance(S, scene, F, R, T.zoom, gaussian, frame_mean_var);
+    compare_one_point(T, R, th, S, tc, d, cov, gaussian, frame_mean_var);
     if (zoom_constant) {
         // Autocovariance rings: Campbell's theorem with h * h~, less Var(frame mean) (every frame
         // is measured about its own mean), plus the white quantisation noise at lag 0.
