@@ -135,6 +135,7 @@ struct LevelDrift {
     int blocks = 0, dof = 0;
     double chi2 = 0.0;
     double z_blocks = 0.0;  ///< chi2 / dof as an upper standard normal deviate (one-sided test)
+    double block_mean_variance = 0.0;  ///< Var of one block's mean under C
     /// The linear change over the series (slope (n - 1)) the trend test detects with the given
     /// power at two-sided level alpha.
     double detectable_change = 0.0;

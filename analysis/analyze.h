@@ -61,6 +61,7 @@ struct TheoryComparison {
     double mean = 0.0;               ///< expected sample mean (display censoring applied)
     double variance = 0.0;           ///< expected sample variance (less Var(mean), + quantisation)
     double sd_frame_mean = 0.0;      ///< sampling sd of one frame's mean
+    double expected_frame_variance = 0.0;  ///< E[V] of one frame (less Var(frame mean))
     double sd_frame_variance = 0.0;  ///< sampling sd of one frame's variance
     double sd_mean = 0.0;            ///< sd of the pooled mean over the frames analysed
     double sd_variance = 0.0;        ///< sd of the pooled variance
@@ -105,6 +106,13 @@ struct Stationarity {
     /// trend's z (two-sided) and the block means' z (one-sided) at family_alpha / 3 each.
     LevelDrift level;
     std::string level_model;  ///< where that covariance comes from
+    std::vector<double> level_covariance;  ///< that covariance C(l) = variance rho(l), l = 0..n-1
+    /// Equivalent degrees of freedom of a block mean of the frame variance, 2 E[V]^2 / Var(block
+    /// mean) (Satterthwaite): below min_block_dof the block means are too far from normal for
+    /// the level tests' z (docs/stationarity.md), which then cannot reject: `level_note` says so.
+    double block_dof = 0.0;
+    double min_block_dof = 0.0;
+    std::string level_note;
     double level_z_limit = 0.0, blocks_z_limit = 0.0;
     double power = 0.8;
     double detectable_drift = 0.0;   ///< relative change of the variance seen with `power`

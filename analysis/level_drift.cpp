@@ -102,6 +102,7 @@ LevelDrift level_drift(std::span<const double> x, double variance, std::span<con
     }
     std::vector<double> pair(static_cast<size_t>(blocks));
     for (int d = 0; d < blocks; ++d) pair[size_t(d)] = block_pair(rho, long(d) * m, m);
+    L.block_mean_variance = pair[0] * variance / double(m * m);
     const size_t k = size_t(blocks - 1);
     const auto cov = [&](size_t a, size_t b) { return pair[a > b ? a - b : b - a]; };
     std::vector<double> A(k * k), y(k);

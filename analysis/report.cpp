@@ -78,10 +78,14 @@ std::string verdict_word(const Stationarity& st) {
 
 std::string stationarity_verdict(const Stationarity& st) {
     const auto& L = st.level;
+    const std::string not_applied =
+        st.level_note.empty() ? "" : " (not applied: block means worth " +
+                                         fmt(st.block_dof, 3) + " < " + fmt(st.min_block_dof, 3) +
+                                         " degrees of freedom)";
     return "level of the frame variance: trend " +
            against("|z|", std::abs(L.z_trend), st.level_z_limit, 2) + ", " +
            std::to_string(L.blocks) + " blocks " + against("z", L.z_blocks, st.blocks_z_limit, 2) +
-           "; spectral drift " + against("max|z|", st.max_abs_z_corrected, st.z_threshold, 2) +
+           not_applied + "; spectral drift " + against("max|z|", st.max_abs_z_corrected, st.z_threshold, 2) +
            " for " + std::to_string(st.drift.z.size()) +
            " annuli; each test at alpha " + fmt(st.family_alpha / 3.0, 2) + ", family " +
            fmt(st.family_alpha, 2) + "; a drift of the variance by " +
@@ -652,6 +656,7 @@ Json stationarity_json(const Stationarity& st) {
                            {"frequency", nums(st.drift.frequency)},
                            {"z", nums(st.drift.z)}};
     j["level"] = {{"model", st.level_model},
+                  {"covariance", nums(st.level_covariance)},
                   {"mean", num(st.level.mean)},
                   {"slope", num(st.level.slope)},
                   {"sd_slope", num(st.level.sd_slope)},
@@ -661,7 +666,10 @@ Json stationarity_json(const Stationarity& st) {
                   {"chi2", num(st.level.chi2)},
                   {"dof", st.level.dof},
                   {"z_blocks", num(st.level.z_blocks)},
-                  {"z_blocks_limit", num(st.blocks_z_limit)}};
+                  {"z_blocks_limit", num(st.blocks_z_limit)},
+                  {"block_dof", num(st.block_dof)},
+                  {"min_block_dof", num(st.min_block_dof)},
+                  {"note", st.level_note}};
     j["family_alpha"] = num(st.family_alpha);
     j["power"] = num(st.power);
     j["detectable_drift"] = num(st.detectable_drift);
@@ -770,6 +778,7 @@ void put_stationarity(std::ostream& o, const Stationarity& st) {
                  ", " + std::to_string(st.level.blocks) + " block means chi2 " +
                  fixed(st.level.chi2, 1) + " on " + std::to_string(st.level.dof) + " dof (z " +
                  fixed(st.level.z_blocks, 2) + "); covariance: " + st.level_model);
+    if (!st.level_note.empty()) put_line(o, "", st.level_note);
 }
 
 /// The scene's closed-form theory beside the measured figures.

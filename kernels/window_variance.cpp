@@ -208,6 +208,25 @@ void WindowCovariance::add(const std::vector<double>& spectrum) {
     m_rows_sum.emplace_back(sums.real(), sums.real() + size_t(m_rows) * m_cols);
 }
 
+double WindowCovariance::frame_mean_variance(std::span<const double> weight) const {
+    // sum_ij C_ij = sum_c sum_{i in window} R_c(x_i), R_c(y) = sum_{j in window} K_c(x_j - y).
+    double sum = 0.0;
+    for (size_t c = 0; c < m_rows_sum.size(); ++c) {
+        const double wc = weight.empty() ? 1.0 : weight[c];
+        if (wc == 0.0) continue;
+        for (int y = 0; y < m_height; ++y)
+            for (int x = 0; x < m_width; ++x) sum += wc * m_rows_sum[c][size_t(y) * m_cols + x];
+    }
+    const double N = double(m_width) * m_height;
+    return sum / (N * N);
+}
+
+double WindowCovariance::pixel_variance() const {
+    double sum = 0.0;
+    for (const auto& K : m_cov) sum += K[0];
+    return sum;
+}
+
 namespace {
 
 /// t mod n for |t| < 2n.

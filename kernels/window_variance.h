@@ -68,6 +68,13 @@ public:
     /// Adds a component from its spectrum on the rows x cols DFT grid (row-major, value^2 px^2).
     void add(const std::vector<double>& spectrum);
     size_t components() const { return m_cov.size(); }
+    /// Var of a frame's mean over the window, (1/N^2) sum_ij C_ij at no shift, C = sum_c
+    /// weight[c] K_c (all components when `weight` is empty): the exact value for a field that
+    /// does not wrap around the window (S(0) / N holds only for frames that are periodic over
+    /// the window; for kernels wide against the window it is far too large).
+    double frame_mean_variance(std::span<const double> weight = {}) const;
+    /// sum_c K_c(0): a pixel's variance.
+    double pixel_variance() const;
     /// 2 ||P C P||_F^2 / N^2 with weight[c] and shift[c] (pixels, integer) per component.
     double gaussian_term(std::span<const double> weight,
                          std::span<const std::array<int, 2>> shift) const;

@@ -401,6 +401,8 @@ struct LayerSums {
     /// each layer's aliased S on a DFT grid padded beyond the window by the covariance's reach
     /// (2 R) and the largest displacement of a layer over the frames (frame_variance_covariance)
     std::vector<std::vector<double>> padded;
+    std::vector<double> padded_impulses;  ///< per padded grid: 1 for an impulse layer, 0 a source
+    double source_dc = 0.0;  ///< the source layers' S(0): their frames tile, so S(0) / N is exact
     int padded_rows = 0, padded_cols = 0;
     double quant = 0.0;        ///< white quantisation noise, new in every frame
     double population = 0.0;   ///< fourth-cumulant term of Var(a frame's sample variance)
@@ -413,11 +415,13 @@ struct LayerSums {
 /// A layer's spectrum on the DFT grid (`ls`) and on the padded grid (`padded_ls`, tabulated for
 /// its size), its annuli and autocovariance, added to S.
 void add_layer_spectrum(const Scene& scene, const LayerSpectrum& ls, const LayerSpectrum& padded_ls,
-                        const AnalysisResult& R, double zoom, double g2, LayerSums& S) {
+                        const AnalysisResult& R, double zoom, double g2, LayerSums& S,
+                        bool layer_is_source = false) {
     const int w = R.width, h = R.height;
     std::vector<double> pg = layer_grid(padded_ls, S.padded_cols, S.padded_rows);
     for (double& v : pg) v *= g2;
     S.padded.push_back(std::move(pg));
+    S.padded_impulses.push_back(layer_is_source ? 0.0 : 1.0);
     std::vector<double> lg = layer_grid(ls, w, h);
     for (size_t i = 0; i < lg.size(); ++i) {
         lg[i] *= g2;
@@ -438,9 +442,11 @@ void add_source_layer(const Scene& scene, const LayerConfig& layer, const Analys
                       double zoom, double g2, LayerSums& S) {
     S.c4.push_back(0.0);
     S.diff_known = false;
+    const double dc = S.grid[0];
     add_layer_spectrum(scene, source_spectrum(scene, layer, zoom, std::max(R.width, R.height)),
                        source_spectrum(scene, layer, zoom, std::max(S.padded_rows, S.padded_cols)),
-                       R, zoom, g2, S);
+                       R, zoom, g2, S, true);
+    S.source_dc += S.grid[0] - dc;
 }
 
 /// The lags (frames) at which the covariance of the frame variances is evaluated: every lag up
@@ -616,14 +622,21 @@ double gaussian_lag(const kernels::WindowCovariance& wc, const Scene& scene, con
 
 /// Cov(V_t, V_{t+d}) of the frame variances at lags d = 0..n-1 (docs/stationarity.md): the
 /// Gaussian part at the lags of F by WindowCovariance plus the population part of S, linear in
-/// between. `gaussian0` receives the Gaussian part at d = 0.
+/// between. `gaussian0` receives the Gaussian part at d = 0, `frame_mean_var` Var(frame mean)
+/// for a window the field does not wrap around (1/N^2 sum_ij C_ij).
 std::vector<double> frame_variance_covariance(const LayerSums& S, const Scene& scene,
                                               const FrameLags& F, const AnalysisResult& R,
-                                              double zoom, double& gaussian0) {
+                                              double zoom, double& gaussian0,
+                                              double& frame_mean_var) {
     const int w = R.width, h = R.height;
     kernels::WindowCovariance wc(w, h, S.padded_rows, S.padded_cols);
     for (const auto& grid : S.padded) wc.add(grid);
     wc.add(std::vector<double>(size_t(S.padded_rows) * S.padded_cols, S.quant));
+    // Impulse layers and the quantisation noise (last) by the window's sum; source layers
+    // (tiles, periodic) by their S(0) / N.
+    std::vector<double> impulses = S.padded_impulses;
+    impulses.push_back(1.0);
+    frame_mean_var = wc.frame_mean_variance(impulses) + S.source_dc / (double(w) * h);
     const int reach = covariance_reach(scene, zoom);
     std::vector<double> at(F.lags.size());
     tbb::parallel_for(size_t(0), F.lags.size(), [&](size_t i) {
@@ -650,15 +663,16 @@ double variance_of_mean(const std::vector<double>& cov) {
 }
 
 /// Mean and variance against their sampling errors. Var(frame mean) = S(0) / N (the DC bin of
-/// the aliased spectrum); the sample variance over N pixels has the Gaussian field's
+/// the aliased spectrum) holds only for frames periodic over the window (source layers' tiles);
+/// `frame_mean_var` has the impulse layers' exact (1/N^2) sum_ij C_ij (docs/stationarity.md)
+/// and the source layers' S(0) / N; the sample variance over N pixels has the Gaussian field's
 /// 2 ||P C P||^2 / N^2 plus the fourth cumulant lambda E[a^4 w^4] int A(u)^2 du of shot noise
 /// (kernels/window_variance.h; (int h^2)^2 / N for kernels small against the frame), and over the
 /// frames the covariance of frame_variance_covariance.
 void compare_one_point(TheoryComparison& T, const AnalysisResult& R, const Theory& th,
                        const LayerSums& S, const TimeCorrelation& tc, const DisplayEffects& d,
-                       const std::vector<double>& cov, double gaussian) {
-    const double N = double(R.width) * R.height;
-    T.sd_frame_mean = std::sqrt(S.grid[0] / N);
+                       const std::vector<double>& cov, double gaussian, double frame_mean_var) {
+    T.sd_frame_mean = std::sqrt(frame_mean_var);
     T.sd_mean = T.sd_frame_mean / std::sqrt(tc.n_eff_mean);
     T.mean = th.mean + (T.mapped ? std::sqrt(th.variance) * d.cens.mean : 0.0);
     T.frame_variance_gaussian = gaussian;
@@ -669,6 +683,7 @@ void compare_one_point(TheoryComparison& T, const AnalysisResult& R, const Theor
     const double field_var = T.mapped ? th.variance * d.cens.variance : th.variance;
     // E[pooled sample variance] = sigma^2 - Var(pooled mean).
     T.variance = field_var + d.quant - T.sd_mean * T.sd_mean;
+    T.expected_frame_variance = field_var + d.quant - T.sd_frame_mean * T.sd_frame_mean;
     // Where the theory fixes a frame's mean exactly (S(0) = 0: a frame of whole fbm tiles at a
     // whole number of pixels per sample) the frame agrees to the rounding of its float values,
     // taken as 1e-6 of the sd (each value is rounded to 2^-24 of itself).
@@ -746,9 +761,10 @@ TheoryComparison compare_with_theory(const Scene& scene, const std::string& path
     const double g2 = d.cens.gain * d.cens.gain;
     const FrameLags F = frame_lags(scene, R, T.zoom);
     LayerSums S = sum_layers(scene, R, T.zoom, g2, d.quant, F);
-    double gaussian = 0.0;
-    const std::vector<double> cov = frame_variance_covariance(S, scene, F, R, T.zoom, gaussian);
-    compare_one_point(T, R, th, S, tc, d, cov, gaussian);
+    double gaussian = 0.0, frame_mean_var = 0.0;
+    const std::vector<double> cov =
+        frame_variance_covariance(S, scene, F, R, T.zoom, gaussian, frame_mean_var);
+    compare_one_point(T, R, th, S, tc, d, cov, gaussian, frame_mean_var);
     if (zoom_constant) {
         // Autocovariance rings: Campbell's theorem with h * h~, less Var(frame mean) (every frame
         // is measured about its own mean), plus the white quantisation noise at lag 0.

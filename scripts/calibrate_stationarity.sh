@@ -47,10 +47,10 @@ import json, sys
 st = json.load(open(sys.argv[1]))["stationarity"]
 lv, sd = st.get("level", {}), st.get("spectral_drift", {})
 print(sys.argv[2], st["verdict"],
-      "z_trend=%.3g/%.3g z_blocks=%.3g/%.3g spectral=%.3g/%.3g detectable=%.3g" % (
+      "z_trend=%.3g/%.3g z_blocks=%.3g/%.3g spectral=%.3g/%.3g detectable=%.3g block_dof=%.3g" % (
           lv.get("z_trend", 0), lv.get("z_trend_limit", 0), lv.get("z_blocks", 0),
           lv.get("z_blocks_limit", 0), sd.get("max_abs_z_corrected", 0), sd.get("threshold", 0),
-          st.get("detectable_drift", 0)))
+          st.get("detectable_drift", 0), lv.get("block_dof", 0)))
 PY
 )
     echo "$line"

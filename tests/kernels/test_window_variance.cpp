@@ -144,15 +144,16 @@ double gaussian_part(const Kernel& k, int w, double lambda) {
     return 2.0 * lambda * lambda * norm / (double(n) * n);
 }
 
-/// Sample variances (1/N normalisation) of `count` w x w frames of random-sign shot noise with
-/// intensity lambda per pixel^2, impulses in the window grown by the kernel's radius.
-std::vector<double> simulated_variances(const Kernel& k, int w, double lambda, int count,
-                                        unsigned seed) {
+/// Means and sample variances (1/N normalisation) of `count` w x w frames of random-sign shot
+/// noise with intensity lambda per pixel^2, impulses in the window grown by the kernel's radius.
+std::vector<std::array<double, 2>> simulated_moments(const Kernel& k, int w, double lambda,
+                                                     int count, unsigned seed) {
     std::mt19937_64 rng(seed);
     const double R = k.radius(), side = w - 1 + 2 * R;
     std::poisson_distribution<int> impulses(lambda * side * side);
     std::uniform_real_distribution<double> position(-R, w - 1 + R);
-    std::vector<double> out, f(size_t(w) * w);
+    std::vector<std::array<double, 2>> out;
+    std::vector<double> f(size_t(w) * w);
     for (int t = 0; t < count; ++t) {
         std::fill(f.begin(), f.end(), 0.0);
         for (int j = impulses(rng); j > 0; --j) {
@@ -165,8 +166,15 @@ std::vector<double> simulated_variances(const Kernel& k, int w, double lambda, i
         double mean = 0.0, var = 0.0;
         for (double v : f) mean += v / f.size();
         for (double v : f) var += (v - mean) * (v - mean) / f.size();
-        out.push_back(var);
+        out.push_back({mean, var});
     }
+    return out;
+}
+
+std::vector<double> simulated_variances(const Kernel& k, int w, double lambda, int count,
+                                        unsigned seed) {
+    std::vector<double> out;
+    for (const auto& m : simulated_moments(k, w, lambda, count, seed)) out.push_back(m[1]);
     return out;
 }
 
@@ -348,4 +356,52 @@ TEST_CASE(
         CHECK(std::abs(c - theory) < 4.0 * se);
         CHECK(std::abs(c - envelope_only) > 4.0 * se);
     }
+}
+
+TEST_CASE("frame mean over a window: Var(frame mean) is the window's sum of covariances",
+          "[kernels][stats]") {
+    // A Gaussian kernel (sigma 12, cut at 5 sigma so the cut is negligible) wider than the 24^2
+    // window, 2e-4 random-sign impulses per pixel^2 (about 2 reach the window). Var(frame mean)
+    // = (1/N^2) sum_ij C_ij and E[V] = C(0) - that; S(0) / N (exact only for frames periodic
+    // over the window) is 3 times a pixel's variance here, which a mean of pixels cannot exceed.
+    // Standard errors from the simulated frames' own fourth moments; the closed forms within 4.
+    const int w = 24, n = 20000, P = 128;  // P holds the window plus the reach 2 R = 120
+    const double sigma = 12.0, lambda = 2e-4;
+    KernelParams p;
+    p.type = KernelType::Gaussian;
+    p.sigma = sigma;
+    p.radius = 5.0 * sigma;
+    const auto grid = gaussian_grid(sigma, lambda, P);
+    impulse::kernels::WindowCovariance wc(w, w, P, P);
+    wc.add(grid);
+    // The definition: C_ij = lambda (h * h~)(x_j - x_i) of the untruncated Gaussian.
+    double direct = 0.0;
+    for (int i = 0; i < w * w; ++i)
+        for (int j = 0; j < w * w; ++j) {
+            const double dx = j % w - i % w, dy = j / w - i / w;
+            direct += lambda * std::numbers::pi * sigma * sigma *
+                      std::exp(-(dx * dx + dy * dy) / (4.0 * sigma * sigma));
+        }
+    direct /= double(w * w) * (w * w);
+    CHECK(wc.frame_mean_variance() == Approx(direct).epsilon(1e-6));
+    CHECK(wc.pixel_variance() == Approx(lambda * std::numbers::pi * sigma * sigma).epsilon(1e-6));
+
+    const auto m = simulated_moments(Kernel(p), w, lambda, n, 5u);
+    double mean_v = 0.0, var_m = 0.0, m4 = 0.0, var_v = 0.0;
+    for (const auto& x : m) mean_v += x[1] / n;
+    for (const auto& x : m) {
+        var_m += x[0] * x[0] / n;  // the field's mean is 0: no degree of freedom lost
+        m4 += std::pow(x[0], 4) / n;
+        var_v += (x[1] - mean_v) * (x[1] - mean_v) / (n - 1);
+    }
+    const double se_var_m = std::sqrt((m4 - var_m * var_m) / n), se_mean_v = std::sqrt(var_v / n);
+    const double periodic = grid[0] / double(w * w);
+    const double expected_v = wc.pixel_variance() - wc.frame_mean_variance();
+    INFO("Var(frame mean) " << var_m << " +- " << se_var_m << ", window sum "
+                            << wc.frame_mean_variance() << ", S(0) / N " << periodic << "; E[V] "
+                            << mean_v << " +- " << se_mean_v << ", closed form " << expected_v
+                            << ", with S(0) / N " << wc.pixel_variance() - periodic);
+    CHECK(std::abs(var_m - wc.frame_mean_variance()) < 4.0 * se_var_m);
+    CHECK(std::abs(var_m - periodic) > 4.0 * se_var_m);
+    CHECK(std::abs(mean_v - expected_v) < 4.0 * se_mean_v);
 }
