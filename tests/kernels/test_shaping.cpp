@@ -163,7 +163,7 @@ TEST_CASE("target distributions: quantiles invert the CDFs in both tails and g i
 }
 
 TEST_CASE("shaped marginals are within KS 0.01 of every target at 1024^2",
-          "[kernels][shaping][stats]") {
+          "[kernels][shaping][stats][slow]") {
     // One raw field, shaped to each target. Cosine kernel R = 4 px, density 64 per kernel area,
     // +-1 amplitudes, periodic 1024^2.
     //  * Sampling error. The KS statistic of N independent samples has mean 0.87 / sqrt(N) and a
@@ -363,7 +363,7 @@ void summarise(const std::vector<std::vector<double>>& ratio, const std::vector<
 }  // namespace
 
 TEST_CASE("pre-correction gives the shaped field the kernel's spectrum and its absence does not",
-          "[kernels][shaping][stats]") {
+          "[kernels][shaping][stats][slow]") {
     // Gaussian kernel R = 4, sigma = 4/3 px, density 128 per kernel area, +-1 amplitudes, shaped
     // to an exponential marginal (skewness 2, excess kurtosis 6). The target is the kernel's own
     // spectrum with the marginal's variance: S_T(k) = Var Y |H(k)|^2 / int h^2.

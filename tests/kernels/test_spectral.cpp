@@ -210,7 +210,7 @@ RoundTrip round_trip(const K::DesignedKernel& d, const std::function<double(doub
 }  // namespace
 
 TEST_CASE("designed kernels reproduce the target spectrum in a rendered field",
-          "[kernels][stats]") {
+          "[kernels][stats][slow]") {
     struct Case {
         const char* name;
         K::ModelParams model, wrong;

@@ -181,7 +181,7 @@ std::vector<double> simulated_variances(const Kernel& k, int w, double lambda, i
 }  // namespace
 
 TEST_CASE("window population integral: simulated frames' variance scatter matches it",
-          "[kernels][stats]") {
+          "[kernels][stats][slow]") {
     // 32^2 frames of random-sign Gaussian impulses (E[m^2] = E[m^4] = 1), sparse enough that
     // the population term is most of Var(V). The estimate of Var(V) from n frames has the
     // standard error sqrt((m4 - s^4) / n) (m4: the fourth central moment of V, from the same

@@ -78,7 +78,8 @@ SlopeEstimate drift_slope(std::vector<std::string> overrides) {
 
 }  // namespace
 
-TEST_CASE("drift's raw frames have k^-5/3 transects over 1.5 decades", "[scenes][gallery][stats]") {
+TEST_CASE("drift's raw frames have k^-5/3 transects over 1.5 decades",
+          "[scenes][gallery][stats][slow]") {
     // Nine blocks (three frames x three 256-row blocks); blocks of one frame share the largest
     // impulses (sigma 120), so the standard error from their spread is a lower bound: the
     // check asks for it to be a quarter of the +-0.2 band at most, so the band is not noise.

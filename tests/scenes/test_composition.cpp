@@ -293,7 +293,7 @@ TEST_CASE("composition: max with a constant layer is max(X, c), with E[max(X, c)
 }
 
 TEST_CASE("composition: the theory of over with an alpha range matches the measured frame",
-          "[scenes][compose][stats]") {
+          "[scenes][compose][stats][slow]") {
     // R = X (1 - A) + Y A, A = 0.8 smoothstep(0, 1.5, Y): the closed form integrates over Y's
     // marginal taken as Gaussian. Sampling: R is a function of the independent X and Y, so its
     // correlation is at most max(rho_x, rho_y) (Hermite expansion) and

@@ -83,7 +83,7 @@ Velocity velocity(const sim::Flow& f, double x, double y) {
 }  // namespace
 
 TEST_CASE("layer flow: the semivariogram quadrature agrees with the exact autocorrelation",
-          "[scenes][compose][flow]") {
+          "[scenes][compose][flow][slow]") {
     // sampled_semivariogram against C(0) - C(tau) from Kernel::autocorrelation, whose own
     // error is ~1e-6 C(0) for the cosine kernel and 1e-4 C(0) for kernels truncated with a jump
     // (the Gaussian here): allowed on top of 1e-3 of the value (the quadrature is far better,
@@ -114,7 +114,7 @@ TEST_CASE("layer flow: the semivariogram quadrature agrees with the exact autoco
 }
 
 TEST_CASE("layer flow: divergence-free, curl as reported, RMS speed as asked",
-          "[scenes][compose][flow]") {
+          "[scenes][compose][flow][slow]") {
     const Stream s(16.0);
     auto flow = sim::make_stream_flow(s.psi, 25.0);
     const numeric::Box region{0.0, 0.0, 2048.0, 2048.0};
@@ -193,7 +193,7 @@ TEST_CASE("layer flow: divergence-free, curl as reported, RMS speed as asked",
 }
 
 TEST_CASE("layer flow: particles stay on the stream function's level lines",
-          "[scenes][compose][flow]") {
+          "[scenes][compose][flow][slow]") {
     // The flow is the curl of psi_I, psi's Catmull-Rom interpolant on the lattice of spacing
     // R / 8 (rebuilt here from the exact psi at the nodes), so psi_I is constant along a path up
     // to the integrator's error: RK4 with steps of 1/64 s at 25 units/s (0.4 units against
@@ -252,7 +252,7 @@ TEST_CASE("layer flow: particles stay on the stream function's level lines",
 }
 
 TEST_CASE("layer flow: in a scene the Jacobian stays 1 and the frames keep their variance",
-          "[scenes][compose][flow]") {
+          "[scenes][compose][flow][slow]") {
     // div v = 0 exactly, so ln J stays 0 and sqrt(J) compensation changes nothing: the frames
     // with and without it have the same bits. A source flow (divergent) is the control.
     auto scene = [](const std::string& flow, bool jacobian) {

@@ -70,7 +70,8 @@ double phase_speed(scenes::Renderer& r, int bin, int pairs) {
 
 }  // namespace
 
-TEST_CASE("dispersion: each band's carrier moves at the deep-water phase speed", "[scenes][waves]") {
+TEST_CASE("dispersion: each band's carrier moves at the deep-water phase speed",
+          "[scenes][waves][slow]") {
     scenes::Renderer r(scenes::load_scene_string(
         wave_scene("[layer.dispersion]\ngravity = " + std::to_string(kGravity) + "\n"), "waves.toml"));
     for (int b = 0; b < 3; ++b) {
@@ -88,7 +89,8 @@ TEST_CASE("dispersion: each band's carrier moves at the deep-water phase speed",
     }
 }
 
-TEST_CASE("without dispersion every band moves at the flow's one speed and the law fails", "[scenes][waves]") {
+TEST_CASE("without dispersion every band moves at the flow's one speed and the law fails",
+          "[scenes][waves][slow]") {
     // The swell's phase speed for everyone (the waves scene before dispersion): chop and
     // ripples move 1.8 and 2.8 times too fast.
     const double c_swell = std::sqrt(kGravity / (2.0 * std::numbers::pi * kBins[0] / kWidth));

@@ -67,7 +67,7 @@ std::pair<double, double> variance_over_seeds(const std::string& method, double 
 }  // namespace
 
 TEST_CASE("an fbm layer's measured variance matches its stated theory",
-          "[scenes][source][fbm][stats]") {
+          "[scenes][source][fbm][stats][slow]") {
     // The frame's pixels sit on the tile's samples (offset 0.5: pixel i at sample i + 1,
     // wrapped, for the periodic Fourier field; offset -0.5: samples 0..63 of the exact method's
     // tile). The spatial variance of one realisation about its mean has expectation R(0)

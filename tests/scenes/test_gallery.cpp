@@ -16,7 +16,7 @@ using namespace impulse;
 namespace fs = std::filesystem;
 
 TEST_CASE("each gallery scene renders 3 frames at 256x256 with sensible statistics",
-          "[scenes][gallery]") {
+          "[scenes][gallery][slow]") {
     std::vector<fs::path> files;
     for (const auto& e : fs::directory_iterator(fs::path(IMPULSE_SOURCE_DIR) / "scenes"))
         if (e.path().extension() == ".toml") files.push_back(e.path());

@@ -236,7 +236,7 @@ radius = 8.0
 }
 
 TEST_CASE("keyframed scenes render the same bits in order, alone and looped",
-          "[scenes][keyframes][determinism]") {
+          "[scenes][keyframes][determinism][slow]") {
     const std::string text = R"(
 [output]
 size = [80, 64]
@@ -323,7 +323,7 @@ radius = 8.0
     }
 }
 
-TEST_CASE("a keyframed kernel orientation turns every impulse", "[scenes][keyframes]") {
+TEST_CASE("a keyframed kernel orientation turns every impulse", "[scenes][keyframes][slow]") {
     // At t = 1 the keyframed layer equals the same layer with the constant orientation 1.2
     // (the turn is added per impulse, in float, instead of to the kernel: rounding only).
     const std::string base = R"(

@@ -55,7 +55,7 @@ double smoothstep_region(double d, double feather) {
 }  // namespace
 
 TEST_CASE("a still layer in a soft circle: Campbell's theorem inside, across the edge, outside",
-          "[scenes][region][stats]") {
+          "[scenes][region][stats][slow]") {
     // Cosine kernel R = 4 px, density 16, normal amplitudes, mean 0.25; circle of radius 320
     // round the frame centre with a feather of 64: p(r) = 1 - smoothstep((r - 288) / 64).
     // Eight seeds of a 1024^2 frame.

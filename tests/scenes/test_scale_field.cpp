@@ -183,7 +183,8 @@ std::string camera_scene(const char* camera, const std::string& scale) {
 
 }  // namespace
 
-TEST_CASE("scale = 1 draws the bits of the layer without a scale in every camera", "[scenes][scale]") {
+TEST_CASE("scale = 1 draws the bits of the layer without a scale in every camera",
+          "[scenes][scale][slow]") {
     // One class (s_0 = 1), weights w c(0) / 1 = w and the kernel (or pyramid) of h(x / 1): the
     // class path repeats the unscaled arithmetic exactly, through each evaluator.
     for (const char* camera : kCameras) {

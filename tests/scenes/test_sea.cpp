@@ -115,7 +115,7 @@ TEST_CASE("a flat sea is the mirror image weighted by Schlick's reflectance", "[
     CHECK(sea > 20 * w);  // the horizon is a quarter up the frame
 }
 
-TEST_CASE("the sea leaves the sky's pixels as they were", "[scenes][sea]") {
+TEST_CASE("the sea leaves the sky's pixels as they were", "[scenes][sea][slow]") {
     const S::Scene with = S::load_scene_string(sea_scene("[camera.sea]\ndepth = 3.0\n"), "a.toml");
     const S::Scene without = S::load_scene_string(sea_scene(""), "b.toml");
     S::Renderer ra(with), rb(without);
@@ -191,7 +191,7 @@ std::vector<SeaBand> sea_bands(const S::CameraConfig& c, const Frame& a, const F
     return bands;
 }
 
-TEST_CASE("a half-size mirror stays within its tolerance of the full one", "[scenes][sea]") {
+TEST_CASE("a half-size mirror stays within its tolerance of the full one", "[scenes][sea][slow]") {
     // clouds' sea (depth 3, rms slope 0.025, longest wave 10) at 1080p, the default mirror (half
     // size, 960 x 540) against the full one.
     const std::string keys = "[camera.sea]\ndepth = 3.0\nroughness = 0.025\nwavelength = 10.0\n";

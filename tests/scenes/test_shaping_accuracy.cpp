@@ -59,7 +59,7 @@ const char* const kTargets[] = {
 }  // namespace
 
 TEST_CASE("default shaping is within KS 0.01 of lognormal and uniform targets from density 8",
-          "[scenes][shaping][stats]") {
+          "[scenes][shaping][stats][slow]") {
     for (const char* amplitude : {"normal", "uniform", "sign"})
         for (double density : {4.0, 8.0, 16.0, 64.0})
             for (int seed = 1; seed <= 3; ++seed) {
@@ -86,7 +86,7 @@ TEST_CASE("default shaping is within KS 0.01 of lognormal and uniform targets fr
 }
 
 TEST_CASE("the Gaussian F_x misses the same targets at density 8 (mechanism off)",
-          "[scenes][shaping][stats]") {
+          "[scenes][shaping][stats][slow]") {
     // Excess kurtosis (E[a^4] / E[a^2]^2) pi / 8: normal 1.18, uniform 0.71, so the Gaussian is
     // ~0.023 x that = 0.027 and 0.016 off in KS (Edgeworth), beyond 0.01 + the sampling error.
     for (const char* amplitude : {"normal", "uniform"})

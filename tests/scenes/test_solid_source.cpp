@@ -41,7 +41,7 @@ render::Frame render_at(const std::string& text, double t) {
 
 }  // namespace
 
-TEST_CASE("solid layer: a slice has Campbell's 3-D variance", "[scenes][solid]") {
+TEST_CASE("solid layer: a slice has Campbell's 3-D variance", "[scenes][solid][slow]") {
     // Pixels 9 apart (> 2R) are independent samples of the slice.
     double s = 0, s2 = 0, s4 = 0, theory = 0;
     int n = 0;
@@ -92,7 +92,8 @@ TEST_CASE("solid layer: bad input is refused at the key", "[scenes][solid][error
     fails_with("[[layer]]\nsource = \"solidish\"\n", "impulses, fbm, subdivision, solid");
 }
 
-TEST_CASE("solid layer: a designed kernel's slice has the stated 2-D spectrum", "[scenes][solid][design]") {
+TEST_CASE("solid layer: a designed kernel's slice has the stated 2-D spectrum",
+          "[scenes][solid][design][slow]") {
     // kernel = "autocorrelation", gaussian l = 3 in 3-D, band-limited to the pixel Nyquist
     // frequency (0.5 at zoom 1): the source states the slice's S_2 (projection-slice), and no
     // power aliases. Hann-windowed periodograms of 128^2 frames, 16 seeds, averaged in annuli 4

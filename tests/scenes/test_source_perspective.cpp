@@ -211,7 +211,7 @@ TEST_CASE(
 
 TEST_CASE(
     "a gaussian solid layer in a grazing perspective view is footprint-filtered near and fades far",
-    "[scenes][source][solid][perspective]") {
+    "[scenes][source][solid][perspective][slow]") {
     const int w = 160, h = 120;
     const double R = 3.0, sigma = R / 3.0;
     // Camera 40 units up: the kernel (R = 3) is small against the depth (over 40), so the map is
@@ -287,7 +287,7 @@ TEST_CASE(
 
 TEST_CASE(
     "a gaussian solid layer seen straight down has the variance of the footprint-filtered slice",
-    "[scenes][source][solid][perspective][stats]") {
+    "[scenes][source][solid][perspective][stats][slow]") {
     // R = 1.5 px (sigma 0.5 px): the pixel filter (sd s = 0.5 px) is as wide as the kernel. The
     // slice filtered by g_s is sum_i a_i e^{-dz_i^2 / 2 sigma^2} 2 pi sigma^2 N(x - x_i; sigma'^2),
     // sigma'^2 = sigma^2 + s^2, whose variance is lambda E[a^2] pi^{3/2} sigma^4 / sigma'^2:
@@ -319,7 +319,7 @@ TEST_CASE(
 }
 
 TEST_CASE("a 4-D gaussian solid layer in perspective has the same bits on one thread as on all",
-          "[scenes][source][solid][perspective][determinism]") {
+          "[scenes][source][solid][perspective][determinism][slow]") {
     // dims = 4: the plane also moves along t (rate), d2 = dz^2 + dt^2 (docs/perspective.md §10);
     // a drift moves it in the plane. Frame 1 at 2 fps: t = 0.5 s.
     const std::string text = "[output]\nfps = 2.0\nframes = 4\n" +
@@ -388,7 +388,7 @@ std::string subdivision_layer(double length) {
 }  // namespace
 
 TEST_CASE("a subdivision layer in a grazing view fades to its own tile's mean",
-          "[scenes][source][subdivision][perspective][stats]") {
+          "[scenes][source][subdivision][perspective][stats][slow]") {
     // Length 4 at the default cut-off: the top level keeps the tile's mean, so a fade measured
     // by the rms (the mean included) never completes and the sky showed 0; length 1 at cut-off
     // 0.5: the far field fades out and used to fade to 0.

@@ -92,7 +92,7 @@ void check_agrees(const analysis::AnalysisResult& r) {
 }  // namespace
 
 TEST_CASE("analyze on an fbm fourier layer agrees with the spectrum it states",
-          "[scenes][source][fbm][analysis][stats]") {
+          "[scenes][source][fbm][analysis][stats][slow]") {
     test::TempDir dir("srcspec");
     for (double hurst : {0.3, 0.8})
         for (int seed : {1, 2}) {
@@ -103,7 +103,7 @@ TEST_CASE("analyze on an fbm fourier layer agrees with the spectrum it states",
 }
 
 TEST_CASE("analyze on an fbm fourier layer agrees at a whole number of pixels per sample",
-          "[scenes][source][fbm][analysis][stats]") {
+          "[scenes][source][fbm][analysis][stats][slow]") {
     // At p = 1, 2, 4 pixels per sample the p images of a tile line that fold onto one pixel
     // frequency are the same line: their amplitudes add with the phases the pixel centres give
     // them (FbmSource::sampled_spectrum, coherent_images). Added as power instead (the stated
@@ -135,7 +135,7 @@ TEST_CASE("analyze on an fbm layer judged against another hurst exponent disagre
 }
 
 TEST_CASE("analyze on a solid noise layer agrees with its slice spectrum and campbell variance",
-          "[scenes][source][solid][analysis][stats]") {
+          "[scenes][source][solid][analysis][stats][slow]") {
     test::TempDir dir("srcspec");
     for (int seed : {1, 2}) {
         CAPTURE(seed);

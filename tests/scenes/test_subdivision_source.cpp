@@ -82,7 +82,7 @@ LagEstimate lag_products(double size, int n, const std::string& acf, int seeds, 
 }  // namespace
 
 TEST_CASE("a subdivision layer has the stated variance and autocorrelation in texture units",
-          "[scenes][source][subdivision][stats]") {
+          "[scenes][source][subdivision][stats][slow]") {
     // Markov R(r) = v exp(-r / l), v = 2.5, l = 16 texture units, on a tile of 512 texture units
     // in 256 samples (2 texture units a sample): at lag k pixels (2k texture units) the
     // correlation is exp(-2k / 16). Over 16 seeds, each within 5 standard errors of its scatter

@@ -109,7 +109,8 @@ TEST_CASE("toe and shoulder are read from [shading] and checked", "[scenes][shad
         Catch::Contains("t.toml:3:") && Catch::Contains("the tone curve is the same in every frame"));
 }
 
-TEST_CASE("built-in cloud frames keep at most 0.5 % of pixels at the top code value", "[scenes][shading][gallery]") {
+TEST_CASE("built-in cloud frames keep at most 0.5 % of pixels at the top code value",
+          "[scenes][shading][gallery][slow]") {
     // Frames 0 and 60 at a quarter of the scenes' size (the same view, fewer pixels). Before
     // the tone curve 3.7 % and 5.8 % of drift's pixels sat at 255 (white plates, the old ramp
     // white from t = 0.8). With the shoulder switched off the tail past the mapping's top is a
