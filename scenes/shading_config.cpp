@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <span>
 
 #include "output/io_module.h"
 #include "numeric/gaussian.h"
@@ -45,6 +46,19 @@ bool read_rgb_pixels(const std::string& path, std::vector<float>& px, int& chann
     px = std::move(image.values);
     error = output::nonfinite_pixel(px.data(), px.size(), image.width, channels);
     return error.empty();  // a NaN would break the sort by luminance
+}
+
+/// Rearranges v[begin, end) so that each position in `at` (ascending, distinct, inside the range)
+/// holds what a full sort would put there and each stretch between two of them the elements a
+/// full sort puts there, in some order: a full sort's quantile bins in O(n log bins) comparisons
+/// instead of O(n log n) (an 8198x164 exemplar took 14 s to sort under the sanitizers).
+void select_positions(std::vector<std::pair<float, size_t>>& v, std::span<const size_t> at,
+                      size_t begin, size_t end) {
+    if (at.empty()) return;
+    const size_t m = at.size() / 2;
+    std::nth_element(v.begin() + long(begin), v.begin() + long(at[m]), v.begin() + long(end));
+    select_positions(v, at.first(m), begin, at[m]);
+    select_positions(v, at.subspan(m + 1), at[m] + 1, end);
 }
 
 }  // namespace
@@ -93,12 +107,18 @@ output::Shading read_shading(std::optional<Reader> r, const std::filesystem::pat
         if (!read_rgb_pixels(path.string(), px, channels, error)) t.fail(pn, "exemplar", error);
         std::vector<std::pair<float, size_t>> order;  // (luminance, pixel)
         const size_t npix = px.size() / channels;
+        if (npix == 0) t.fail(pn, "exemplar", "expected an image with pixels");
         for (size_t i = 0; i < npix; ++i) {
             const float* c = px.data() + i * channels;
             const float y = channels >= 3 ? 0.2126f * c[0] + 0.7152f * c[1] + 0.0722f * c[2] : c[0];
             order.emplace_back(y, i);
         }
-        std::sort(order.begin(), order.end());
+        // Where each bin below starts (a bin of fewer pixels than stops is its first pixel).
+        std::vector<size_t> bounds;
+        for (int b = 0; b < stops; ++b)
+            if (const size_t i0 = npix * b / stops; bounds.empty() || i0 != bounds.back())
+                bounds.push_back(i0);
+        select_positions(order, bounds, 0, npix);
         for (int b = 0; b < stops; ++b) {
             const size_t i0 = npix * b / stops, i1 = std::max(i0 + 1, npix * (b + 1) / stops);
             double sum[3] = {0, 0, 0};

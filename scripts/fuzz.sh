@@ -27,7 +27,10 @@ fuzz() {
     found=$(mktemp -d)
     mkdir -p "$corpus"
     if [ "$name" = scene ]; then
-        seeds=(scenes tests/scenes/errors)
+        # the built-in scenes (only the .toml files of scenes/, not the library's sources)
+        # and the error corpus
+        cp scenes/*.toml "$found"/
+        seeds=(tests/scenes/errors)
     else
         max_len=65536
     fi

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <tuple>
 
+#include "output/io_module.h"
 #include "output/output.h"
 #include "render/render.h"
 #include "scenes/scenes.h"
@@ -209,5 +210,82 @@ TEST_CASE("a Shader shades straight into YUV 4:2:0 within one code value of the 
         Picture from_rgb(f.width, f.height);
         output::rgb_rows_to_yuv420(rgb.data(), f.width, f.height, from_rgb.planes());
         CHECK(worst_code_error(from_rgb, rgb) <= 1);
+    }
+}
+
+namespace {
+
+/// The ramp of a colour exemplar by a full sort of its pixels by luminance: the reference the
+/// loader's quantile selection must reproduce.
+std::vector<output::ColorStop> ramp_by_full_sort(const std::string& path, int stops) {
+    output::Pixels image;
+    std::string error;
+    REQUIRE(output::read_pixels(path, image, error));
+    const int c = image.channels;
+    const size_t n = image.values.size() / size_t(c);
+    std::vector<std::pair<float, size_t>> order;
+    for (size_t i = 0; i < n; ++i) {
+        const float* p = image.values.data() + i * size_t(c);
+        order.emplace_back(c >= 3 ? 0.2126f * p[0] + 0.7152f * p[1] + 0.0722f * p[2] : p[0], i);
+    }
+    std::sort(order.begin(), order.end());
+    std::vector<output::ColorStop> ramp;
+    for (int b = 0; b < stops; ++b) {
+        const size_t i0 = n * size_t(b) / size_t(stops),
+                     i1 = std::max(i0 + 1, n * size_t(b + 1) / size_t(stops));
+        double sum[3] = {0, 0, 0};
+        for (size_t k = i0; k < i1; ++k)
+            for (int ch = 0; ch < 3; ++ch)
+                sum[ch] += image.values[order[k].second * size_t(c) + size_t(c >= 3 ? ch : 0)];
+        output::ColorStop s;
+        s.r = float(sum[0] / double(i1 - i0)), s.g = float(sum[1] / double(i1 - i0));
+        s.b = float(sum[2] / double(i1 - i0));
+        ramp.push_back(s);
+    }
+    return ramp;
+}
+
+}  // namespace
+
+TEST_CASE("an exemplar ramp's quantile bins hold what a full sort puts in them", "[scenes][shading]") {
+    const fs::path dir = fs::temp_directory_path() / ("impulse_ramp_bins_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    // Random colours with many ties (8-bit PNG), at more and fewer pixels than stops.
+    uint32_t state = 12345u;
+    const auto next = [&] { state = state * 1664525u + 1013904223u; return float(state >> 8) / 16777216.0f; };
+    for (const auto& [w, h, stops] : {std::tuple{61, 37, 16}, std::tuple{61, 37, 256}, std::tuple{3, 3, 16},
+                                      std::tuple{1, 1, 2}}) {
+        std::vector<float> rgb(size_t(w) * h * 3);
+        for (float& v : rgb) v = next();
+        const std::string path = (dir / "ex.png").string();
+        output::write_rgb_image(path, w, h, rgb, {});
+        const std::string text = "[[layer]]\n[shading]\nramp = { exemplar = \"ex.png\", stops = " +
+                                 std::to_string(stops) + " }\n";
+        const scenes::Scene s = scenes::load_scene_string(text, (dir / "scene.toml").string());
+        const auto expected = ramp_by_full_sort(path, stops);
+        REQUIRE(s.shading.ramp.size() == expected.size());
+        for (size_t b = 0; b < expected.size(); ++b) {
+            CAPTURE(w, h, stops, b);
+            CHECK(s.shading.ramp[b].r == Approx(expected[b].r).margin(1e-6));
+            CHECK(s.shading.ramp[b].g == Approx(expected[b].g).margin(1e-6));
+            CHECK(s.shading.ramp[b].b == Approx(expected[b].b).margin(1e-6));
+        }
+    }
+    fs::remove_all(dir);
+}
+
+TEST_CASE("a wide one-channel JPEG exemplar (fuzzing's slow unit) reads as a grey ramp", "[scenes][shading]") {
+    // fuzz_image's reproducer: 1189 bytes of JPEG declaring 8198x164 grey pixels; the full sort
+    // of 1.3 million pixels by luminance took 14 s under the sanitizers, over a minute on a
+    // loaded machine (libFuzzer's timeout).
+    const std::string path = std::string(IMPULSE_SOURCE_DIR) + "/tests/scenes/images/exemplar_8198x164.jpg";
+    const std::string text = "[[layer]]\n[shading]\nramp = { exemplar = \"" + path + "\", stops = 16 }\n";
+    const scenes::Scene s = scenes::load_scene_string(text, "scene.toml");
+    const auto expected = ramp_by_full_sort(path, 16);
+    REQUIRE(s.shading.ramp.size() == 16);
+    for (size_t b = 0; b < 16; ++b) {
+        CHECK(s.shading.ramp[b].r == Approx(expected[b].r).margin(1e-6));
+        CHECK(s.shading.ramp[b].g == s.shading.ramp[b].r);  // grey: one channel
+        if (b > 0) CHECK(s.shading.ramp[b].r >= s.shading.ramp[b - 1].r);
     }
 }
