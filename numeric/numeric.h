@@ -9,5 +9,6 @@
 #include "numeric/fft.h"       // real 2-D FFTs on FFTW, one planner lock
 #include "numeric/gaussian.h"  // normal pdf, CDF, quantile
 #include "numeric/keyframed.h" // time-varying scalars
+#include "numeric/quantile_bins.h" // equal-count bins by selection, not a full sort
 #include "numeric/rng.h"       // counter-based random numbers (Philox)
 #include "numeric/spline.h"    // Catmull-Rom weights

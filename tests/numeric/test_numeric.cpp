@@ -101,3 +101,36 @@ TEST_CASE("Keyframed integral: the closed form matches Simpson's rule for every 
     }
     CHECK(numeric::Keyframed(2.5).integral(3.0) == 7.5);  // a constant: v t
 }
+
+TEST_CASE("quantile bins by selection hold what a full sort by (key, index) puts in each",
+          "[numeric][quantile]") {
+    // Keys with many ties (16 levels), both signs and both zeros, at more and fewer keys than
+    // bins; each bin's set of indices, and each bin start's own index, against a full sort.
+    uint32_t state = 777u;
+    const auto next = [&] { state = state * 1664525u + 1013904223u; return state >> 8; };
+    for (const auto& [n, bins] : {std::pair{1000, 16}, std::pair{1001, 7}, std::pair{5, 16},
+                                  std::pair{1, 2}, std::pair{0, 4}, std::pair{4096, 256}}) {
+        std::vector<float> key(static_cast<size_t>(n));
+        for (float& k : key) k = float(int(next() % 16) - 8) * 0.25f;
+        for (size_t i = 0; i < key.size(); i += 5) key[i] = (i / 5) % 2 ? -0.0f : 0.0f;
+        std::vector<size_t> sorted(static_cast<size_t>(n));
+        for (size_t i = 0; i < sorted.size(); ++i) sorted[i] = i;
+        // -0 and +0 are one key: compare by value, then by index.
+        std::sort(sorted.begin(), sorted.end(), [&](size_t a, size_t b) {
+            return key[a] < key[b] || (key[a] == key[b] && a < b);
+        });
+        const std::vector<size_t> order = numeric::order_into_quantile_bins(key, bins);
+        REQUIRE(order.size() == size_t(n));
+        for (int b = 0; b < bins; ++b) {
+            const size_t i0 = numeric::quantile_bin_start(size_t(n), b, bins);
+            const size_t i1 = numeric::quantile_bin_start(size_t(n), b + 1, bins);
+            CAPTURE(n, bins, b);
+            std::vector<size_t> got(order.begin() + long(i0), order.begin() + long(i1));
+            std::vector<size_t> want(sorted.begin() + long(i0), sorted.begin() + long(i1));
+            std::sort(got.begin(), got.end());
+            std::sort(want.begin(), want.end());
+            CHECK(got == want);
+            if (i0 < size_t(n)) CHECK(order[i0] == sorted[i0]);
+        }
+    }
+}
