@@ -4,14 +4,18 @@
 #   fuzz_image  file bytes -> the image and video readers (OpenImageIO, libav) and the scene
 #               inputs that read images
 # Each target starts from its minimized corpus in fuzz/corpus/<target>/ (plus, for scenes, the
-# built-in scenes and the error corpus); inputs that reach new coverage are merged back into it
-# (-merge=1), so the corpus grows with what fuzzing finds. A crash, hang, leak or sanitizer
+# built-in scenes and the error corpus): every corpus input runs first, then fuzzing. With
+# --merge, inputs that reach new coverage are merged back into the corpus (-merge=1, which runs
+# the corpus once more), so it grows with what fuzzing finds; a maintainer commits that. CI runs
+# without it (a clean clone's corpus changes are thrown away). A crash, hang, leak or sanitizer
 # report fails the script and leaves its reproducer in build-asan/crashes/.
-#   scripts/fuzz.sh [seconds] [target...]
+#   scripts/fuzz.sh [--merge] [seconds] [target...]
 # Built in the sanitized build the test suite shares (scripts/sanitized_build.sh: clang, ASan,
 # UBSan, coverage instrumentation on every library).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+merge=false
+if [ "${1:-}" = --merge ]; then merge=true; shift; fi
 seconds=${1:-60}
 shift || true
 targets=("$@")
@@ -20,10 +24,11 @@ bash scripts/sanitized_build.sh "${targets[@]}"
 mkdir -p build-asan/crashes
 export LSAN_OPTIONS="suppressions=$PWD/fuzz/lsan.supp"
 
-# fuzz TARGET: run it, then merge what it found into its corpus.
+# fuzz TARGET: run it, then (with --merge) merge what it found into its corpus.
 fuzz() {
     local target=$1 name=${1#fuzz_}
     local corpus=fuzz/corpus/$name found seeds=() max_len=8192
+    local t0=$SECONDS
     found=$(mktemp -d)
     mkdir -p "$corpus"
     if [ "$name" = scene ]; then
@@ -38,14 +43,17 @@ fuzz() {
         -timeout=60 -rss_limit_mb=2048 -max_len="$max_len" -artifact_prefix=build-asan/crashes/"$name"- \
         -print_final_stats=1 > build-asan/"$target".log 2>&1 \
         || { tail -60 build-asan/"$target".log; rm -rf "$found"; return 1; }
-    ./build-asan/fuzz/"$target" -merge=1 -max_len="$max_len" -timeout=60 \
-        -artifact_prefix=build-asan/crashes/"$name"- "$corpus" "$found" \
-        > build-asan/"$target"-merge.log 2>&1 || { tail -20 build-asan/"$target"-merge.log; return 1; }
+    if $merge; then
+        ./build-asan/fuzz/"$target" -merge=1 -max_len="$max_len" -timeout=60 \
+            -artifact_prefix=build-asan/crashes/"$name"- "$corpus" "$found" \
+            > build-asan/"$target"-merge.log 2>&1 || { tail -20 build-asan/"$target"-merge.log; return 1; }
+    fi
     rm -rf "$found"
     local runs cov
     runs=$(awk '/stat::number_of_executed_units/ {print $2}' build-asan/"$target".log)
     cov=$(grep -oE 'cov: [0-9]+' build-asan/"$target".log | tail -1)
-    echo "$target: $runs executions in ${seconds} s, $cov edges, no crash;" \
+    echo "$target: $runs executions in $((SECONDS - t0)) s (corpus first, then fuzzing to ${seconds} s)," \
+        "$cov edges, no crash;" \
         "corpus $(ls "$corpus" | wc -l) files"
 }
 for t in "${targets[@]}"; do fuzz "$t"; done
