@@ -316,7 +316,11 @@ Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
                 std::make_shared<detail::LatticeOrientation>(l.compose.orientation->level_lines);
             process.orientation_field = S.orientations[i];
         }
-        S.sims.emplace_back(process, l.flow, timing, l.max_radius() * l.max_scale());
+        try {
+            S.sims.emplace_back(process, l.flow, timing, l.max_radius() * l.max_scale());
+        } catch (const BudgetError& e) {  // e.g. a density beyond the sampler: name the layer
+            throw BudgetError(S.scene.path + ": layer[" + std::to_string(i) + "]: " + e.what());
+        }
     }
     S.marginal_built.resize(count);
     S.impulses.resize(count);

@@ -3,10 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <sstream>
 #include <numbers>
 
 #include "sim/layout.h"
 #include "sim/normal.h"
+#include "numeric/errors.h"
 #include "numeric/rng.h"
 
 namespace impulse::sim {
@@ -59,7 +62,17 @@ namespace {
 /// inversion stays accurate (exp(-mean) does not underflow); part p draws counter index
 /// kCountIndex - p.
 int poisson_parts(const Layout& L) {
-    return std::max(static_cast<int>(std::ceil(L.mean_per_cell / 200.0)), 1);
+    const double parts = std::ceil(L.mean_per_cell / 200.0);
+    // A count drawn as more parts than an int holds (4.3e11 impulses expected per cell) is
+    // beyond every budget; it is refused here, at construction (tabulate_poisson), where the
+    // conversion would otherwise be undefined (fuzzing found a density of 1.6e80).
+    if (!(parts <= double(std::numeric_limits<int>::max()))) {
+        std::ostringstream s;
+        s << "a seeding cell expects " << L.mean_per_cell << " impulses, over the "
+          << 200.0 * std::numeric_limits<int>::max() << " the Poisson sampler draws (lower the density)";
+        throw BudgetError(s.str());
+    }
+    return std::max(static_cast<int>(parts), 1);
 }
 constexpr uint32_t kCountIndex = 0xFFFFFFFFu;
 

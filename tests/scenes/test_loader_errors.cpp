@@ -242,6 +242,21 @@ TEST_CASE("errors in a scene file name the file", "[scenes][errors]") {
     CHECK_THROWS_WITH(load_scene(missing.path()), StartsWith(missing.path() + ": cannot open scene file"));
 }
 
+TEST_CASE("a density beyond the Poisson sampler is refused naming the layer (fuzzing's find)",
+          "[scenes][errors]") {
+    // fuzz_scene's reproducer (veins with density = 1.6e80): the seeding cell's count, drawn as
+    // ceil(mean / 200) Poisson parts, overflowed an int (undefined behaviour under UBSan) while
+    // the simulators were built, before the impulse budget is checked.
+    const auto scene = load_scene_string(with_line(6, "density = 1.6e80"), "dense.toml");
+    CHECK_THROWS_AS(impulse::scenes::Renderer(scene), BudgetError);
+    CHECK_THROWS_WITH(impulse::scenes::Renderer(scene),
+                      StartsWith("dense.toml: layer[0]: a seeding cell expects ") &&
+                          Contains("the Poisson sampler draws (lower the density)"));
+    // Under the sampler's limit the impulse budget refuses it, with its estimate.
+    const auto big = load_scene_string(with_line(6, "density = 1e10"), "dense.toml");
+    CHECK_THROWS_WITH(impulse::scenes::Renderer(big), Contains("limits.max_impulses"));
+}
+
 TEST_CASE("a scene over the impulse or memory budget is refused with the estimate",
           "[scenes][errors]") {
     // 1024 x 1024 at density 1e5 per kernel area of radius 8: lambda = 1e5 / (64 pi) per px^2 over
