@@ -42,7 +42,8 @@ std::vector<size_t> order_into_quantile_bins(std::span<const float> key, int bin
     for (size_t i = 0; i < n; ++i) v[i] = packed(key[i], i);
     std::vector<size_t> bounds;  // each bin's start, once (bins of no element share one)
     for (int b = 0; b < bins; ++b)
-        if (const size_t i0 = quantile_bin_start(n, b, bins); i0 < n && (bounds.empty() || i0 != bounds.back()))
+        if (const size_t i0 = quantile_bin_start(n, b, bins);
+            i0 < n && (bounds.empty() || i0 != bounds.back()))
             bounds.push_back(i0);
     select_positions(v, bounds, 0, n);
     std::vector<size_t> order(n);

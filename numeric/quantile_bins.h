@@ -15,9 +15,10 @@ inline size_t quantile_bin_start(size_t n, int b, int bins) { return n * size_t(
 
 /// A permutation of the indices 0..n-1 of `key` in which each bin's stretch,
 /// [quantile_bin_start(b), quantile_bin_start(b + 1)), holds the indices a full sort by
-/// (key, index) puts there, in some order, and every bin's start the very index a full sort puts
-/// there (so a bin of no elements may read the one at its start). Keys must be finite (a NaN has no place in an order);
-/// -0 and +0 are one key. Throws impulse::ValueError for 2^32 keys or more.
+/// (key, index) puts there, in some order, and every bin's start the very index a full sort
+/// puts there (so a bin of no elements may read the one at its start). Keys must be finite (a
+/// NaN has no place in an order); -0 and +0 are one key. Throws impulse::ValueError for 2^32
+/// keys or more.
 std::vector<size_t> order_into_quantile_bins(std::span<const float> key, int bins);
 
 }  // namespace impulse::numeric
