@@ -7,14 +7,18 @@
 // `--size` and `--set` do (kBudget): every scene renders frames 0 and 1 at 64x48, and one whose
 // estimated impulses, memory or perspective pixel evaluations exceed the small limits below is
 // refused with BudgetError by the Renderer before any work (scenes/renderer.cpp), so an input
-// cannot buy a long run with a large size or density. The memory limit also bounds the caches a
-// flow builds before the first frame (a curl-noise or stream-function potential lattice, a node
-// every scale / 8 over the region the impulses move in: 8 MiB is ~300 thousand nodes; a mutated
-// curl scale used to build lattices of up to 1e8 nodes, seconds under the sanitizers) and a
-// designed kernel's spectral grids (47 bytes a node: 8 MiB fits 256^2, not 512^2; a ridges-like
-// design at 2048^2 took 10-14 s). The flow-step limit bounds the walk that places a flowing
-// scene's first-frame impulses (each moved from its birth, ~3.5 us a step under the sanitizers:
-// 50 000 steps is ~0.2 s; a clouds-like scene needs 3e7).
+// cannot buy a long run with a large size or density. The memory limit also bounds what is made
+// at load, before the Renderer's estimate: the source layers' tiles together (an fbm or
+// subdivision field, made as its layer is read: 2 MiB holds one 256^2 incremental fbm surface
+// or many 128^2 ones; at 8 MiB the grown corpus's scenes of 7-14 fbm layers synthesized up to
+// 512^2 each and ran at 30-50 inputs a second), the caches a flow builds before the first frame
+// (a curl-noise or stream-function potential lattice, a node every scale / 8 over the region
+// the impulses move in: 2 MiB is ~75 thousand nodes; a mutated curl scale used to build
+// lattices of up to 1e8 nodes, seconds under the sanitizers) and a designed kernel's spectral
+// grids (47 bytes a node: 2 MiB fits 128^2, not 256^2; a ridges-like design at 2048^2 took
+// 10-14 s). The flow-step limit bounds the walk that places a flowing scene's first-frame
+// impulses (each moved from its birth, ~3.5 us a step under the sanitizers: 50 000 steps is
+// ~0.2 s; a clouds-like scene needs 3e7).
 // Keep it at >= 100 executions a second.
 #include <cstddef>
 #include <cstdint>
@@ -32,7 +36,7 @@ namespace {
 const std::vector<std::string> kBudget = {
     "output.size=[64, 48]",
     "limits.max_impulses=20000",
-    "limits.max_memory_mib=8",
+    "limits.max_memory_mib=2",
     "limits.max_pixel_evaluations=2000000",
     "limits.max_flow_steps=50000",
 };

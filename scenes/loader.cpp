@@ -84,6 +84,15 @@ using detail::read_flows;
 using detail::read_kernel;
 using detail::read_source_layer;
 
+/// MiB the tiles of the source layers read so far hold (a frame's buffers not counted: the
+/// Renderer adds them to its estimate once the size is known).
+double held_tiles_mib(const std::vector<LayerConfig>& layers) {
+    double bytes = 0.0;
+    for (const LayerConfig& l : layers)
+        if (l.source) bytes += l.source->memory_bytes(0.0, false);
+    return bytes / (1024.0 * 1024.0);
+}
+
 /// output.compression: one of OpenEXR's compressions as OpenImageIO names them.
 std::string exr_compression(detail::Reader& o) {
     std::array<std::string_view, std::size(output::kExrCompressions)> names;
@@ -339,8 +348,9 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base, Out
         Reader& r = layers[i];
         LayerConfig L;
         if (r.has("source") && r.choice("source", detail::kLayerSourceNames, 0) != 0) {
-            read_source_layer(r, i, global_seed, base, s.limits, s.camera.zoom.min(),
-                              s.camera.type == CameraConfig::Type::Perspective, compose, L);
+            read_source_layer(
+                r, i, global_seed, base, {s.limits.max_memory_mib, held_tiles_mib(s.layers)},
+                s.camera.zoom.min(), s.camera.type == CameraConfig::Type::Perspective, compose, L);
             s.layers.push_back(std::move(L));
             continue;
         }

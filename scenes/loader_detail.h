@@ -16,6 +16,7 @@
 #include "scenes/compose_detail.h"
 #include "scenes/reader.h"
 #include "scenes/scenes.h"
+#include "scenes/source_detail.h"
 
 namespace impulse::scenes::detail {
 
@@ -52,10 +53,11 @@ std::shared_ptr<sim::Flow> read_flows(
 /// The velocity of a `type = "uniform"` flow table: `velocity = [vx, vy]` or keyframed `vx`,
 /// `vy` (texture units per second; absent: 0).
 std::pair<numeric::Keyframed, numeric::Keyframed> read_uniform_velocity(Reader& flow);
-/// A [[layer]] drawn by another synthesizer (source = "fbm", "subdivision", "solid"); `zoom`:
-/// the camera's smallest zoom (pixels per texture unit); `perspective`: the camera is one.
+/// A [[layer]] drawn by another synthesizer (source = "fbm", "subdivision", "solid"); `budget`:
+/// what the limit leaves its tile; `zoom`: the camera's smallest zoom (pixels per texture unit);
+/// `perspective`: the camera is one.
 void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const std::filesystem::path& base,
-                       const Limits& limits, double zoom, bool perspective,
+                       const TileBudget& budget, double zoom, bool perspective,
                        CompositionReader& compose, LayerConfig& L);
 /// A volume scene's [volume] and [preview] tables (scenes/volume_config.cpp); `fps` and the
 /// preview size come from [output].

@@ -102,13 +102,38 @@ std::shared_ptr<const LayerSource> with_flow(Reader& r, const std::string& kind,
     return std::make_shared<const DriftingSource>(std::move(source), vx, vy);
 }
 
+/// MiB for a message: whole above 100, three significant digits below (a small budget's
+/// fractions matter).
+std::string mib_text(double mib) {
+    std::ostringstream s;
+    if (mib >= 100.0)
+        s << std::lround(mib);
+    else
+        s << std::setprecision(3) << mib;
+    return s.str();
+}
+
 }  // namespace
+
+void TileBudget::check(Reader& t, std::string_view key, std::string_view what,
+                       double need_mib) const {
+    if (held_mib + need_mib <= limit_mib) return;
+    std::string why =
+        std::string(what) + " needs an estimated " + mib_text(need_mib) + " MiB, over ";
+    if (held_mib > 0.0)
+        why += "the " + mib_text(std::max(limit_mib - held_mib, 0.0)) +
+               " MiB that limits.max_memory_mib = " + mib_text(limit_mib) +
+               " leaves beside the earlier source layers' tiles (" + mib_text(held_mib) + " MiB)";
+    else
+        why += "limits.max_memory_mib = " + mib_text(limit_mib);
+    t.fail(t.node(key), key, why + " (fewer samples, or raise the limit)");
+}
 
 /// A [[layer]] drawn by another synthesizer (source = "fbm", "subdivision", "solid"): its seed,
 /// mean, gain, marginal and
 /// composition; the impulse process's keys are refused (scenes/source.h).
 void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path& base,
-                       const Limits& limits, double zoom, bool perspective,
+                       const TileBudget& budget, double zoom, bool perspective,
                        detail::CompositionReader& compose, LayerConfig& L) {
     const std::string kind(detail::kLayerSourceNames[r.choice("source", detail::kLayerSourceNames, 0)]);
     for (std::string_view key : {"kernel", "density", "amplitude", "period", "lifetime", "envelope",
@@ -123,7 +148,7 @@ void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path
     L.mean = r.keyframed("mean", 0.0);
     L.gain = r.keyframed("gain", 1.0);
     if (kind == "fbm") {
-        L.source = detail::read_fbm_source(r.table(kind), L.process.seed, limits.max_memory_mib);
+        L.source = detail::read_fbm_source(r.table(kind), r, L.process.seed, budget);
     } else if (kind == "solid") {
         L.source = detail::read_solid_source(r.table(kind), L.process.seed, base, zoom,
                                              perspective);
@@ -133,7 +158,7 @@ void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const fs::path
             r.fail(r.node("source"), "source",
                    "a subdivision layer needs its [layer.subdivision] table with acf (markov, "
                    "gaussian, oscillatory_markov, ...) and the model's lengths");
-        L.source = detail::read_subdivision_source(&*t, L.process.seed, base, limits.max_memory_mib);
+        L.source = detail::read_subdivision_source(&*t, L.process.seed, base, budget);
     }
     L.source = with_flow(r, kind, std::move(L.source));
     detail::read_marginal(r, L, base);

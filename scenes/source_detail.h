@@ -19,17 +19,30 @@ namespace impulse::scenes::detail {
 inline constexpr std::array<std::string_view, 4> kLayerSourceNames = {"impulses", "fbm",
                                                                         "subdivision", "solid"};
 
-/// A fractional Brownian surface layer from its [layer.fbm] table (absent: the defaults) and
-/// the layer's seed: the realised grid is made here, once. Throws SceneError at the key, also
-/// when making it would need more than `max_memory_mib` (limits.max_memory_mib).
-std::shared_ptr<const LayerSource> read_fbm_source(std::optional<Reader> fbm, uint64_t seed,
-                                                   double max_memory_mib);
+/// What limits.max_memory_mib leaves the next source layer's tile while the scene loads. The
+/// tiles are made as their layers are read and stay, so the limit bounds the tiles held so far
+/// plus the peak of the one being made, not each tile alone (a scene of many fbm layers, each
+/// within the limit, once held their sum before the Renderer's estimate refused it).
+struct TileBudget {
+    double limit_mib = 0.0;  ///< limits.max_memory_mib
+    double held_mib = 0.0;   ///< the tiles of the source layers read before this one
+    /// Throws SceneError at `t`'s `key` when making a tile needs `need_mib` at its peak and that
+    /// does not fit beside the tiles held; `what` names it ("the surface", "the field").
+    void check(Reader& t, std::string_view key, std::string_view what, double need_mib) const;
+};
+
+/// A fractional Brownian surface layer from its [layer.fbm] table (absent: the defaults; then
+/// `layer`, the [[layer]] table, is where a budget error points) and the layer's seed: the
+/// realised grid is made here, once. Throws SceneError at the key, also when making it does not
+/// fit the budget.
+std::shared_ptr<const LayerSource> read_fbm_source(std::optional<Reader> fbm, Reader& layer,
+                                                   uint64_t seed, const TileBudget& budget);
 /// A generalized stochastic subdivision layer from its [layer.subdivision] table (acf and the
 /// model's keys, lengths in texture units; samples, size, neighbors, displacement) and the
-/// layer's seed. Throws SceneError at the key.
+/// layer's seed. Throws SceneError at the key, also when making it does not fit the budget.
 std::shared_ptr<const LayerSource> read_subdivision_source(Reader* subdivision, uint64_t seed,
                                                            const std::filesystem::path& base,
-                                                           double max_memory_mib);
+                                                           const TileBudget& budget);
 
 /// A slice of solid noise from its [layer.solid] table (absent: the defaults) and the layer's
 /// seed; `base` resolves a designed kernel's table, `zoom` (the camera's smallest, pixels per

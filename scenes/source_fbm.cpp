@@ -144,8 +144,8 @@ private:
 
 }  // namespace
 
-std::shared_ptr<const LayerSource> read_fbm_source(std::optional<Reader> t, uint64_t seed,
-                                                   double max_memory_mib) {
+std::shared_ptr<const LayerSource> read_fbm_source(std::optional<Reader> t, Reader& layer,
+                                                   uint64_t seed, const TileBudget& budget) {
     synth::FbmOptions o;
     o.size = 256;
     double size = 256.0;
@@ -165,11 +165,10 @@ std::shared_ptr<const LayerSource> read_fbm_source(std::optional<Reader> t, uint
     }
     o.seamless = o.method == synth::FbmMethod::Fourier;  // the periodic field itself tiles
     const double mib = synth::fbm_memory_bytes(o) / (1024.0 * 1024.0);
-    if (mib > max_memory_mib && t)
-        t->fail(t->node("samples"), "samples",
-                "the surface needs an estimated " + std::to_string(std::lround(mib)) +
-                    " MiB, over limits.max_memory_mib = " + std::to_string(std::lround(max_memory_mib)) +
-                    " (fewer samples, or raise the limit)");
+    if (t)
+        budget.check(*t, "samples", "the surface", mib);
+    else
+        budget.check(layer, "source", "the default 256^2 surface", mib);
     try {
         return std::make_shared<const FbmSource>(o, size, seed);
     } catch (const ValueError& e) {

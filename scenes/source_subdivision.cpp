@@ -106,7 +106,7 @@ std::vector<synth::AcfParam> read_acf_params(Reader& t, const std::filesystem::p
 
 std::shared_ptr<const LayerSource> read_subdivision_source(Reader* t, uint64_t seed,
                                                            const std::filesystem::path& base,
-                                                           double max_memory_mib) {
+                                                           const TileBudget& budget) {
     const std::string model = t->string("acf", "");
     if (model.empty()) t->fail(t->node("acf"), "acf", "expected the autocorrelation's model name");
     std::vector<synth::AcfParam> params = read_acf_params(*t, base);
@@ -127,12 +127,8 @@ std::shared_ptr<const LayerSource> read_subdivision_source(Reader* t, uint64_t s
     t->finish();
     // Field values, the finest level's work arrays and the neighbourhood solves: about three
     // doubles per sample.
-    const double mib = double(n) * double(n) * 3 * sizeof(double) / (1024.0 * 1024.0);
-    if (mib > max_memory_mib)
-        t->fail(t->node("samples"), "samples",
-                "the field needs an estimated " + std::to_string(std::lround(mib)) +
-                    " MiB, over limits.max_memory_mib = " + std::to_string(std::lround(max_memory_mib)) +
-                    " (fewer samples, or raise the limit)");
+    budget.check(*t, "samples", "the field",
+                 double(n) * double(n) * 3 * sizeof(double) / (1024.0 * 1024.0));
     const double cell = size / double(n);
     // A model defined by its spectrum is band-limited to the samples' Nyquist frequency in
     // texture units unless the scene says otherwise.

@@ -113,6 +113,42 @@ TEST_CASE("an fbm layer's tile mean is removed and its frame is the same in any 
     CHECK(test::same_bits(f, g));
 }
 
+TEST_CASE("source layers' tiles are held to limits.max_memory_mib together, as they load",
+          "[scenes][source][fbm][errors]") {
+    // A default fbm layer (256^2, incremental) needs `need` MiB while it is made and then holds
+    // its tile (4 bytes a sample). With the limit at 3.5 tiles + need, layers 0-3 fit beside the
+    // tiles held before them and layer 4 does not, although each alone fits (the loader checked
+    // each alone, and a scene of many layers held their sum).
+    synth::FbmOptions o;
+    o.size = 256;
+    const double mib = 1024.0 * 1024.0, tile = 4.0 * 256 * 256 / mib;
+    const double need = synth::fbm_memory_bytes(o) / mib, limit = 3.5 * tile + need;
+    auto scene = [&](int fbm_layers, const std::string& last) {
+        std::string t =
+            "[output]\nsize = [32, 32]\n[limits]\nmax_memory_mib = " + std::to_string(limit) + "\n";
+        for (int i = 0; i < fbm_layers; ++i)
+            t += "[[layer]]\nsource = \"fbm\"\nseed = " + std::to_string(i + 1) + "\n";
+        return t + last;
+    };
+    CHECK_NOTHROW(scenes::load_scene_string(scene(4, ""), "held.toml"));
+    REQUIRE_THROWS_WITH(
+        scenes::load_scene_string(scene(5, ""), "held.toml"),
+        Catch::Contains("layer[4].source = \"fbm\": the default 256^2 surface needs an "
+                        "estimated 1.51 MiB, over the 1.38 MiB that limits.max_memory_mib "
+                        "= 2.38 leaves beside the earlier source layers' tiles (1 MiB)"));
+    // A subdivision tile shares the budget: 256^2 samples need 1.5 MiB (3 doubles a sample),
+    // which fit the limit alone, not beside four fbm tiles.
+    const std::string subdivision =
+        "[[layer]]\nsource = \"subdivision\"\n[layer.subdivision]\n"
+        "acf = \"markov\"\nlength = 8.0\nsamples = 256\n";
+    CHECK_NOTHROW(scenes::load_scene_string(scene(0, subdivision), "held.toml"));
+    REQUIRE_THROWS_WITH(
+        scenes::load_scene_string(scene(4, subdivision), "held.toml"),
+        Catch::Contains(
+            "layer[4].subdivision.samples = 256: the field needs an estimated 1.5 MiB, over "
+            "the 1.38 MiB that limits.max_memory_mib = 2.38 leaves beside"));
+}
+
 TEST_CASE("an fbm layer's bad input is one line at the key", "[scenes][source][fbm][errors]") {
     const std::string base = "[output]\nsize = [64, 64]\n[[layer]]\nsource = \"fbm\"\n";
     auto fails_with = [&](const std::string& text, const std::string& what) {
