@@ -110,6 +110,19 @@ struct LayerSimulator::State {
         if (config.loop_s > 0) loop_steps = std::llround(config.loop_s * timing.fps) * substeps;
     }
 
+    /// The box a flow is prepared for (its caches cover it): the whole seeding cells that meet
+    /// `birth` (every impulse of a cell is born and moved, also where the cell overhangs the
+    /// birth region) grown by how far an impulse travels, `travel`. A point outside the caches
+    /// costs a stencil of nodes computed on the fly (the same bits, ~100 times the time).
+    Box flow_region(const Region& birth, double travel) const {
+        const Box b = birth.bounds();
+        const Box cells{std::floor(b.x0 / layout.cell_x) * layout.cell_x,
+                        std::floor(b.y0 / layout.cell_y) * layout.cell_y,
+                        (std::floor(b.x1 / layout.cell_x) + 1.0) * layout.cell_x,
+                        (std::floor(b.y1 / layout.cell_y) + 1.0) * layout.cell_y};
+        return cells.expanded(travel + 1.0);
+    }
+
     /// Time argument of grid step s: wrapped into the loop so looped copies see the same flow.
     double time_of_step(int64_t s) const {
         if (loop_steps) s = detail::floor_mod(s, loop_steps);
@@ -187,7 +200,7 @@ double LayerSimulator::flow_cache_bytes(const Region& view) const {
     const State& S = *m_state;
     if (!S.flow || S.config.lifetime_s <= 0 || view.empty()) return 0.0;
     // The region impulses_at prepares the flow for.
-    return S.flow->cache_bytes(birth_region(view).bounds().expanded(S.travel(view.bounds()) + 1.0));
+    return S.flow->cache_bytes(S.flow_region(birth_region(view), S.travel(view.bounds())));
 }
 double LayerSimulator::first_frame_steps(const Region& view) const {
     const State& S = *m_state;
@@ -521,7 +534,7 @@ void LayerSimulator::impulses_at(int64_t frame, const Region& view, Impulses& ou
     // The birth region follows the view's boxes (a perspective view's wedge, say): only the
     // cells that meet one of them are generated.
     const Region region = birth_region(view);
-    if (S.flow && !still) S.flow->prepare(region.bounds().expanded(travel + 1.0));
+    if (S.flow && !still) S.flow->prepare(S.flow_region(region, travel));
     const detail::CellCover cover = detail::cell_cover(region, L);
     if (still) {
         // out.theta holds theta0 for a random orientation, and for the field's jitter until
