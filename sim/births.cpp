@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 #include <numbers>
+#include <sstream>
 
 #include "sim/layout.h"
 #include "sim/normal.h"
