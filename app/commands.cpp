@@ -339,6 +339,23 @@ output::Metadata run_metadata(const scenes::Scene& sc, const output::ValueMappin
             {"range", std::to_string(mapping.lo) + " " + std::to_string(mapping.hi)}};
 }
 
+/// How each layer is evaluated (docs/multirate.md §5), for the frames' metadata:
+/// "tolerance 0.005; layer 0 h=32 error 0.0031; layer 1 h=1 ..." ("direct" for layers the
+/// camera's pyramid draws, "source" for source layers).
+std::string lattice_text(scenes::Renderer& r) {
+    const scenes::Scene& sc = r.scene();
+    std::ostringstream s;
+    s << "tolerance " << sc.render.tolerance;
+    for (size_t i = 0; i < sc.layers.size(); ++i) {
+        s << "; layer " << i << " ";
+        if (const auto rule = r.lattice(i))
+            s << "h=" << rule->spacing << " error " << rule->predicted_error;
+        else
+            s << (sc.layers[i].source ? "source" : "direct");
+    }
+    return s.str();
+}
+
 void open_video(output::VideoWriter& writer, const std::string& path,
                 const scenes::OutputConfig& out, const output::Metadata& meta) {
     output::quiet_video_logs();
@@ -421,6 +438,10 @@ int run_render(const RenderOptions& opt) {
     eo.tile_size = opt.tile;
 
     const output::Metadata meta = run_metadata(sc, mapping);
+    // Images also say how their layers were evaluated (a video's metadata stays what `impulse
+    // encode` rebuilds from the frames).
+    output::Metadata image_meta = meta;
+    image_meta.push_back({"lattice", lattice_text(*renderer)});
 
     StopSignals stop_signals;  // from here a stop signal keeps what was written
     output::VideoWriter writer;
@@ -473,7 +494,7 @@ int run_render(const RenderOptions& opt) {
             });
         } else {
             pending = std::async(std::launch::async, [&, s = slot, f, target] {
-                write_frame_image(sc, frames[s], f, target, mapping, meta, rgb);
+                write_frame_image(sc, frames[s], f, target, mapping, image_meta, rgb);
             });
         }
         slot ^= 1;
@@ -606,6 +627,18 @@ int run_info(const InfoOptions& opt) {
                     l.density.value(0.0), l.process.intensity, lt.variance,
                     l.process.lifetime_s > 0 ? " (animated)" : " (still)",
                     l.keyframed() ? " (keyframed)" : "", composition_text(l).c_str());
+        if (const auto rule = r.lattice(i)) {
+            if (rule->spacing > 1)
+                std::printf("           lattice h=%d px, predicted rms error %.2g of the layer's sd "
+                            "(render.tolerance %g)\n",
+                            rule->spacing, rule->predicted_error, scene.render.tolerance);
+            else if (scene.render.tolerance > 0 && rule->next_error == 0.0)
+                std::printf("           lattice h=1 px (direct): the kernel is under 2 px wide\n");
+            else if (scene.render.tolerance > 0)
+                std::printf("           lattice h=1 px (direct): h=2 would give %.2g of the sd, over "
+                            "render.tolerance %g\n",
+                            rule->next_error, scene.render.tolerance);
+        }
         const auto lm = scenes::layer_moments(l);
         std::printf("           overlap %.3g effective impulses, excess kurtosis %.3g%s\n",
                     lm.effective_impulses, lm.excess_kurtosis,

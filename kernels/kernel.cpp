@@ -365,36 +365,18 @@ double Kernel::envelope_transform(double k) const {
 }
 
 double Kernel::power_spectrum(double kx, double ky) const {
-    const double o = m_params.orientation;
+    return spectrum_with(kx, ky, m_params.orientation,
+                         [this](double k) { return envelope_transform(k); });
+}
+
+template <class Transform>
+double Kernel::spectrum_with(double kx, double ky, double o, const Transform& transform) const {
     const double c = std::cos(o), s = std::sin(o);
     const double ku = c * kx + s * ky, kv = -s * kx + c * ky;
     const double a = m_params.aspect;
     // Transform of e(u, a v) at (ku, kv) is (1/a) E(sqrt(ku^2 + (kv/a)^2)).
-    if (is_grid()) {
-        // FT of the bilinear interpolant: d^2 sinc^2(ku d) sinc^2(kv' d) sum v_ij e^{-2 pi i k.x_ij},
-        // in the kernel frame with the aspect squeeze (v' = kv / a, Jacobian 1/a).
-        const SampledKernel& sk = *m_params.sampled;
-        const int n = sk.n;
-        const double R = m_params.radius, d = 2.0 * R / (n - 1);
-        const double kv2 = kv / a;
-        auto sinc = [](double x) { return x == 0.0 ? 1.0 : std::sin(kPi * x) / (kPi * x); };
-        double re = 0.0, im = 0.0;
-        for (int j = 0; j < n; ++j) {
-            const double y = -R + j * d;
-            for (int i = 0; i < n; ++i) {
-                const double x = -R + i * d;
-                const double ph = -2.0 * kPi * (ku * x + kv2 * y);
-                const double v = sk.values[size_t(j) * n + i];
-                re += v * std::cos(ph);
-                im += v * std::sin(ph);
-            }
-        }
-        const double f = d * d * std::pow(sinc(ku * d) * sinc(kv2 * d), 2) / a;
-        return f * f * (re * re + im * im);
-    }
-    auto E = [&](double u, double v) {
-        return envelope_transform(std::sqrt(u * u + (v / a) * (v / a))) / a;
-    };
+    if (is_grid()) return grid_spectrum(ku, kv / a) / (a * a);
+    auto E = [&](double u, double v) { return transform(std::sqrt(u * u + (v / a) * (v / a))) / a; };
     if (!has_carrier()) {
         const double e = E(ku, kv);
         return e * e;
@@ -403,6 +385,92 @@ double Kernel::power_spectrum(double kx, double ky) const {
     const double f = m_params.frequency;
     const double A = E(ku - f, kv), B = E(ku + f, kv);
     return 0.25 * A * A + 0.25 * B * B + 0.5 * A * B * std::cos(2.0 * m_params.phase);
+}
+
+double Kernel::grid_spectrum(double ku, double kv) const {
+    // FT of the bilinear interpolant: d^2 sinc^2(ku d) sinc^2(kv d) sum v_ij e^{-2 pi i k.x_ij},
+    // in the kernel frame (the caller applies the aspect squeeze).
+    const SampledKernel& sk = *m_params.sampled;
+    const int n = sk.n;
+    const double R = m_params.radius, d = 2.0 * R / (n - 1);
+    auto sinc = [](double x) { return x == 0.0 ? 1.0 : std::sin(kPi * x) / (kPi * x); };
+    double re = 0.0, im = 0.0;
+    for (int j = 0; j < n; ++j) {
+        const double y = -R + j * d;
+        for (int i = 0; i < n; ++i) {
+            const double x = -R + i * d;
+            const double ph = -2.0 * kPi * (ku * x + kv * y);
+            const double v = sk.values[size_t(j) * n + i];
+            re += v * std::cos(ph);
+            im += v * std::sin(ph);
+        }
+    }
+    const double f = d * d * std::pow(sinc(ku * d) * sinc(kv * d), 2);
+    return f * f * (re * re + im * im);
+}
+
+std::vector<double> Kernel::envelope_transform_table(double dk, int count, int first) const {
+    // Projection-slice: the 2-D transform of the isotropic envelope along an axis is the 1-D
+    // transform of its projection p(x) = 2 int_0^Y e((x^2 + y^2) / R^2) dy, Y = sqrt(R^2 - x^2),
+    // so E(k) = 2 int_0^R p(x) cos(2 pi k x) dx. With x = R sin(phi) both integrands are smooth
+    // up to the support's edge (Y = R cos(phi)), and Gauss-Legendre panels resolve the cosine
+    // at the largest k; the cosines of k_j = (first + j) dk follow by the Chebyshev recurrence
+    // at each node (one sincos a node, not a Bessel function a node and a frequency).
+    const double R = m_params.radius;
+    const double k_top = std::abs(first + count - 1.0) * dk;
+    const int panels = 24 + static_cast<int>(std::ceil(4.0 * k_top * R));
+    const double* xs = detail::gl_nodes();
+    const double* ws = detail::gl_weights();
+    const double half_pi = 0.5 * kPi, width = half_pi / panels;
+    std::vector<double> out(size_t(count), 0.0);
+    for (int p = 0; p < panels; ++p)
+        for (int i = 0; i < detail::kGlPoints; ++i) {
+            const double phi = (p + 0.5) * width + 0.5 * width * xs[i];
+            const double x = R * std::sin(phi), Y = R * std::cos(phi);
+            double proj = 0.0;  // int_0^1 e((x^2 + Y^2 t^2) / R^2) dt, t by 16-point Gauss-Legendre
+            for (int j = 0; j < detail::kGlPoints; ++j) {
+                const double t = 0.5 + 0.5 * xs[j];
+                proj += 0.5 * ws[j] * envelope((x * x + Y * Y * t * t) / (R * R));
+            }
+            // 2 (projection, 2 Y x the mean) x (dx = Y dphi) x the panel's weight
+            const double w = 2.0 * (2.0 * Y * proj) * Y * 0.5 * width * ws[i];
+            const double theta = 2.0 * kPi * dk * x;
+            const double c1 = std::cos(theta);
+            double prev = std::cos(theta * (first - 1)), cur = std::cos(theta * first);
+            for (int j = 0; j < count; ++j) {
+                out[size_t(j)] += w * cur;
+                const double next = 2.0 * c1 * cur - prev;
+                prev = cur, cur = next;
+            }
+        }
+    return out;
+}
+
+std::vector<double> Kernel::power_spectrum_grid(double K, int n, double rotation) const {
+    const double dk = 2.0 * K / n;
+    // The envelope's Hankel transform E(k), tabulated once over every radius the grid reaches
+    // (a carrier shifts it by f, the aspect stretches it by a) and interpolated (cubic): a
+    // quadrature per point would cost ~1e4 times more.
+    const double reach = (std::sqrt(2.0) * K + m_params.frequency) * m_params.aspect;
+    const int m = is_grid() ? 0 : 2048;
+    // E at (i - 1) reach / m, i = 0 .. m + 2
+    const std::vector<double> table = is_grid() ? std::vector<double>(3, 0.0)
+                                                : envelope_transform_table(reach / m, m + 3, -1);
+    auto transform = [&](double k) {  // cubic (Lagrange) through the four nearest samples
+        const double x = k / reach * m;
+        if (!(x <= m)) return 0.0;
+        const int i = std::min(static_cast<int>(x), m - 1);
+        const double t = x - i;
+        const double* e = table.data() + i;  // e[0] = E at sample i - 1
+        return e[0] * (-t * (t - 1) * (t - 2) / 6) + e[1] * ((t + 1) * (t - 1) * (t - 2) / 2) +
+               e[2] * (-(t + 1) * t * (t - 2) / 2) + e[3] * ((t + 1) * t * (t - 1) / 6);
+    };
+    std::vector<double> out(size_t(n) * n);
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i)
+            out[size_t(j) * n + i] = spectrum_with(-K + (i + 0.5) * dk, -K + (j + 0.5) * dk,
+                                                   m_params.orientation + rotation, transform);
+    return out;
 }
 
 double Kernel::radial_power_spectrum(double k) const {

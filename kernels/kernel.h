@@ -117,6 +117,11 @@ public:
     /// Angular average of |H|^2 over the circle |k| = k (what a radially averaged periodogram
     /// estimates for an isotropic orientation distribution).
     double radial_power_spectrum(double k) const;
+    /// |H|^2 of the kernel turned by `rotation` radians on the n x n grid of frequencies
+    /// k_i = -K + (i + 1/2) 2K / n (cycles per unit; the same in y), row-major [j * n + i]. The
+    /// envelope's transform is tabulated once (2048 points, cubic interpolation: relative error
+    /// ~(reach R / 2048)^4), so a grid costs n^2 look-ups (render's lattice rule).
+    std::vector<double> power_spectrum_grid(double K, int n, double rotation = 0.0) const;
     /// Autocorrelation (h * h~)(tau) = int h(x) h(x + tau) dx, by quadrature (relative error
     /// about 1e-4 for kernels truncated with a jump, far smaller for the cosine kernel).
     double autocorrelation(double tx, double ty) const;
@@ -139,6 +144,12 @@ public:
 private:
     double envelope_transform(double k) const;  ///< isotropic envelope's Hankel transform E(k)
     double grid_value(double u, double v) const;  ///< grid kernels: bilinear sample at (u, v)
+    /// |H|^2 at (kx, ky) for orientation o, the envelope's transform given by `transform`.
+    template <class Transform>
+    double spectrum_with(double kx, double ky, double o, const Transform& transform) const;
+    double grid_spectrum(double ku, double kv) const;  ///< grid kernels, kernel frame
+    /// E(k) at k_j = (first + j) dk, j = 0 .. count - 1 (isotropic envelopes), all at once.
+    std::vector<double> envelope_transform_table(double dk, int count, int first) const;
 
     KernelParams m_params;
     double m_gabor_a = 0.0;

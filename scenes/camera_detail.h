@@ -67,10 +67,19 @@ public:
     bool active() const { return m_active; }
     /// Texture region layer `layer`'s impulses must cover at time t_s (`view`: the orthographic
     /// view; its box when nothing applies). A point when the layer is faded to its mean.
-    numeric::Region region(size_t layer, const render::View& view, double t_s);
+    /// `footprint_scale`: an orthographic view's pixel footprint is that many of `view`'s
+    /// pixels (a lattice of h pixels takes 1 / h: its nodes are filtered as the pixels are).
+    numeric::Region region(size_t layer, const render::View& view, double t_s,
+                           double footprint_scale = 1.0);
     /// Adds the layer's impulses to `out` (frame size) as the camera sees them at time t_s.
     void accumulate(size_t layer, const sim::Impulses& impulses, const render::View& view,
-                    double t_s, render::Frame& out, const render::EvalOptions& options);
+                    double t_s, render::Frame& out, const render::EvalOptions& options,
+                    double footprint_scale = 1.0);
+    /// True for a perspective camera.
+    bool perspective() const;
+    /// The kernel an orthographic view draws layer `layer` with (the finer of the pyramid's
+    /// blended levels): what its lattice rule follows (docs/multirate.md §5).
+    const kernels::Kernel& filtered_kernel(size_t layer, const render::View& view) const;
     /// The largest region over the camera's keys (for budget estimates); `view0`: the
     /// orthographic view at its widest.
     numeric::Region estimate_region(size_t layer, const render::View& view0) const;
@@ -88,7 +97,10 @@ private:
     /// Adds impulses drawn with pyramid `pyr` (the layer's, or one of its scale classes').
     void accumulate_with(size_t layer, const kernels::KernelPyramid& pyr,
                          const sim::Impulses& impulses, const render::View& view, double t_s,
-                         render::Frame& out, const render::EvalOptions& options);
+                         render::Frame& out, const render::EvalOptions& options,
+                         double footprint_scale);
+    /// The anti-aliasing options with the pixel footprint scaled.
+    render::AntiAlias aa_at(double footprint_scale) const;
     /// The pyramid of the layer's kernel scaled by a class scale (built on first use, kept).
     const kernels::KernelPyramid& class_pyramid(size_t layer, double scale) const;
     /// The pyramid whose support reaches furthest: the layer's, or its largest scale class's.

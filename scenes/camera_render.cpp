@@ -112,8 +112,26 @@ void CameraPipeline::add_source(const LayerSource& source, double t, double t_la
     source.add_perspective(m_footprints, 0.0, 0.0, t_layer, out);
 }
 
-numeric::Region CameraPipeline::region(size_t layer, const render::View& view, double t) {
+render::AntiAlias CameraPipeline::aa_at(double footprint_scale) const {
+    render::AntiAlias aa = m_aa;
+    aa.footprint_scale *= footprint_scale;
+    return aa;
+}
+
+bool CameraPipeline::perspective() const {
+    return m_scene->camera.type == CameraConfig::Type::Perspective;
+}
+
+const kernels::Kernel& CameraPipeline::filtered_kernel(size_t layer, const render::View& view) const {
+    const kernels::KernelPyramid& pyr = *m_pyramids.at(layer);
+    if (!m_aa.enabled) return pyr.base();
+    return pyr.level(pyr.select(m_aa.filter_px * m_aa.footprint_scale * view.scale, m_aa.blend).lo);
+}
+
+numeric::Region CameraPipeline::region(size_t layer, const render::View& view, double t,
+                                       double footprint_scale) {
     if (!m_active) return view.box();
+    const render::AntiAlias aa = aa_at(footprint_scale);
     const kernels::KernelPyramid& pyr = reach_pyramid(layer);
     if (m_scene->camera.type == CameraConfig::Type::Perspective) {
         prepare(t);
@@ -122,7 +140,7 @@ numeric::Region CameraPipeline::region(size_t layer, const render::View& view, d
         const auto& c = m_view->camera();
         return numeric::Box{c.x, c.y, c.x, c.y};  // nothing to draw: a point (a few impulses, no work)
     }
-    if (!(render::filtered_fade(pyr, view, m_aa) > 0.0)) {
+    if (!(render::filtered_fade(pyr, view, aa) > 0.0)) {
         // The layer is its mean: ask for next to nothing (a point, never an inverted box).
         const numeric::Box v = view.box();
         const double cx = 0.5 * (v.x0 + v.x1), cy = 0.5 * (v.y0 + v.y1);
@@ -130,25 +148,27 @@ numeric::Region CameraPipeline::region(size_t layer, const render::View& view, d
     }
     // The simulator adds the kernel's own radius; the blended levels reach further.
     return view.box().expanded(
-        std::max(0.0, render::filtered_support(pyr, view, m_aa) - kernel_reach(layer)));
+        std::max(0.0, render::filtered_support(pyr, view, aa) - kernel_reach(layer)));
 }
 
 void CameraPipeline::accumulate(size_t layer, const sim::Impulses& impulses,
                                 const render::View& view, double t, render::Frame& out,
-                                const render::EvalOptions& options) {
+                                const render::EvalOptions& options, double footprint_scale) {
     if (!m_active) return render::accumulate(m_kernels->at(layer), impulses, view, out, options);
     if (impulses.scale.empty())
-        return accumulate_with(layer, *m_pyramids.at(layer), impulses, view, t, out, options);
+        return accumulate_with(layer, *m_pyramids.at(layer), impulses, view, t, out, options,
+                               footprint_scale);
     // A scale field: each class with its own pyramid, in ascending scale (a fixed order).
     for (const render::ScaleClass& c :
          render::split_scale_classes(m_kernels->at(layer), impulses, "layer scale"))
-        accumulate_with(layer, class_pyramid(layer, c.scale), c.impulses, view, t, out, options);
+        accumulate_with(layer, class_pyramid(layer, c.scale), c.impulses, view, t, out, options,
+                        footprint_scale);
 }
 
 void CameraPipeline::accumulate_with(size_t layer, const kernels::KernelPyramid& pyr,
                                      const sim::Impulses& impulses, const render::View& view,
                                      double t, render::Frame& out,
-                                     const render::EvalOptions& options) {
+                                     const render::EvalOptions& options, double footprint_scale) {
     if (m_scene->camera.type == CameraConfig::Type::Perspective) {
         prepare(t);
         render::EvalOptions o = options;
@@ -166,7 +186,7 @@ void CameraPipeline::accumulate_with(size_t layer, const kernels::KernelPyramid&
         }
         return;
     }
-    render::accumulate_filtered(pyr, impulses, view, out, m_aa, options);
+    render::accumulate_filtered(pyr, impulses, view, out, aa_at(footprint_scale), options);
 }
 
 numeric::Region CameraPipeline::estimate_region(size_t layer, const render::View& view0) const {

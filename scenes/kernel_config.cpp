@@ -338,6 +338,34 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
     return k;
 }
 
+/// A Gaussian's radius cuts it with a step exp(-R^2 / (2 sigma^2)) of its peak, which is not
+/// band-limited (docs/multirate.md §4): an unset radius follows sigma to a step of 1e-3
+/// (R = sqrt(2 ln 1000) sigma, the largest sigma when it is keyed); a given one leaving a step
+/// above 1 % is warned about.
+void gaussian_radius(Reader& r, const std::vector<KernelKey>& keys, kernels::KernelParams& k) {
+    constexpr double kFollow = 3.7169221888498383;  // sqrt(2 ln 1000)
+    double sigma = k.sigma;
+    bool radius_keyed = false;
+    for (const auto& key : keys) {
+        if (key.field == &kernels::KernelParams::sigma) sigma = key.value.max();
+        radius_keyed = radius_keyed || key.field == &kernels::KernelParams::radius;
+    }
+    if (!r.has("radius")) {
+        k.radius = kFollow * sigma;
+        return;
+    }
+    const double step = std::exp(-0.5 * (k.radius / sigma) * (k.radius / sigma));
+    if (!radius_keyed && step > 0.01) {
+        std::ostringstream s;
+        s << std::setprecision(3) << "cuts the Gaussian (sigma = " << sigma << ") with a step of "
+          << 100.0 * step << " % of its peak, which is not band-limited (aliasing, and the "
+          << "lattice rule keeps it at every pixel); radius >= " << 3.035 * sigma
+          << " keeps the step under 1 %, or leave radius unset (" << kFollow * sigma
+          << ": a step of 1e-3)";
+        r.warn("radius", s.str());
+    }
+}
+
 }  // namespace
 
 /// The [layer.kernel] table; keyframed fields go to `keys` (their values at t = 0 into the
@@ -372,6 +400,7 @@ kernels::KernelParams read_kernel(std::optional<Reader> r, Reader& layer, const 
         field("orientation", &K::KernelParams::orientation, k.orientation, {}, "");
         field("aspect", &K::KernelParams::aspect, k.aspect, [](double v) { return v >= 1.0; },
               "a ratio >= 1");
+        if (k.type == K::KernelType::Gaussian) gaussian_radius(*r, keys, k);
         if (k.type != K::KernelType::Gaussian && r->has("sigma"))
             r->warn("sigma", "ignored for kernel type " + std::string(K::to_string(k.type)));
         if (k.type != K::KernelType::Gabor)

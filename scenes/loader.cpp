@@ -327,6 +327,13 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base, Out
                                              scene_h, global_seed);
     s.shading = detail::read_shading(shading, base, s.shading_keys);
     if (auto l = top.table("limits")) read_limits(*l, s.limits);
+    if (auto r = top.table("render")) {
+        s.render.tolerance = r->number(
+            "tolerance", s.render.tolerance,
+            [](double v) { return v >= 0.0 && v <= render::kMaxLatticeTolerance; },
+            "a fraction of each layer's sd in [0, 0.1] (0: direct evaluation)");
+        r->finish();
+    }
 
     if (top.has("volume")) {  // impulses in 3-D (docs/volume.md): no [[layer]], no 2-D view
         if (top.has("layer"))

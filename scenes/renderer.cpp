@@ -242,6 +242,41 @@ struct Renderer::State {
     /// `main`: v is the frame's view in camera space, whose fields are kept for the frame.
     void field(size_t i, const Pass& pass, const render::View& v, Space space, bool main,
                render::Frame& out, sim::Impulses& impulses);
+    /// Layer i's lattice rule on a view of `units_per_pixel` (docs/multirate.md), for the
+    /// kernel it draws now and its finest scale; cached per kernel and scale.
+    const render::LatticeRule& lattice_rule(size_t i, int64_t frame, const render::View& v,
+                                            Space space);
+    /// Whether layer i's impulses on a view in `space` go through a lattice: a tolerance above
+    /// 0 and an orthographic view (through the camera's pyramid too, but for a scale field).
+    bool multirate(size_t i, Space space) const {
+        if (!(scene.render.tolerance > 0.0) || read_for_position(i)) return false;
+        if (space == Space::Texture || !camera->active()) return true;
+        return !camera->perspective() && !scene.layers[i].scale;
+    }
+    /// Whether another layer reads layer i's values as a displacement (a warp's source) or
+    /// its gradient (an orientation's source): their errors move or turn that layer's kernels,
+    /// and the moved layer's error is its gradient times the displacement's, not bounded by
+    /// the source's own tolerance; such layers are evaluated directly.
+    bool read_for_position(size_t i) const {
+        if (warp_source[i]) return true;
+        for (const auto& l : scene.layers)
+            if (l.compose.orientation && l.compose.orientation->source == i) return true;
+        return false;
+    }
+    /// Whether layer i is drawn through the camera's pyramid in `space`.
+    bool filtered(Space space) const { return space == Space::Camera && camera->active(); }
+    /// The region layer i's impulses are needed on for view v: the lattice's, or the camera's.
+    numeric::Region impulse_region(size_t i, const render::View& v, Space space, const Pass& pass);
+    /// Adds layer i's impulses on `v` to `out`: through the lattice, or as the camera sees them.
+    void draw(size_t i, const sim::Impulses& imp, const render::View& v, Space space,
+              const Pass& pass, render::Frame& out);
+    struct CachedRule {
+        kernels::KernelParams kernel;
+        double units_per_pixel;
+        bool filtered;
+        render::LatticeRule rule;
+    };
+    std::vector<std::vector<CachedRule>> lattice_rules;  ///< per layer
     /// The sum of the layer's impulses on `v` (added to `out`).
     void raw(size_t i, const Pass& pass, const render::View& v, Space space, render::Frame& out,
              sim::Impulses& impulses);
@@ -492,6 +527,17 @@ output::ValueMapping Renderer::mapping() const {
     return {lo, hi};
 }
 
+std::optional<render::LatticeRule> Renderer::lattice(size_t layer, int64_t frame) {
+    State& S = *m_state;
+    const LayerConfig& l = S.scene.layers.at(layer);
+    if (l.source || !S.rendered[layer] || !S.multirate(layer, State::Space::Camera))
+        return std::nullopt;
+    const auto& o = S.scene.output;
+    const double t = S.scene.frame_time(frame);
+    return S.lattice_rule(layer, frame, S.scene.camera.view(o.width, o.height, t),
+                          State::Space::Camera);
+}
+
 void Renderer::render(int64_t frame, render::Frame& out, const render::EvalOptions& options) {
     State& S = *m_state;
     const auto& o = S.scene.output;
@@ -512,8 +558,8 @@ void Renderer::render(int64_t frame, render::Frame& out, const render::EvalOptio
             !S.warp_source[i] && !layer.source) {
             // A plain sum: impulses straight into the frame, the mean added at the end.
             sim::Impulses& imp = S.impulses[i];
-            S.layer_impulses(i, pass, S.camera->region(i, view, t), imp);
-            S.camera->accumulate(i, imp, view, t, out, options);
+            S.layer_impulses(i, pass, S.impulse_region(i, view, State::Space::Camera, pass), imp);
+            S.draw(i, imp, view, State::Space::Camera, pass, out);
             mean += layer.mean.value(S.scene.layer_time(i, frame));
             continue;
         }
@@ -631,13 +677,67 @@ void Renderer::State::raw(size_t i, const Pass& pass, const render::View& v, Spa
             out.data[p] = static_cast<float>(out.data[p] + gain * f.data[p]);
         return;
     }
-    if (space == Space::Camera) {
-        layer_impulses(i, pass, camera->region(i, v, pass.t), imp);
-        camera->accumulate(i, imp, v, pass.t, out, *pass.options);
-    } else {
-        layer_impulses(i, pass, v.box(), imp);
-        render::accumulate(kernels[i], imp, v, out, *pass.options);
+    layer_impulses(i, pass, impulse_region(i, v, space, pass), imp);
+    draw(i, imp, v, space, pass, out);
+}
+
+const render::LatticeRule& Renderer::State::lattice_rule(size_t i, int64_t frame,
+                                                        const render::View& v, Space space) {
+    const double units_per_pixel = v.scale;
+    const bool through_pyramid = filtered(space);
+    if (lattice_rules.size() < scene.layers.size()) lattice_rules.resize(scene.layers.size());
+    const LayerConfig& layer = scene.layers[i];
+    // The kernel the layer draws at this time (layer_impulses turns keyed orientations on the
+    // impulses instead, so the orientation stays the layer's): a pure function of the time,
+    // so the rule does not depend on which frames were rendered before.
+    kernels::KernelParams k = layer.kernel;
+    if (!layer.kernel_keys.empty()) {
+        k = layer.kernel_at(scene.layer_time(i, frame));
+        k.orientation = layer.kernel.orientation;
     }
+    auto& cache = lattice_rules[i];
+    for (const CachedRule& c : cache)
+        if (c.units_per_pixel == units_per_pixel && c.filtered == through_pyramid &&
+            same_kernel(c.kernel, k))
+            return c.rule;
+    // The finest kernel the layer draws: its scale field's smallest scale class.
+    const double r = kernels::kScaleClassRatio;
+    const double s = std::pow(r, std::floor(std::log(layer.min_scale()) / std::log(r) + 1e-9));
+    const kernels::Kernel finest(layer.scale ? render::scaled_kernel(k, s) : k);
+    // Through the pyramid (a fixed kernel: keys are refused there but for the orientation),
+    // the level the view draws.
+    const kernels::Kernel& drawn = through_pyramid ? camera->filtered_kernel(i, v) : finest;
+    if (cache.size() >= 8) cache.erase(cache.begin());  // keyed kernels: a few recent ones
+    cache.push_back({k, units_per_pixel, through_pyramid,
+                     render::choose_lattice(drawn, units_per_pixel, scene.render.tolerance)});
+    return cache.back().rule;
+}
+
+numeric::Region Renderer::State::impulse_region(size_t i, const render::View& v, Space space,
+                                                const Pass& pass) {
+    if (!multirate(i, space)) return space == Space::Camera ? camera->region(i, v, pass.t) : v.box();
+    const render::LatticeRule& rule = lattice_rule(i, pass.frame, v, space);
+    const render::View lattice = render::lattice_view(v, rule);
+    if (filtered(space)) return camera->region(i, lattice, pass.t, 1.0 / rule.spacing);
+    return lattice.box();
+}
+
+void Renderer::State::draw(size_t i, const sim::Impulses& imp, const render::View& v,
+                           Space space, const Pass& pass, render::Frame& out) {
+    const render::EvalOptions& options = *pass.options;
+    if (!multirate(i, space)) {
+        if (space == Space::Camera) return camera->accumulate(i, imp, v, pass.t, out, options);
+        return render::accumulate(kernels[i], imp, v, out, options);
+    }
+    const render::LatticeRule& rule = lattice_rule(i, pass.frame, v, space);
+    if (!filtered(space)) return render::accumulate_lattice(kernels[i], imp, v, rule, out, options);
+    if (rule.spacing == 1) return camera->accumulate(i, imp, v, pass.t, out, options);
+    // The pyramid's levels at the nodes, chosen for the pixels' footprint.
+    const render::View lattice = render::lattice_view(v, rule);
+    render::Frame nodes;
+    nodes.resize(lattice.width, lattice.height);
+    camera->accumulate(i, imp, lattice, pass.t, nodes, options, 1.0 / rule.spacing);
+    render::add_reconstruction(nodes, rule, v, out);
 }
 
 void Renderer::State::layer_impulses(size_t i, const Pass& pass, const numeric::Region& box,

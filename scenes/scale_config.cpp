@@ -33,6 +33,7 @@ public:
         std::fill(s, s + n, static_cast<float>(m_value.value(t_s)));
     }
     double max_scale() const override { return m_value.max(); }
+    double min_scale() const override { return m_value.min(); }
 
 private:
     numeric::Keyframed m_value;
@@ -57,6 +58,7 @@ public:
         }
     }
     double max_scale() const override { return std::max(m_values[0], m_values[1]); }
+    double min_scale() const override { return std::min(m_values[0], m_values[1]); }
 
 private:
     bool m_radial;
@@ -71,6 +73,7 @@ public:
     ImageScale(int w, int h, std::vector<float> values, double ox, double oy, double spacing)
         : m_w(w), m_h(h), m_values(std::move(values)), m_ox(ox), m_oy(oy), m_spacing(spacing) {
         m_max = *std::max_element(m_values.begin(), m_values.end());
+        m_min = *std::min_element(m_values.begin(), m_values.end());
     }
     void scales(double, size_t n, const double* x, const double* y, float* s) const override {
         for (size_t i = 0; i < n; ++i) {
@@ -86,11 +89,12 @@ public:
         }
     }
     double max_scale() const override { return m_max; }
+    double min_scale() const override { return m_min; }
 
 private:
     int m_w, m_h;
     std::vector<float> m_values;
-    double m_ox, m_oy, m_spacing, m_max = 1.0;
+    double m_ox, m_oy, m_spacing, m_max = 1.0, m_min = 1.0;
 };
 
 /// A required [x, y] point.

@@ -155,6 +155,8 @@ public:
                         float* s) const = 0;
     /// The largest s anywhere at any time (the simulator's support radius is R times it).
     virtual double max_scale() const = 0;
+    /// The smallest s anywhere at any time (the finest kernel: what the lattice rule follows).
+    virtual double min_scale() const = 0;
 };
 
 /// One [[layer]]. Its keyframed parameters are evaluated at the layer time (layer_time).
@@ -208,6 +210,7 @@ struct LayerConfig {
     /// The largest kernel scale of the scale field (1 without one): the impulses' support
     /// reaches max_radius() * max_scale().
     double max_scale() const { return scale ? scale->max_scale() : 1.0; }
+    double min_scale() const { return scale ? scale->min_scale() : 1.0; }
     /// The marginal's target parameters at layer time t_s (marginal must be set).
     kernels::MarginalParams marginal_at(double t_s) const;
     /// The weight of the carrier's quadrature component at layer time t_s (1 without
@@ -228,12 +231,20 @@ struct ShadingKeys {
 /// A volume scene's content (scenes/volume_scene.h).
 struct VolumeSceneConfig;
 
+/// [render]: how frames are evaluated (docs/multirate.md).
+struct RenderConfig {
+    /// rms error allowed to multi-rate evaluation, as a fraction of each layer's sd, in
+    /// [0, render::kMaxLatticeTolerance]; 0: every impulse at every pixel (direct evaluation).
+    double tolerance = render::kDefaultLatticeTolerance;
+};
+
 struct Scene {
     std::string path;  ///< file it came from ("" for a string)
     uint64_t seed = 0; ///< the scene-wide seed (top-level `seed`, `--seed`)
     OutputConfig output;
     CameraConfig camera;
     Limits limits;
+    RenderConfig render;
     std::vector<LayerConfig> layers;
     /// Set for a volume scene (then `layers` is empty and the Renderer refuses it).
     std::shared_ptr<const VolumeSceneConfig> volume;
@@ -341,6 +352,11 @@ public:
     /// frames (scene_theory at the first and last frame, every key time inside, one lifetime
     /// after each, and 64 times between), so the mapping is the same in every frame.
     output::ValueMapping mapping() const;
+    /// How layer `layer`'s impulses are evaluated on frame `frame`'s view (docs/multirate.md):
+    /// its lattice rule (spacing 1, error 0: every impulse at every pixel); nullopt where the
+    /// layer draws no impulses on the frame's view itself (a source layer, a hidden layer, the
+    /// camera's pyramid or perspective).
+    std::optional<render::LatticeRule> lattice(size_t layer, int64_t frame = 0);
 
 private:
     struct State;
