@@ -1,0 +1,165 @@
+# SPDX-License-Identifier: Apache-2.0
+"""impulse in Blender (docs/blender.md): fill a float Image with frame N of an impulse scene (a
+built-in name or a TOML file), rendered by the impulse Python module, optionally following the
+timeline (frames rendered on demand and cached). The pixels are the values `impulse render SCENE
+--frames N-N -o f.exr` writes, in R, G and B (alpha 1), bit for bit."""
+
+bl_info = {
+    "name": "impulse procedural textures",
+    "author": "the impulse authors",
+    "version": (0, 1, 0),
+    "blender": (3, 4, 0),
+    "location": "Image Editor > Sidebar > impulse",
+    "description": "Animated sparse-convolution noise (Lewis 1986) rendered into an Image",
+    "category": "Render",
+}
+
+import sys
+from collections import OrderedDict
+
+import bpy
+from bpy.props import BoolProperty, IntProperty, PointerProperty, StringProperty
+
+_CACHED_FRAMES = 16  # frames kept per scene while following the timeline
+_cache = {"key": None, "scene": None, "frames": OrderedDict()}
+
+
+def _impulse():
+    """The impulse module: from the add-on's module directory when one is set (build/python, or
+    a venv's site-packages after `pip install .`), else from Blender's Python path."""
+    prefs = bpy.context.preferences.addons[__name__].preferences
+    if prefs.module_dir and prefs.module_dir not in sys.path:
+        sys.path.insert(0, bpy.path.abspath(prefs.module_dir))
+    import impulse
+    return impulse
+
+
+def _scene(settings):
+    """The impulse scene of the settings, loaded once per (source, size)."""
+    size = (settings.width, settings.height) if settings.width > 0 and settings.height > 0 else None
+    key = (settings.source, size)
+    if _cache["key"] != key:
+        _cache["scene"] = _impulse().load_scene(settings.source, size=size)
+        _cache["key"], _cache["frames"] = key, OrderedDict()
+    return _cache["scene"]
+
+
+def _field(scene, frame):
+    """Frame `frame` of the scene (float32, H x W, top row first), from the cache if there."""
+    frames = _cache["frames"]
+    if frame not in frames:
+        frames[frame] = scene.render(frame).copy()
+        while len(frames) > _CACHED_FRAMES:
+            frames.popitem(last=False)
+    return frames[frame]
+
+
+def _image(settings, scene):
+    """The settings' Image (a float one of the scene's size is made when none is set)."""
+    image = settings.image
+    if image is None or tuple(image.size) != (scene.width, scene.height):
+        image = bpy.data.images.new(f"impulse {settings.source}", scene.width, scene.height,
+                                    alpha=False, float_buffer=True)
+        image.colorspace_settings.name = "Non-Color"  # the field's raw values, no view transform
+        settings.image = image
+    return image
+
+
+def fill(settings, frame):
+    """Renders `frame` into the settings' Image; raises impulse.Error with the CLI's message."""
+    import numpy as np
+
+    scene = _scene(settings)
+    if not 0 <= frame < scene.frames:
+        raise ValueError(f"frame {frame}: outside [0, {scene.frames}) (the scene's output.frames)")
+    field = _field(scene, frame)
+    rgba = np.ones((scene.height, scene.width, 4), dtype=np.float32)
+    rgba[:, :, :3] = field[::-1, :, None]  # Blender stores the bottom row first
+    image = _image(settings, scene)
+    image.pixels.foreach_set(rgba.ravel())
+    image.update()
+    return image
+
+
+class ImpulseSettings(bpy.types.PropertyGroup):
+    source: StringProperty(name="Scene", default="drift",
+                           description="A built-in scene (drift, clouds, marble ...) or a TOML file")
+    width: IntProperty(name="Width", default=0, min=0, max=32768,
+                       description="Pixels across (0: the scene's own size); the same view, as --size")
+    height: IntProperty(name="Height", default=0, min=0, max=32768)
+    image: PointerProperty(name="Image", type=bpy.types.Image)
+    follow: BoolProperty(name="Follow the timeline", default=False,
+                         description="Fill the Image with the current frame whenever it changes")
+
+
+class IMPULSE_OT_fill_image(bpy.types.Operator):
+    """Render a frame of the impulse scene into the Image"""
+
+    bl_idname = "impulse.fill_image"
+    bl_label = "Fill Image"
+    frame: IntProperty(name="Frame", default=-1, description="The frame (-1: the current frame)")
+
+    def execute(self, context):
+        frame = self.frame if self.frame >= 0 else context.scene.frame_current
+        try:
+            image = fill(context.scene.impulse, frame)
+        except Exception as e:  # impulse.Error carries the CLI's one line
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"{image.name}: frame {frame}")
+        return {"FINISHED"}
+
+
+class IMPULSE_PT_panel(bpy.types.Panel):
+    bl_label = "impulse"
+    bl_space_type = "IMAGE_EDITOR"
+    bl_region_type = "UI"
+    bl_category = "impulse"
+
+    def draw(self, context):
+        settings = context.scene.impulse
+        layout = self.layout
+        layout.prop(settings, "source")
+        row = layout.row()
+        row.prop(settings, "width")
+        row.prop(settings, "height")
+        layout.prop(settings, "image")
+        layout.prop(settings, "follow")
+        layout.operator(IMPULSE_OT_fill_image.bl_idname)
+
+
+class ImpulsePreferences(bpy.types.AddonPreferences):
+    bl_idname = __name__
+    module_dir: StringProperty(name="impulse module directory", subtype="DIR_PATH",
+                               description="Where `import impulse` is found: build/python, or a "
+                                           "venv's site-packages (empty: Blender's Python path)")
+
+    def draw(self, context):
+        self.layout.prop(self, "module_dir")
+
+
+@bpy.app.handlers.persistent
+def _follow_timeline(scene, depsgraph=None):
+    settings = scene.impulse
+    if settings.follow:
+        try:
+            fill(settings, scene.frame_current)
+        except Exception as e:
+            print(f"impulse: {e}")
+
+
+_classes = (ImpulseSettings, IMPULSE_OT_fill_image, IMPULSE_PT_panel, ImpulsePreferences)
+
+
+def register():
+    for c in _classes:
+        bpy.utils.register_class(c)
+    bpy.types.Scene.impulse = PointerProperty(type=ImpulseSettings)
+    bpy.app.handlers.frame_change_post.append(_follow_timeline)
+
+
+def unregister():
+    bpy.app.handlers.frame_change_post.remove(_follow_timeline)
+    del bpy.types.Scene.impulse
+    for c in reversed(_classes):
+        bpy.utils.unregister_class(c)
