@@ -127,6 +127,10 @@ TEST_CASE("flipbook cells are the frames render writes, bit for bit", "[cli][exp
         CHECK(cell(atlas, f, 5).data == read_exr(dir / name).data);
     }
     CHECK(cell(atlas, 24, 5).data == std::vector<float>(size_t(kW) * kH, 0.0f));  // the unused cell
+    // The same bytes on one thread (design.md §4: any thread count).
+    REQUIRE(run(dir, "export flipbook " + quote(dir / "loop.toml") + " --loop --tileable --threads 1 -o " +
+                         quote(dir / "one.exr")).status == 0);
+    CHECK(read_file(dir / "one.exr") == read_file(dir / "atlas.exr"));
 }
 
 TEST_CASE("a looping flipbook's last frame is followed by its first", "[cli][export]") {
@@ -203,6 +207,9 @@ TEST_CASE("a flow map encodes the layer's velocity", "[cli][export]") {
 TEST_CASE("a volume's slices, raw file and sidecar agree, and it tiles", "[cli][export]") {
     TempDir dir;
     REQUIRE(run(dir, "export volume --size 32x32x16 --radius 8 --seed 4 -o " + quote(dir / "v.exr")).status == 0);
+    REQUIRE(shell(dir, "taskset -c 0 " + quote(IMPULSE_BINARY) + " export volume --size 32x32x16 --radius 8 --seed 4 -o " +
+                           quote(dir / "w.exr")).status == 0);
+    CHECK(read_file(dir / "w.raw") == read_file(dir / "v.raw"));  // one core: the same bytes
     const nlohmann::json j = read_json(dir / "v.json");
     CHECK(j["size"] == nlohmann::json::array({32, 32, 16}));
     CHECK(j["radius_voxels"] == 8);
