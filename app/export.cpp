@@ -174,6 +174,16 @@ std::string flipbook_sidecar(const scenes::Scene& sc, const std::string& image, 
     return j.text();
 }
 
+/// Refuses an atlas whose pixels would exceed the scene's memory limit, with the estimate.
+void check_atlas_memory(const scenes::Scene& sc, const output::AtlasLayout& l, int channels) {
+    const double mib = double(l.width()) * l.height() * channels * sizeof(float) / (1024.0 * 1024.0);
+    if (mib > sc.limits.max_memory_mib)
+        throw ValueError("an atlas of " + std::to_string(l.width()) + "x" + std::to_string(l.height()) + " pixels (" +
+                         std::to_string(channels) + " float channels) needs " + std::to_string(std::llround(mib)) +
+                         " MiB, over limits.max_memory_mib = " + fmt(sc.limits.max_memory_mib) +
+                         ": fewer frames or a smaller --size");
+}
+
 int run_flipbook(const ExportOptions& o) {
     check_atlas_output(o.output);
     scenes::Scene scene = load_render_scene(render_options(o));
@@ -181,11 +191,12 @@ int run_flipbook(const ExportOptions& o) {
     const FlipbookPlan plan = plan_flipbook(o, scene);
     const output::AtlasLayout layout =
         output::atlas_layout(o.layout, plan.last - plan.first + 1, scene.output.width, scene.output.height);
+    const bool exr = output::lower_extension(o.output) == ".exr";
+    const int channels = !exr && colour_shading(scene) ? 3 : 1;
+    check_atlas_memory(scene, layout, channels);
     const auto cap = thread_cap(o.threads);
     scenes::Renderer renderer(std::move(scene));
     const scenes::Scene& sc = renderer.scene();
-    const bool exr = output::lower_extension(o.output) == ".exr";
-    const int channels = !exr && colour_shading(sc) ? 3 : 1;
     const std::vector<float> atlas = render_atlas(renderer, plan, layout, channels);
     const output::ValueMapping mapping = renderer.mapping();
     const output::Metadata meta = {{"seed", std::to_string(sc.seed)}, {"scene_hash", sc.hash},

@@ -246,6 +246,7 @@ TEST_CASE("export refuses bad input with one line and writes nothing", "[cli][ex
         {"export flipbook " + loop + " --loop --frames 0-9" + out, "--frames 0-9 with --loop: a loop is 24 frames"},
         {"export flipbook " + loop + " --tileable --set camera.zoom=2" + out, "not a whole number of periods"},
         {"export flipbook " + loop + " -o " + quote(dir / "a.jpg"), "a.jpg: expected an image ending in .exr or .png"},
+        {"export flipbook " + loop + " --loop --set limits.max_memory_mib=0.5" + out, "an atlas of 480x320 pixels (1 float channels) needs 1 MiB, over limits.max_memory_mib = 0.5"},
         {"export flowmap " + loop + " --layer 3" + out, "--layer 3: expected"},
         {"export flowmap " + loop + " --bits 12 -o " + quote(dir / "f.png"), "--bits 12: expected 8 or 16"},
         {"export volume --size 1x8x8" + out, "--size 1x8x8: expected N or WxHxD voxels"},
