@@ -1,21 +1,23 @@
 # SPDX-License-Identifier: Apache-2.0
 # Run by blender/test_blender_addon.sh inside headless Blender:
-#   blender -b --factory-startup --python-exit-code 1 --python test_addon.py -- ZIP MODULE_DIR EXR_FITS CONFTEST_DIR
+#   blender -b --factory-startup --python-exit-code 1 --python test_addon.py -- ZIP MODULE_DIR EXR_FITS CONFTEST_DIR CLI
 # Installs the add-on from its zip, fills an Image with drift's frame 12 at 192x108 and compares
 # its pixels with the CLI's EXR (as FITS, float32) bit for bit; a scene that does not load is
-# the operator's error report (one line) and no Image.
+# the operator's error report (one line) and no Image; a small cloudvolume comes in as a Volume
+# object sequence with its "density" grid.
 import sys
 
 import bpy
 import numpy as np
 
-zip_path, module_dir, fits, conftest_dir = sys.argv[sys.argv.index("--") + 1:]
+zip_path, module_dir, fits, conftest_dir, cli = sys.argv[sys.argv.index("--") + 1:]
 sys.path.insert(0, conftest_dir)
 from conftest import read_fits  # noqa: E402
 
 bpy.ops.preferences.addon_install(filepath=zip_path)
 bpy.ops.preferences.addon_enable(module="impulse_addon")
-bpy.context.preferences.addons["impulse_addon"].preferences.module_dir = module_dir
+prefs = bpy.context.preferences.addons["impulse_addon"].preferences
+prefs.module_dir, prefs.tool = module_dir, cli
 
 settings = bpy.context.scene.impulse
 settings.source, settings.width, settings.height = "drift", 192, 108
@@ -42,3 +44,25 @@ except RuntimeError as e:  # the operator's ERROR report, as Blender raises it i
     assert len(message.splitlines()) == 1, message
 assert len(bpy.data.images) == images and settings.image is None
 print("impulse add-on: a bad scene is one error report, no Image")
+
+settings.source = "cloudvolume"
+settings.overrides = "volume.size=[40,24,20]; volume.octaves=2; volume.kernel.radius=8"
+assert bpy.ops.impulse.import_volume(first=2, last=4) == {"FINISHED"}
+volume = bpy.context.active_object
+assert volume.type == "VOLUME", volume.type
+assert volume.data.is_sequence and volume.data.frame_duration == 3, (volume.data.is_sequence, volume.data.frame_duration)
+bpy.context.scene.frame_set(volume.data.frame_start + 1)  # the sequence's second frame, file 3
+volume.data.grids.load()
+names = [g.name for g in volume.data.grids]
+assert "density" in names, (names, volume.data.grids.error_message, volume.data.filepath)
+print(f"impulse add-on: cloudvolume frames 2-4 as a Volume sequence with grids {names}")
+settings.overrides = "volume.size=[40,24]"
+objects = len(bpy.data.objects)
+try:
+    bpy.ops.impulse.import_volume(first=0, last=0)
+    raise AssertionError("a bad override was accepted")
+except RuntimeError as e:
+    message = str(e).strip()
+    assert "volume.size" in message and len(message.splitlines()) == 1, message
+assert len(bpy.data.objects) == objects
+print("impulse add-on: a bad volume key is one error report, no object")

@@ -14,6 +14,6 @@ bash "$src/scripts/blender_addon.sh" -o "$tmp/impulse_addon.zip"
 "$cli" render drift --size 192x108 --frames 12-12 -o "$tmp/f.exr" -q
 oiiotool "$tmp/f.exr" -d float -o "$tmp/f.fits"
 blender -b --factory-startup --python-exit-code 1 --python "$src/blender/test_addon.py" -- \
-    "$tmp/impulse_addon.zip" "$module" "$tmp/f.fits" "$src/python/tests" > "$tmp/blender.log" 2>&1 \
+    "$tmp/impulse_addon.zip" "$module" "$tmp/f.fits" "$src/python/tests" "$cli" > "$tmp/blender.log" 2>&1 \
     || { cat "$tmp/blender.log"; exit 1; }
 grep "^impulse add-on:" "$tmp/blender.log"

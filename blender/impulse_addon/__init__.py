@@ -1,8 +1,9 @@
 # SPDX-License-Identifier: Apache-2.0
 """impulse in Blender (docs/blender.md): fill a float Image with frame N of an impulse scene (a
 built-in name or a TOML file), rendered by the impulse Python module, optionally following the
-timeline (frames rendered on demand and cached). The pixels are the values `impulse render SCENE
---frames N-N -o f.exr` writes, in R, G and B (alpha 1), bit for bit."""
+timeline (frames rendered on demand and cached); the pixels are the values `impulse render SCENE
+--frames N-N -o f.exr` writes, in R, G and B (alpha 1), bit for bit. A volume scene comes in as
+a Volume object playing its OpenVDB sequence (grid "density"), written by the impulse tool."""
 
 bl_info = {
     "name": "impulse procedural textures",
@@ -14,7 +15,11 @@ bl_info = {
     "category": "Render",
 }
 
+import os
+import shutil
+import subprocess
 import sys
+import tempfile
 from collections import OrderedDict
 
 import bpy
@@ -34,12 +39,17 @@ def _impulse():
     return impulse
 
 
+def _overrides(settings):
+    """The settings' overrides, "key=value" separated by semicolons, as a list for --set."""
+    return [o.strip() for o in settings.overrides.split(";") if o.strip()]
+
+
 def _scene(settings):
-    """The impulse scene of the settings, loaded once per (source, size)."""
+    """The impulse scene of the settings, loaded once per (source, overrides, size)."""
     size = (settings.width, settings.height) if settings.width > 0 and settings.height > 0 else None
-    key = (settings.source, size)
+    key = (settings.source, settings.overrides, size)
     if _cache["key"] != key:
-        _cache["scene"] = _impulse().load_scene(settings.source, size=size)
+        _cache["scene"] = _impulse().load_scene(settings.source, overrides=_overrides(settings), size=size)
         _cache["key"], _cache["frames"] = key, OrderedDict()
     return _cache["scene"]
 
@@ -81,9 +91,36 @@ def fill(settings, frame):
     return image
 
 
+def import_volume(settings, first, last):
+    """Writes frames first..last of a volume scene as OpenVDB files with the impulse tool (in a
+    new temporary directory) and imports them as one Volume object sequence; returns it. Raises
+    RuntimeError with the tool's error line."""
+    prefs = bpy.context.preferences.addons[__name__].preferences
+    folder = tempfile.mkdtemp(prefix="impulse_volume_")
+    stem = os.path.splitext(os.path.basename(settings.source))[0]
+    pattern = os.path.join(folder, stem + "_####.vdb")
+    command = [prefs.tool or "impulse", "render", settings.source, "-o", pattern, "--frames",
+               f"{first}-{last}", "-q"]
+    for o in _overrides(settings):
+        command += ["--set", o]
+    run = subprocess.run(command, capture_output=True, text=True)
+    if run.returncode != 0:
+        shutil.rmtree(folder, ignore_errors=True)  # nothing written
+        lines = run.stderr.strip().splitlines()
+        raise RuntimeError(lines[-1] if lines else f"impulse exited with status {run.returncode}")
+    files = sorted(f for f in os.listdir(folder) if f.endswith(".vdb"))
+    bpy.ops.object.volume_import(filepath=os.path.join(folder, files[0]), directory=folder,
+                                 files=[{"name": f} for f in files])
+    volume = bpy.context.active_object
+    volume.data.frame_start = first  # impulse frame f at Blender frame f, as Fill Image does
+    return volume
+
+
 class ImpulseSettings(bpy.types.PropertyGroup):
     source: StringProperty(name="Scene", default="drift",
                            description="A built-in scene (drift, clouds, marble ...) or a TOML file")
+    overrides: StringProperty(name="Overrides", default="",
+                              description="key=value; key=value: scene keys set as --set does")
     width: IntProperty(name="Width", default=0, min=0, max=32768,
                        description="Pixels across (0: the scene's own size); the same view, as --size")
     height: IntProperty(name="Height", default=0, min=0, max=32768)
@@ -110,6 +147,27 @@ class IMPULSE_OT_fill_image(bpy.types.Operator):
         return {"FINISHED"}
 
 
+class IMPULSE_OT_import_volume(bpy.types.Operator):
+    """Render frames of a volume scene to OpenVDB with the impulse tool and import them as a Volume object"""
+
+    bl_idname = "impulse.import_volume"
+    bl_label = "Import Volume"
+    first: IntProperty(name="First frame", default=0, min=0)
+    last: IntProperty(name="Last frame", default=0, min=0)
+
+    def execute(self, context):
+        if self.last < self.first:
+            self.report({"ERROR"}, f"frames {self.first}-{self.last}: expected first <= last")
+            return {"CANCELLED"}
+        try:
+            volume = import_volume(context.scene.impulse, self.first, self.last)
+        except Exception as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"{volume.name}: frames {self.first}-{self.last}")
+        return {"FINISHED"}
+
+
 class IMPULSE_PT_panel(bpy.types.Panel):
     bl_label = "impulse"
     bl_space_type = "IMAGE_EDITOR"
@@ -120,12 +178,14 @@ class IMPULSE_PT_panel(bpy.types.Panel):
         settings = context.scene.impulse
         layout = self.layout
         layout.prop(settings, "source")
+        layout.prop(settings, "overrides")
         row = layout.row()
         row.prop(settings, "width")
         row.prop(settings, "height")
         layout.prop(settings, "image")
         layout.prop(settings, "follow")
         layout.operator(IMPULSE_OT_fill_image.bl_idname)
+        layout.operator(IMPULSE_OT_import_volume.bl_idname)
 
 
 class ImpulsePreferences(bpy.types.AddonPreferences):
@@ -133,9 +193,12 @@ class ImpulsePreferences(bpy.types.AddonPreferences):
     module_dir: StringProperty(name="impulse module directory", subtype="DIR_PATH",
                                description="Where `import impulse` is found: build/python, or a "
                                            "venv's site-packages (empty: Blender's Python path)")
+    tool: StringProperty(name="impulse tool", subtype="FILE_PATH", default="impulse",
+                         description="The impulse command (Import Volume runs it)")
 
     def draw(self, context):
         self.layout.prop(self, "module_dir")
+        self.layout.prop(self, "tool")
 
 
 @bpy.app.handlers.persistent
@@ -148,7 +211,8 @@ def _follow_timeline(scene, depsgraph=None):
             print(f"impulse: {e}")
 
 
-_classes = (ImpulseSettings, IMPULSE_OT_fill_image, IMPULSE_PT_panel, ImpulsePreferences)
+_classes = (ImpulseSettings, IMPULSE_OT_fill_image, IMPULSE_OT_import_volume, IMPULSE_PT_panel,
+            ImpulsePreferences)
 
 
 def register():
