@@ -27,9 +27,9 @@ assert tuple(image.size) == (192, 108) and image.is_float, (tuple(image.size), i
 pixels = np.empty(len(image.pixels), dtype=np.float32)
 image.pixels.foreach_get(pixels)
 rgba = pixels.reshape(108, 192, 4)[::-1]  # Blender's rows run bottom-up
-cli = read_fits(fits)
+reference = read_fits(fits)
 for c in range(3):
-    assert np.array_equal(rgba[:, :, c].view(np.uint32), cli.view(np.uint32)), f"channel {c} differs"
+    assert np.array_equal(rgba[:, :, c].view(np.uint32), reference.view(np.uint32)), f"channel {c} differs"
 assert np.all(rgba[:, :, 3] == 1.0)
 print("impulse add-on: drift frame 12 in the Image equals the CLI's EXR bit for bit")
 
@@ -66,3 +66,30 @@ except RuntimeError as e:
     assert "volume.size" in message and len(message.splitlines()) == 1, message
 assert len(bpy.data.objects) == objects
 print("impulse add-on: a bad volume key is one error report, no object")
+
+# A UV sphere's vertices coloured by `impulse mesh texture`: attribute colour i is the colour the
+# tool gives vertex i of the same vertex list (written here as OBJ, in Blender's order).
+import os  # noqa: E402
+import subprocess  # noqa: E402
+import tempfile  # noqa: E402
+
+bpy.ops.mesh.primitive_uv_sphere_add(segments=48, ring_count=24)
+sphere = bpy.context.active_object
+assert bpy.ops.impulse.texture_mesh(transform="wood", seed=3) == {"FINISHED"}
+attribute = sphere.data.color_attributes["impulse"]
+got = np.empty(len(sphere.data.vertices) * 4, dtype=np.float32)
+attribute.data.foreach_get("color", got)
+got = got.reshape(-1, 4)[:, :3]
+with tempfile.TemporaryDirectory() as folder:
+    obj = os.path.join(folder, "s.obj")
+    with open(obj, "w") as f:
+        f.writelines("v %.9g %.9g %.9g\n" % tuple(v.co) for v in sphere.data.vertices)
+        f.writelines("f " + " ".join(str(i + 1) for i in p.vertices) + "\n" for p in sphere.data.polygons)
+    subprocess.run([cli, "mesh", "texture", obj, "--transform", "wood", "--seed", "3", "-o",
+                    os.path.join(folder, "s.ply")], check=True, capture_output=True)
+    addon = sys.modules["impulse_addon"]
+    expected = np.array([[addon._linear(c) for c in rgb] for rgb in addon.ply_colours(os.path.join(folder, "s.ply"))])
+assert got.shape == expected.shape, (got.shape, expected.shape)
+assert np.abs(got - expected).max() < 1e-6, np.abs(got - expected).max()
+assert np.ptp(expected[:, 0]) > 0.1  # the rings vary: a permutation would not match
+print(f"impulse add-on: {len(got)} sphere vertices carry the tool's wood colours, vertex for vertex")

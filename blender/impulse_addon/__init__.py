@@ -116,6 +116,69 @@ def import_volume(settings, first, last):
     return volume
 
 
+def _write_ply(mesh, path):
+    """The mesh's vertices (in Blender's order) and polygons as ASCII PLY."""
+    lines = ["ply", "format ascii 1.0", f"element vertex {len(mesh.vertices)}", "property float x",
+             "property float y", "property float z", f"element face {len(mesh.polygons)}",
+             "property list uchar int vertex_indices", "end_header"]
+    lines += ["%.9g %.9g %.9g" % tuple(v.co) for v in mesh.vertices]
+    lines += [" ".join([str(len(p.vertices))] + [str(i) for i in p.vertices]) for p in mesh.polygons]
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def ply_colours(path):
+    """The 8-bit red, green, blue of an ASCII PLY's vertices, in their order, as [0, 1] floats."""
+    with open(path) as f:
+        text = f.read().split("\n")
+    props, count, at, in_vertex = [], 0, 0, False
+    while text[at] != "end_header":
+        words = text[at].split()
+        if words[:2] == ["element", "vertex"]:
+            count, in_vertex = int(words[2]), True
+        elif words[:1] == ["element"]:
+            in_vertex = False
+        elif words[:1] == ["property"] and in_vertex:
+            props.append(words[-1])
+        at += 1
+    rgb = [props.index(c) for c in ("red", "green", "blue")]
+    rows = (text[at + 1 + i].split() for i in range(count))
+    return [[int(row[k]) / 255.0 for k in rgb] for row in rows]
+
+
+def _linear(c):
+    """sRGB-encoded display value to linear (Blender's colour attributes hold linear colour)."""
+    return c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
+
+
+def texture_mesh(obj, transform, seed):
+    """Colours every vertex of the mesh object with `impulse mesh texture` (solid wood or marble,
+    docs/mesh.md) into the colour attribute "impulse": the tool writes vertex i of its input as
+    vertex i, so the colours line up with Blender's vertices. Raises RuntimeError with the
+    tool's error line."""
+    prefs = bpy.context.preferences.addons[__name__].preferences
+    with tempfile.TemporaryDirectory(prefix="impulse_mesh_") as folder:
+        source, textured = os.path.join(folder, "in.ply"), os.path.join(folder, "out.ply")
+        _write_ply(obj.data, source)
+        run = subprocess.run([prefs.tool or "impulse", "mesh", "texture", source, "--transform",
+                              transform, "--seed", str(seed), "-o", textured],
+                             capture_output=True, text=True)
+        if run.returncode != 0:
+            lines = run.stderr.strip().splitlines()
+            raise RuntimeError(lines[-1] if lines else f"impulse exited with status {run.returncode}")
+        colours = ply_colours(textured)
+    mesh = obj.data
+    if len(colours) != len(mesh.vertices):
+        raise RuntimeError(f"impulse mesh texture wrote {len(colours)} vertices for {len(mesh.vertices)}")
+    attribute = mesh.color_attributes.get("impulse") or mesh.color_attributes.new("impulse", "FLOAT_COLOR", "POINT")
+    flat = []
+    for c in colours:
+        flat += [_linear(c[0]), _linear(c[1]), _linear(c[2]), 1.0]
+    attribute.data.foreach_set("color", flat)
+    mesh.color_attributes.active_color = attribute
+    return attribute
+
+
 class ImpulseSettings(bpy.types.PropertyGroup):
     source: StringProperty(name="Scene", default="drift",
                            description="A built-in scene (drift, clouds, marble ...) or a TOML file")
@@ -168,6 +231,28 @@ class IMPULSE_OT_import_volume(bpy.types.Operator):
         return {"FINISHED"}
 
 
+class IMPULSE_OT_texture_mesh(bpy.types.Operator):
+    """Colour the active mesh's vertices with solid wood or marble (impulse mesh texture)"""
+
+    bl_idname = "impulse.texture_mesh"
+    bl_label = "Texture Mesh"
+    transform: bpy.props.EnumProperty(name="Transform", items=[("wood", "Wood", ""), ("marble", "Marble", "")])
+    seed: IntProperty(name="Seed", default=0, min=0)
+
+    def execute(self, context):
+        obj = context.active_object
+        if obj is None or obj.type != "MESH":
+            self.report({"ERROR"}, "Texture Mesh: the active object is not a mesh")
+            return {"CANCELLED"}
+        try:
+            texture_mesh(obj, self.transform, self.seed)
+        except Exception as e:
+            self.report({"ERROR"}, str(e))
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"{obj.name}: colour attribute \"impulse\" ({self.transform})")
+        return {"FINISHED"}
+
+
 class IMPULSE_PT_panel(bpy.types.Panel):
     bl_label = "impulse"
     bl_space_type = "IMAGE_EDITOR"
@@ -186,6 +271,7 @@ class IMPULSE_PT_panel(bpy.types.Panel):
         layout.prop(settings, "follow")
         layout.operator(IMPULSE_OT_fill_image.bl_idname)
         layout.operator(IMPULSE_OT_import_volume.bl_idname)
+        layout.operator(IMPULSE_OT_texture_mesh.bl_idname)
 
 
 class ImpulsePreferences(bpy.types.AddonPreferences):
@@ -211,8 +297,8 @@ def _follow_timeline(scene, depsgraph=None):
             print(f"impulse: {e}")
 
 
-_classes = (ImpulseSettings, IMPULSE_OT_fill_image, IMPULSE_OT_import_volume, IMPULSE_PT_panel,
-            ImpulsePreferences)
+_classes = (ImpulseSettings, IMPULSE_OT_fill_image, IMPULSE_OT_import_volume, IMPULSE_OT_texture_mesh,
+            IMPULSE_PT_panel, ImpulsePreferences)
 
 
 def register():
