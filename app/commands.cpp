@@ -172,6 +172,19 @@ std::vector<std::string> overrides_for(const std::vector<std::string>& sets, con
     return o;
 }
 
+/// Why the file `target` present for --resume is not frame `f` of `sc` as this run would
+/// write it ("" when it is): output::image_mismatch with the run's size, channels and metadata.
+std::string present_frame_mismatch(const std::string& target, const scenes::Scene& sc, long long f) {
+    const bool exr = fs::path(target).extension() == ".exr";
+    const int channels = !exr && colour_shading(sc) ? 3 : 1;
+    const output::Metadata expected = {
+        {"seed", std::to_string(sc.seed)}, {"frame", std::to_string(f)}, {"scene_hash", sc.hash}};
+    return output::image_mismatch(target, sc.output.width, sc.output.height, channels,
+                                  sc.output.bits == 16, expected);
+}
+
+}  // namespace
+
 void ensure_directory(const std::string& path) {
     const fs::path dir = fs::path(path).parent_path();
     std::error_code ec;
@@ -187,19 +200,6 @@ bool colour_shading(const scenes::Scene& s) {
     return !s.shading.ramp.empty() || s.shading_keys.relief.max() != 0.0 || s.shading.toe > 0.0 ||
            s.shading.shoulder > 0.0;
 }
-
-/// Why the file `target` present for --resume is not frame `f` of `sc` as this run would
-/// write it ("" when it is): output::image_mismatch with the run's size, channels and metadata.
-std::string present_frame_mismatch(const std::string& target, const scenes::Scene& sc, long long f) {
-    const bool exr = fs::path(target).extension() == ".exr";
-    const int channels = !exr && colour_shading(sc) ? 3 : 1;
-    const output::Metadata expected = {
-        {"seed", std::to_string(sc.seed)}, {"frame", std::to_string(f)}, {"scene_hash", sc.hash}};
-    return output::image_mismatch(target, sc.output.width, sc.output.height, channels,
-                                  sc.output.bits == 16, expected);
-}
-
-}  // namespace
 
 long long whole_number(const std::string& option, const std::string& text, const std::string& digits,
                        const std::string& expected) {

@@ -57,6 +57,10 @@ long long first_frame_present(const std::string& pattern);
 /// The frame numbers whose files exist for `pattern` (a pattern in the file name), ascending;
 /// empty when there is none or the pattern is in the directory part.
 std::vector<long long> frames_present(const std::string& pattern);
+/// Throws IoError naming `path` when its directory does not exist or is not writable.
+void ensure_directory(const std::string& path);
+/// True when the scene's shading gives colour (a ramp or relief at some time), not plain grey.
+bool colour_shading(const scenes::Scene& s);
 /// Parse "A-B" or "A" into an inclusive range; throws ValueError.
 std::pair<long long, long long> parse_frame_range(const std::string& text, long long frames);
 

@@ -15,6 +15,7 @@
 #include "app/analyze.h"
 #include "app/commands.h"
 #include "app/encode.h"
+#include "app/export.h"
 #include "app/farm.h"
 #include "app/preview.h"
 #include "app/synth_fbm.h"
@@ -152,6 +153,8 @@ int main(int argc, char** argv) {
     CLI::App* farm = impulse::app::add_farm(app, fm);
     impulse::app::PreviewOptions po;
     CLI::App* preview = add_preview(app, po);
+    impulse::app::ExportOptions xo;
+    CLI::App* export_command = impulse::app::add_export(app, xo);
 
     // Past a file size limit (ulimit -f) a write fails with EFBIG and is reported with the file's
     // name, instead of the process being killed by SIGXFSZ with nothing said.
@@ -192,6 +195,7 @@ int main(int argc, char** argv) {
         if (*analyze) return impulse::app::run_analyze(ao);
         if (*encode) return impulse::app::run_encode(eo);
         if (*farm) return impulse::app::run_farm(fm);
+        if (*export_command) return impulse::app::run_export(*export_command, xo);
         if (*synth_fbm) return impulse::app::run_synth_fbm(fo);
         if (*synth_solid) return impulse::app::run_synth_solid(so);
         if (*synth) return 0;  // gss ran in its callback

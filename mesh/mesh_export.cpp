@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// Mesh -> aiScene -> assimp's exporter into memory -> atomic file (output/files.h).
+// Mesh -> OBJ text (mesh/obj_format.h) or aiScene -> assimp's PLY exporter into memory ->
+// atomic file (output/files.h); vertices in the Mesh's order either way.
 
 #include <assimp/Exporter.hpp>
 #include <assimp/material.h>
@@ -11,6 +12,7 @@
 #include <memory>
 
 #include "mesh/mesh.h"
+#include "mesh/obj_format.h"
 #include "numeric/errors.h"
 #include "output/files.h"
 
@@ -33,7 +35,7 @@ unsigned primitive_type(uint32_t face_size) {
     }
 }
 
-void copy_vertices(const Mesh& in, bool ply, aiMesh& out) {
+void copy_vertices(const Mesh& in, aiMesh& out) {
     const auto n = static_cast<unsigned>(in.positions.size());
     out.mNumVertices = n;
     out.mVertices = new aiVector3D[n];
@@ -47,8 +49,7 @@ void copy_vertices(const Mesh& in, bool ply, aiMesh& out) {
         if (out.mTextureCoords[0]) out.mTextureCoords[0][v] = aiVector3D(in.uvs[v].x(), in.uvs[v].y(), 0.0f);
         if (!out.mColors[0]) continue;
         const Vec3& c = in.colors[v];
-        out.mColors[0][v] = ply ? aiColor4D(ply_colour(c.x()), ply_colour(c.y()), ply_colour(c.z()), 1.0f)
-                                : aiColor4D(c.x(), c.y(), c.z(), 1.0f);
+        out.mColors[0][v] = aiColor4D(ply_colour(c.x()), ply_colour(c.y()), ply_colour(c.z()), 1.0f);
     }
 }
 
@@ -66,7 +67,7 @@ void copy_faces(const Mesh& in, aiMesh& out) {
     }
 }
 
-std::unique_ptr<aiScene> to_scene(const Mesh& mesh, bool ply) {
+std::unique_ptr<aiScene> to_scene(const Mesh& mesh) {
     auto scene = std::make_unique<aiScene>();
     scene->mRootNode = new aiNode("impulse");
     scene->mRootNode->mNumMeshes = 1;
@@ -76,7 +77,7 @@ std::unique_ptr<aiScene> to_scene(const Mesh& mesh, bool ply) {
     scene->mNumMeshes = 1;
     scene->mMeshes = new aiMesh*[1]{new aiMesh()};
     scene->mMeshes[0]->mMaterialIndex = 0;
-    copy_vertices(mesh, ply, *scene->mMeshes[0]);
+    copy_vertices(mesh, *scene->mMeshes[0]);
     copy_faces(mesh, *scene->mMeshes[0]);
     return scene;
 }
@@ -85,12 +86,15 @@ std::unique_ptr<aiScene> to_scene(const Mesh& mesh, bool ply) {
 
 void write_mesh(const std::string& path, const Mesh& mesh) {
     check_mesh_output(path);
-    const bool ply = output::lower_extension(path) == ".ply";
-    const std::unique_ptr<aiScene> scene = to_scene(mesh, ply);
+    if (output::lower_extension(path) == ".obj") {  // assimp's OBJ exporter renumbers vertices
+        const std::string text = encode_obj(mesh);
+        output::write_file_atomic(path, text.data(), text.size());
+        return;
+    }
+    const std::unique_ptr<aiScene> scene = to_scene(mesh);
     Assimp::Exporter exporter;
-    // ASCII PLY: assimp 5.2 cannot read back its own binary PLY with colours (0 vertices);
-    // "objnomtl": no material library (a blob's .mtl would be named "$blobfile.mtl").
-    const aiExportDataBlob* blob = exporter.ExportToBlob(scene.get(), ply ? "ply" : "objnomtl");
+    // ASCII PLY: assimp 5.2 cannot read back its own binary PLY with colours (0 vertices).
+    const aiExportDataBlob* blob = exporter.ExportToBlob(scene.get(), "ply");
     if (!blob) throw IoError(path + ": cannot encode mesh: " + exporter.GetErrorString());
     output::write_file_atomic(path, blob->data, blob->size);
 }

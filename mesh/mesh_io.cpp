@@ -1,19 +1,22 @@
 // SPDX-License-Identifier: Apache-2.0
-// Meshes through assimp: the importer with its validation, the exporters to memory, then an
-// atomic write (output/files.h).
+// Meshes in: OBJ vertex for vertex (mesh/obj_format.h), any other format through assimp
+// with its validation; vertex i is the file's vertex i (docs/mesh.md "Formats").
 
-#include <assimp/Exporter.hpp>
 #include <assimp/Importer.hpp>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 #include <sstream>
 
 #include "mesh/mesh.h"
+#include "mesh/obj_format.h"
 #include "numeric/errors.h"
 #include "output/files.h"
 
@@ -21,21 +24,6 @@ namespace impulse::mesh {
 namespace {
 
 namespace fs = std::filesystem;
-
-/// The first non-finite position of the file's meshes, as assimp read it (before joining).
-void check_finite(const aiScene& scene, const std::string& path) {
-    for (unsigned m = 0, base = 0; m < scene.mNumMeshes; base += scene.mMeshes[m]->mNumVertices, ++m) {
-        const aiMesh& mesh = *scene.mMeshes[m];
-        for (unsigned v = 0; v < mesh.mNumVertices; ++v) {
-            const aiVector3D& p = mesh.mVertices[v];
-            if (std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) continue;
-            std::ostringstream s;
-            s << path << ": vertex " << base + v << " position (" << p.x << ", " << p.y << ", "
-              << p.z << "): expected finite coordinates";
-            throw ValueError(s.str());
-        }
-    }
-}
 
 /// Appends one assimp mesh to `out` (vertex attributes present in every mesh are kept).
 void append(const aiMesh& m, bool normals, bool uvs, bool colors, Mesh& out) {
@@ -65,6 +53,39 @@ Mesh from_scene(const aiScene& scene) {
     return out;
 }
 
+/// The first non-finite position, numbered as in the file.
+void check_finite(const Mesh& mesh, const std::string& path) {
+    for (size_t v = 0; v < mesh.positions.size(); ++v) {
+        const Vec3& p = mesh.positions[v];
+        if (p.allFinite()) continue;
+        std::ostringstream s;
+        s << path << ": vertex " << v << " position (" << p.x() << ", " << p.y() << ", " << p.z()
+          << "): expected finite coordinates";
+        throw ValueError(s.str());
+    }
+}
+
+std::string read_text(const std::string& path) {
+    std::error_code ec;
+    if (fs::is_directory(path, ec)) throw IoError(path + ": cannot read mesh: a directory");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw IoError(path + ": cannot read mesh: " + std::strerror(errno));
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (in.bad()) throw IoError(path + ": cannot read mesh: " + std::strerror(errno));
+    return text.str();
+}
+
+/// Any format but OBJ through assimp, its vertices as the file lists them (no joining: that
+/// would merge a seam's vertices and drop those no face uses, docs/mesh.md "Formats").
+Mesh read_with_assimp(const std::string& path) {
+    Assimp::Importer importer;
+    // Validation catches what the parsers let through (a PLY face index past the vertices).
+    const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure | aiProcess_PreTransformVertices);
+    if (!scene) throw IoError(path + ": cannot read mesh: " + importer.GetErrorString());
+    return from_scene(*scene);
+}
+
 }  // namespace
 
 void Mesh::add_face(std::initializer_list<uint32_t> face) {
@@ -73,15 +94,9 @@ void Mesh::add_face(std::initializer_list<uint32_t> face) {
 }
 
 Mesh read_mesh(const std::string& path) {
-    Assimp::Importer importer;
-    // Validation catches what the parsers let through (a PLY face index past the vertices).
-    const aiScene* scene = importer.ReadFile(path, aiProcess_ValidateDataStructure);
-    if (!scene) throw IoError(path + ": cannot read mesh: " + importer.GetErrorString());
-    check_finite(*scene, path);
-    // Joined after the check, so a NaN never meets the vertex hash.
-    scene = importer.ApplyPostProcessing(aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices);
-    if (!scene) throw IoError(path + ": cannot read mesh: " + importer.GetErrorString());
-    Mesh mesh = from_scene(*scene);
+    const bool obj = output::lower_extension(path) == ".obj";
+    Mesh mesh = obj ? parse_obj(read_text(path), path) : read_with_assimp(path);
+    check_finite(mesh, path);
     if (mesh.positions.empty()) throw ValueError(path + ": the file holds no vertices");
     return mesh;
 }

@@ -1,9 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// Meshes in and out through assimp (part of impulse::mesh): any format assimp reads (OBJ and PLY
-// tested) in; OBJ (with `v x y z r g b` vertex colours, `l` records for line segments) or ASCII
-// PLY (uchar red green blue alpha per vertex, 2-vertex faces for line segments) out, written
-// atomically.
+// Meshes in and out (part of impulse::mesh; docs/mesh.md "Formats"), vertex i of the file being
+// vertex i of the Mesh: OBJ by our own reader and writer (mesh/obj_format.h; `v x y z r g b`
+// vertex colours, `l` records for line segments), any other format assimp reads (PLY tested) in
+// through assimp, ASCII PLY (uchar red green blue alpha per vertex, 2-vertex faces for line
+// segments) out through assimp; written atomically.
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
@@ -35,18 +36,19 @@ struct Mesh {
     void add_face(std::initializer_list<uint32_t> face);
 };
 
-/// Reads a mesh with assimp (every mesh of the file flattened into one, node transforms applied,
-/// identical vertices joined). Throws IoError "PATH: cannot read mesh: <assimp's message>" when
-/// assimp refuses the file, ValueError "PATH: vertex N position (x, y, z): expected finite
-/// coordinates" for a NaN or infinite position, ValueError for a file without vertices.
+/// Reads a mesh, its vertices in the file's number and order (none joined, none dropped): an
+/// OBJ by parse_obj (ValueError "PATH:LINE: ..."), any other format with assimp (every mesh of
+/// the file flattened into one, node transforms applied; IoError "PATH: cannot read mesh:
+/// <assimp's message>" when assimp refuses it). ValueError "PATH: vertex N position (x, y, z):
+/// expected finite coordinates" for a NaN or infinite position, ValueError for no vertices.
 Mesh read_mesh(const std::string& path);
 
 /// Throws ValueError "PATH: expected an output ending in .obj or .ply" unless the writer knows the
 /// extension (case-insensitive); IoError when the directory does not exist. Call before work.
 void check_mesh_output(const std::string& path);
 
-/// Writes `mesh` by its extension (.obj or .ply) through assimp's exporters, atomically.
-/// PLY colours are rounded to 8 bits. Throws ValueError (extension) or IoError.
+/// Writes `mesh` by its extension (.obj: encode_obj; .ply: assimp's exporter), vertices in
+/// order, atomically. PLY colours are rounded to 8 bits. Throws ValueError (extension) or IoError.
 void write_mesh(const std::string& path, const Mesh& mesh);
 
 /// The positions as points of the noise's domain (t = `t`).

@@ -13,6 +13,7 @@
 #include "numeric/errors.h"
 #include "python/scene_object.h"
 #include "scenes/closed_form.h"
+#include "scenes/scene_dir.h"
 
 namespace py = pybind11;
 
@@ -293,6 +294,8 @@ PYBIND11_MODULE(impulse, m) {
         "impulse: animated procedural textures from sparse convolution noise (Lewis 1986), "
         "rendered to numpy arrays";
     register_errors(m);
+    m.def("_set_builtin_scene_dir", &scenes::set_builtin_scene_dir, py::arg("dir"),
+          "Where built-in scene names are looked up (the installed package's impulse/scenes).");
 
     py::class_<SceneObject, std::shared_ptr<SceneObject>>(m, "Scene")
         .def_property_readonly("width", [](const SceneObject& s) { return s.scene().output.width; })

@@ -12,6 +12,7 @@
 #include "scenes/compose_detail.h"
 #include "scenes/marginal.h"
 #include "scenes/reader.h"
+#include "scenes/scene_dir.h"
 #include "scenes/scenes.h"
 #include "numeric/errors.h"
 
@@ -826,8 +827,18 @@ void Renderer::State::update_marginal(size_t i, double tl) {
     marginal_built[i] = std::move(built);
 }
 
+namespace {
+std::string& builtin_scene_dir_set() {
+    static std::string dir;
+    return dir;
+}
+}  // namespace
+
+void set_builtin_scene_dir(const std::string& dir) { builtin_scene_dir_set() = dir; }
+
 std::string builtin_scene_dir() {
     if (const char* e = std::getenv("IMPULSE_SCENES_DIR")) return e;
+    if (!builtin_scene_dir_set().empty()) return builtin_scene_dir_set();
     // An installed tool whose source tree is gone: PREFIX/share/impulse/scenes beside PREFIX/bin.
     namespace fs = std::filesystem;
     std::error_code ec;

@@ -14,6 +14,7 @@ packages=(build-essential cmake pkg-config libeigen3-dev libtbb-dev libopenimage
           # the Python module (build/python/) and its tests; the preview server and its
           # browser test
           python3-dev pybind11-dev python3-numpy python3-pytest libcpp-httplib-dev chromium
+          python3-venv python3-pip python3-setuptools python3-wheel python3-build blender  # python/test_pip_install.sh, blender/test_blender_addon.sh
           # the ffmpeg tool: the SSIM of video presets in bench/README.md
           ffmpeg
           # the SIMD-path tests run the command line on emulated CPUs without AVX2 / AVX-512

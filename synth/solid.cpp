@@ -39,12 +39,13 @@ struct CellImpulses {
 /// keys the stream (CounterRng::keyed).
 template <int D>
 void generate_cell(const numeric::CounterRng& base, const std::array<int64_t, D>& c, double m,
-                   std::array<std::vector<float>, D>& u, std::vector<float>& a) {
+                   const detail::CellPeriod& period, std::array<std::vector<float>, D>& u,
+                   std::vector<float>& a) {
     const numeric::CounterRng rng = D == 4 ? base.keyed(c[D - 1]) : base;
-    const int n = detail::cell_count(rng, c[0], c[1], c[2], m);
+    const int n = detail::cell_count(rng, c[0], c[1], c[2], m, period);
     for (int j = 0; j < n; ++j) {
         float w[3], amplitude;
-        detail::cell_impulse(rng, c[0], c[1], c[2], j, w, amplitude);
+        detail::cell_impulse(rng, c[0], c[1], c[2], j, period, w, amplitude);
         for (int d = 0; d < 3; ++d) u[d].push_back(w[d]);
         a.push_back(amplitude);
         if constexpr (D == 4)
@@ -61,7 +62,8 @@ struct CellTable {
     std::array<std::vector<float>, D> u;
     std::vector<float> a;
 
-    CellTable(const numeric::CounterRng& rng, double m, const std::vector<Cell>& groups) {
+    CellTable(const numeric::CounterRng& rng, double m, const detail::CellPeriod& period,
+              const std::vector<Cell>& groups) {
         for (const Cell& g : groups)
             for (const Cell& c : detail::neighbours<D>(g)) cells.push_back(c);
         tbb::parallel_sort(cells.begin(), cells.end());
@@ -69,7 +71,7 @@ struct CellTable {
         std::vector<CellImpulses<D>> per(cells.size());
         tbb::parallel_for(tbb::blocked_range<size_t>(0, cells.size(), 64), [&](const auto& r) {
             for (size_t i = r.begin(); i != r.end(); ++i)
-                generate_cell<D>(rng, cells[i], m, per[i].u, per[i].a);
+                generate_cell<D>(rng, cells[i], m, period, per[i].u, per[i].a);
         });
         offset.assign(1, 0);
         for (const auto& p : per) {
@@ -135,6 +137,12 @@ void validate(const SolidParams& p) {
     if (!(std::abs(det) > 1e-9 * norm * norm * norm))
         throw ValueError("metric: singular (det = " + std::to_string(det) +
                          "); expected an invertible 3x3 matrix");
+    const bool periodic = p.period_cells != detail::CellPeriod{0, 0, 0};
+    for (const int64_t n : p.period_cells)
+        if (n < 0 || n > (int64_t(1) << 40))
+            throw ValueError("period_cells: expected cells per period in [0, 2^40] (0: not periodic)");
+    if (periodic && p.metric != std::array<double, 9>{1, 0, 0, 0, 1, 0, 0, 0, 1})
+        throw ValueError("period_cells: a periodic noise takes the identity metric only");
 }
 
 }  // namespace
@@ -214,7 +222,7 @@ void run_batch(const SolidNoise& noise, const detail::CellBatch<D>& b, int split
         std::vector<std::array<int64_t, D>> cells;
         for (size_t g = g0; g < g1; ++g) cells.push_back(impulse_cell(b.cells[g]));
         cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
-        const CellTable<D> table(rng, m, cells);
+        const CellTable<D> table(rng, m, p.period_cells, cells);
         tbb::parallel_for(tbb::blocked_range<size_t>(g0, g1, 1), [&](const auto& r) {
             detail::Gathered<D> gathered;
             std::vector<float> acc;
@@ -320,8 +328,8 @@ constexpr size_t kSliceColumns = 256;  // columns whose impulses one task genera
 /// The impulses of column (cx, cy) within one radius of the plane at (zc, tc) (cell units):
 /// cells cz = floor(zc) - 1 .. floor(zc) + 1 (and ct alike) are the only ones that reach it.
 template <int D>
-void slice_column(const numeric::CounterRng& rng, double m, const std::array<int64_t, 2>& col,
-                  double zc, double tc, double R, SliceImpulses& out) {
+void slice_column(const numeric::CounterRng& rng, double m, const detail::CellPeriod& period,
+                  const std::array<int64_t, 2>& col, double zc, double tc, double R, SliceImpulses& out) {
     const int64_t z0 = int64_t(std::floor(zc)), t0 = int64_t(std::floor(tc));
     std::array<std::vector<float>, D> u;
     std::vector<float> a;
@@ -332,7 +340,7 @@ void slice_column(const numeric::CounterRng& rng, double m, const std::array<int
             std::array<int64_t, D> cell;
             cell[0] = col[0], cell[1] = col[1], cell[2] = cz;
             if constexpr (D == 4) cell[3] = ct;
-            generate_cell<D>(rng, cell, m, u, a);
+            generate_cell<D>(rng, cell, m, period, u, a);
             for (size_t j = 0; j < a.size(); ++j) {
                 const double dz = (double(cz) - zc) + double(u[2][j]);
                 double d2 = dz * dz;
@@ -368,8 +376,8 @@ void SolidNoise::slice_impulses(const std::vector<std::array<int64_t, 2>>& colum
     tbb::parallel_for(size_t(0), parts.size(), [&](size_t k) {
         const size_t end = std::min(columns.size(), (k + 1) * kSliceColumns);
         for (size_t c = k * kSliceColumns; c < end; ++c) {
-            if (m_params.dims == 3) slice_column<3>(rng, m, columns[c], zc, tc, R, parts[k]);
-            else slice_column<4>(rng, m, columns[c], zc, tc, R, parts[k]);
+            if (m_params.dims == 3) slice_column<3>(rng, m, m_params.period_cells, columns[c], zc, tc, R, parts[k]);
+            else slice_column<4>(rng, m, m_params.period_cells, columns[c], zc, tc, R, parts[k]);
         }
     });
     out = SliceImpulses{};

@@ -65,6 +65,10 @@ struct SolidParams {
     int dims = 3;                  ///< 3: f(x, y, z); 4: f(x, y, z, t), t in texture units
     /// Row-major 3x3 metric M: f(x) = g(M x). Identity: isotropic.
     std::array<double, 9> metric = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    /// Cells of side R per period along x, y, z, in [0, 2^40]: > 0 makes the noise periodic
+    /// along that axis with period period_cells * R (its cells' impulses repeat, Lewis 1986
+    /// §3.2's wrap-around); 0: not periodic. Identity metric only.
+    std::array<int64_t, 3> period_cells = {0, 0, 0};
 };
 
 /// A point of the noise's domain (t ignored in 3-D).

@@ -37,16 +37,24 @@ inline int poisson(double u, double m) {
     return k;
 }
 
+/// Cells per period along x, y, z (SolidParams::period_cells; 0: that axis is not periodic).
+using CellPeriod = std::array<int64_t, 3>;
+
+/// The key of cell index c on an axis of n cells a period: c reduced into [0, n) (c when n is
+/// 0), so cell c + n draws the impulses of cell c and the noise repeats (Lewis 1986 §3.2).
+inline int64_t wrap_cell(int64_t c, int64_t n) { return n > 0 ? (c % n + n) % n : c; }
+
 /// Number of impulses of cell (x, y, z) under `rng`: draw 0.
-inline int cell_count(const numeric::CounterRng& rng, int64_t x, int64_t y, int64_t z, double m) {
-    return poisson(rng.uniforms(x, y, z, 0)[0], m);
+inline int cell_count(const numeric::CounterRng& rng, int64_t x, int64_t y, int64_t z, double m,
+                      const CellPeriod& period) {
+    return poisson(rng.uniforms(wrap_cell(x, period[0]), wrap_cell(y, period[1]), wrap_cell(z, period[2]), 0)[0], m);
 }
 
 /// Impulse j of cell (x, y, z): draw j + 1 gives its position in the cell, in (0, 1]^3 (cell
 /// units; 1 is the far face, still within reach of the 3^3 neighbourhood), and amplitude.
 inline void cell_impulse(const numeric::CounterRng& rng, int64_t x, int64_t y, int64_t z, int j,
-                         float* u, float& a) {
-    const auto r = rng.uniforms(x, y, z, uint32_t(j + 1));
+                         const CellPeriod& period, float* u, float& a) {
+    const auto r = rng.uniforms(wrap_cell(x, period[0]), wrap_cell(y, period[1]), wrap_cell(z, period[2]), uint32_t(j + 1));
     for (int d = 0; d < 3; ++d) u[d] = static_cast<float>(r[d]);
     a = static_cast<float>(2.0 * r[3] - 1.0);
 }
@@ -61,7 +69,7 @@ struct DenseCells {
 
     /// Generates them (TBB-parallel; the same table for any thread count).
     DenseCells(const numeric::CounterRng& rng, double m, const std::array<int64_t, 3>& lo,
-               const std::array<int64_t, 3>& n);
+               const std::array<int64_t, 3>& n, const CellPeriod& period);
     size_t linear(int64_t x, int64_t y, int64_t z) const {
         return size_t(((x - lo[0]) * n[1] + (y - lo[1])) * n[2] + (z - lo[2]));
     }

@@ -18,7 +18,7 @@
 namespace impulse::synth::detail {
 
 DenseCells::DenseCells(const numeric::CounterRng& rng, double m, const std::array<int64_t, 3>& box_lo,
-                       const std::array<int64_t, 3>& box_n)
+                       const std::array<int64_t, 3>& box_n, const CellPeriod& period)
     : lo(box_lo), n(box_n) {
     const size_t cells = size_t(n[0] * n[1] * n[2]);
     std::vector<uint32_t> count(cells);
@@ -30,7 +30,7 @@ DenseCells::DenseCells(const numeric::CounterRng& rng, double m, const std::arra
     tbb::parallel_for(tbb::blocked_range<size_t>(0, cells, 256), [&](const auto& r) {
         for (size_t i = r.begin(); i != r.end(); ++i) {
             const auto c = cell_of(i);
-            count[i] = uint32_t(cell_count(rng, c[0], c[1], c[2], m));
+            count[i] = uint32_t(cell_count(rng, c[0], c[1], c[2], m, period));
         }
     });
     offset.assign(cells + 1, 0);
@@ -43,7 +43,7 @@ DenseCells::DenseCells(const numeric::CounterRng& rng, double m, const std::arra
             for (uint32_t j = 0; j < count[i]; ++j) {
                 float w[3];
                 const size_t k = offset[i] + j;
-                cell_impulse(rng, c[0], c[1], c[2], int(j), w, a[k]);
+                cell_impulse(rng, c[0], c[1], c[2], int(j), period, w, a[k]);
                 for (int d = 0; d < 3; ++d) u[d][k] = w[d];
             }
         }
@@ -160,7 +160,7 @@ bool grid_by_bricks(const SolidNoise& noise, const std::array<int, 3>& size, con
         int z1 = z0;
         while (z1 < pieces_z && az.cell[az.begin[z1]] - az.cell[az.begin[z0]] < slab) ++z1;
         const int64_t cz0 = az.cell[az.begin[z0]] - 1, cz1 = az.cell[az.begin[z1] - 1] + 1;
-        const DenseCells table(rng, m, {lo[0], lo[1], cz0}, {nx, ny, cz1 - cz0 + 1});
+        const DenseCells table(rng, m, {lo[0], lo[1], cz0}, {nx, ny, cz1 - cz0 + 1}, p.period_cells);
         const size_t bricks = size_t(z1 - z0) * pieces_y * pieces_x;
         tbb::parallel_for(tbb::blocked_range<size_t>(0, bricks, 4), [&](const auto& r) {
             Gathered<3> g;

@@ -223,7 +223,7 @@ bool evaluate_dense(const SolidNoise& noise, const std::vector<SolidPoint>& poin
     const numeric::CounterRng rng = numeric::CounterRng(p.seed, kSolidStream).keyed(component);
     const double m = p.density / (4.0 / 3.0 * std::numbers::pi);  // per cell of side R, as run_batch
     const DenseCells table(rng, m, {box.lo[0] - 1, box.lo[1] - 1, box.lo[2] - 1},
-                           {n[0] + 2, n[1] + 2, n[2] + 2});
+                           {n[0] + 2, n[1] + 2, n[2] + 2}, p.period_cells);
     const LoopKernel lk = loop_kernel(noise.kernel());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, s.start.size() - 1, 16), [&](const auto& r) {
         Scratch w;

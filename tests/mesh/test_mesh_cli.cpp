@@ -95,7 +95,7 @@ TEST_CASE("mesh commands refuse bad input with one line and write nothing", "[me
     write_file(dir / "ok.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n");
     const std::string out = " -o " + quote(dir / "out.ply");
     const std::vector<std::pair<std::string, std::string>> cases = {
-        {"mesh texture " + quote(dir / "bad.obj") + " --transform wood" + out, "bad.obj: cannot read mesh: OBJ: vertex index out of range"},
+        {"mesh texture " + quote(dir / "bad.obj") + " --transform wood" + out, "bad.obj:4: v index 9: expected 1..3 or -3..-1 (the v lines above it)"},
         {"mesh deform " + quote(dir / "nan.obj") + " --amount 1 --scale 1" + out, "nan.obj: vertex 2 position (nan, 1, 0): expected finite coordinates"},
         {"mesh porous --iso 40 --size 16" + out, "iso = 40: outside the field's range ["},
         {"mesh porous --iso 0 --size 16" + out, "iso = 0: F is 0 all round the object"},
