@@ -141,10 +141,11 @@ std::vector<VdbGridHeader> list_vdb_grids(const std::string& path) {
 
 namespace {
 
-/// The dense samples of `grid` (vec3s or vec3d) over its active bounding box into `out`.
+/// The dense samples of `grid` (vec3s or vec3d) over `box` (empty: its active bounding box)
+/// into `out`.
 template <typename GridT>
-void copy_vectors(const GridT& grid, VdbVectorGrid& out) {
-    const openvdb::CoordBBox box = grid.evalActiveVoxelBoundingBox();
+void copy_vectors(const GridT& grid, openvdb::CoordBBox box, VdbVectorGrid& out) {
+    if (box.empty()) box = grid.evalActiveVoxelBoundingBox();
     if (box.empty()) return;
     const openvdb::Coord lo = box.min(), dim = box.dim();
     out.origin = {lo.x(), lo.y(), lo.z()};
@@ -162,20 +163,32 @@ void copy_vectors(const GridT& grid, VdbVectorGrid& out) {
 
 }  // namespace
 
-VdbVectorGrid read_vdb_vectors(const std::string& path, const std::string& name) {
+VdbVectorGrid read_vdb_vectors(const std::string& path, const std::string& name,
+                               const VdbIndexBox* box) {
     initialize_vdb();
     openvdb::GridBase::Ptr base;
+    openvdb::CoordBBox clip;
     try {
         openvdb::io::File file(path);
         file.open(false);
-        base = file.readGrid(name);
+        if (box) {
+            // the grid's transform first (metadata only), then the nodes that meet the box
+            clip = {{box->min[0], box->min[1], box->min[2]}, {box->max[0], box->max[1], box->max[2]}};
+            const auto head = file.readGridMetadata(name);
+            const openvdb::BBoxd index(clip.min().asVec3d() - openvdb::Vec3d(0.5),
+                                       clip.max().asVec3d() + openvdb::Vec3d(0.5));
+            const openvdb::BBoxd world = head->transform().indexToWorld(index);
+            base = file.readGrid(name, world);
+        } else {
+            base = file.readGrid(name);
+        }
         file.close();
     } catch (const std::exception& e) {
         throw IoError(path + ": cannot read grid \"" + name + "\": " + e.what());
     }
     VdbVectorGrid out;
-    if (auto g = openvdb::gridPtrCast<openvdb::Vec3SGrid>(base)) copy_vectors(*g, out);
-    else if (auto d = openvdb::gridPtrCast<openvdb::Vec3DGrid>(base)) copy_vectors(*d, out);
+    if (auto g = openvdb::gridPtrCast<openvdb::Vec3SGrid>(base)) copy_vectors(*g, clip, out);
+    else if (auto d = openvdb::gridPtrCast<openvdb::Vec3DGrid>(base)) copy_vectors(*d, clip, out);
     else
         throw IoError(path + ": grid \"" + name + "\" holds " + base->valueType() +
                       " values: expected a vector grid (vec3s or vec3d)");

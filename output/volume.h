@@ -63,8 +63,14 @@ struct VdbVectorGrid {
     bool affine = true;      ///< false: the grid's transform is not affine (a frustum)
     bool staggered = false;  ///< the grid's class is "staggered" (components on the faces)
 };
-/// Reads the vector grid `name` (vec3s or vec3d). Throws IoError naming the file and the grid,
-/// also when the grid is not a vector grid.
-VdbVectorGrid read_vdb_vectors(const std::string& path, const std::string& name);
+/// An index-space box of voxels, both corners included.
+struct VdbIndexBox {
+    std::array<int, 3> min{}, max{};
+};
+/// Reads the vector grid `name` (vec3s or vec3d), dense over its active voxels' bounding box,
+/// or over `box` when given (only the file's nodes that meet it are read: a slab of a large
+/// grid). Throws IoError naming the file and the grid, also when the grid is not a vector grid.
+VdbVectorGrid read_vdb_vectors(const std::string& path, const std::string& name,
+                               const VdbIndexBox* box = nullptr);
 
 }  // namespace impulse::output

@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <sstream>
 
 #include "numeric/errors.h"
@@ -143,6 +144,9 @@ struct SequenceFiles {
     [[noreturn]] void fail(const std::string& file, const std::string& what) const {
         throw SceneError(context + ": " + file + ": " + what);
     }
+    /// Slice planes while rendering: the voxel layers the plane reads (and the next, for a
+    /// staggered grid's averages), read alone; every frame was read whole and checked at load.
+    std::optional<output::VdbIndexBox> slab;
     std::array<double, 3> velocity3{1, 1, 1};     ///< 3-D: per axis, to volume voxels per second
     std::array<double, 3> index_scale3{1, 1, 1};  ///< 3-D: d index / d voxel, per axis
     /// Refuses a frame whose interpolant's largest |div v|, `d`, is over max_divergence.
@@ -201,11 +205,11 @@ void stagger_to_centres(output::VdbVectorGrid& g) {
 output::VdbVectorGrid SequenceFiles::read_checked(const std::string& file) const {
     output::VdbVectorGrid g;
     try {
-        g = output::read_vdb_vectors((dir / file).string(), grid);
+        g = output::read_vdb_vectors((dir / file).string(), grid, slab ? &*slab : nullptr);
     } catch (const IoError& e) {
         fail(file, reason(e, dir / file));
     }
-    if (!(vdb_header(g) == header)) {
+    if (!slab && !(vdb_header(g) == header)) {
         std::ostringstream m;
         m << "grid \"" << grid << "\" covers " << g.size[0] << "x" << g.size[1] << "x" << g.size[2]
           << " voxels from (" << g.origin[0] << ", " << g.origin[1] << ", " << g.origin[2]
@@ -224,12 +228,16 @@ sim::PlaneFrame SequenceFiles::plane_from_volume(output::VdbVectorGrid g) const 
     // The transform is axis-aligned (checked on the first frame): world_c = s_c index_c + t_c.
     const Vec3 s{g.linear[0], g.linear[4], g.linear[8]};
     const Vec3 t{g.translation[0], g.translation[1], g.translation[2]};
-    const auto& N = g.size;
+    // Coordinates are the whole grid's (header), samples g's, which may be a slab of it
+    // (SequenceFiles::slab): the same arithmetic either way, so the same bits.
+    const auto& N = header.size;
+    const std::array<int, 3> from{g.origin[0] - header.origin[0], g.origin[1] - header.origin[1],
+                                  g.origin[2] - header.origin[2]};
     auto sample = [&](const Vec3& X, Vec3& v) {  // trilinear; 0 outside the voxels' centres
         double f[3];
         int i0[3];
         for (int c = 0; c < 3; ++c) {
-            const double q = (X[size_t(c)] - t[size_t(c)]) / s[size_t(c)] - g.origin[size_t(c)];
+            const double q = (X[size_t(c)] - t[size_t(c)]) / s[size_t(c)] - header.origin[size_t(c)];
             if (!(q >= -1e-9 && q <= N[size_t(c)] - 1 + 1e-9)) return false;
             const double qc = std::clamp(q, 0.0, N[size_t(c)] - 1.0);
             i0[c] = std::min(static_cast<int>(qc), std::max(N[size_t(c)] - 2, 0));
@@ -245,7 +253,8 @@ sim::PlaneFrame SequenceFiles::plane_from_volume(output::VdbVectorGrid g) const 
                 wgt *= bit ? f[c] : 1.0 - f[c];
             }
             if (wgt == 0.0) continue;
-            const size_t k = 3 * ((size_t(idx[2]) * N[1] + idx[1]) * N[0] + idx[0]);
+            const size_t k = 3 * ((size_t(idx[2] - from[2]) * g.size[1] + size_t(idx[1] - from[1])) * g.size[0] +
+                                  size_t(idx[0] - from[0]));
             for (int c = 0; c < 3; ++c) v[size_t(c)] += wgt * g.values[k + size_t(c)];
         }
         return true;
@@ -559,6 +568,21 @@ output::VdbVectorGrid read_first_vdb(Reader& f, SequenceFiles& s) {
     return g;
 }
 
+/// The voxels a slice reads: its two layers across the axis, one below and two above.
+output::VdbIndexBox slice_slab(const SequenceFiles& s) {
+    const PlaneGeometry& P = s.plane;
+    const size_t axis = P.n[0] != 0 ? 0 : P.n[1] != 0 ? 1 : 2;
+    const double sc = s.header.linear[4 * axis], t = s.header.translation[axis];
+    const double q = (P.depths[0] - t) / sc - s.header.origin[axis];
+    const int k = static_cast<int>(std::floor(q)), top = s.header.size[axis] - 1;
+    output::VdbIndexBox box;
+    for (size_t c = 0; c < 3; ++c)
+        box.min[c] = s.header.origin[c], box.max[c] = s.header.origin[c] + s.header.size[c] - 1;
+    box.min[axis] = s.header.origin[axis] + std::clamp(k - 1, 0, top);
+    box.max[axis] = s.header.origin[axis] + std::clamp(k + 3, 0, top);
+    return box;
+}
+
 /// The largest sample speed of every frame, each read once (its checks fail here, before
 /// anything renders).
 template <class Speed>
@@ -641,6 +665,7 @@ void read_sequence_flow(Reader& f, const sim::ProcessConfig& process, Reader& la
         for (size_t k = 0; k < fr.vx.size(); ++k) m = std::max(m, std::hypot(double(fr.vx[k]), double(fr.vy[k])));
         return m;
     });
+    if (s->vdb && mode == PlaneMode::Slice) s->slab = slice_slab(*s);
     cfg.source = std::make_shared<FileFrames>(s);
     cfg.first = frames.front(), cfg.last = frames.back();
     cfg.width = P.width, cfg.height = P.height;

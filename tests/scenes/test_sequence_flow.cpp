@@ -375,7 +375,7 @@ Blocks blocks_of(const std::vector<double>& s, int blocks) {
 }  // namespace
 
 TEST_CASE("sequence: a sampled divergent source keeps the frame variance only with sqrt(J)",
-          "[scenes][sequence][stats]") {
+          "[scenes][sequence][stats][slow]") {
     // The uniform divergence of tests/sim/test_motion_stats.cpp case a, v = 0.125 (x - c),
     // div 0.25/s, as a VDB sequence over [0, 256]^2 round the 128^2 view at [64, 192]^2
     // (particles born within the view's reach stay inside the grid for a lifetime). Without
@@ -481,7 +481,7 @@ std::string volume_scene(const std::string& flows) {
 
 TEST_CASE("sequence: a volume's sampled divergent flow is the analytic one, and keeps its variance "
           "only with sqrt(J)",
-          "[scenes][sequence][volume][stats]") {
+          "[scenes][sequence][volume][stats][slow]") {
     // v = 0.15 (x - c), c the middle of the 48^3 volume, sampled every 4 voxels over
     // [-40, 88]^3 (the birth region's reach: speed <= 0.15 * 64 sqrt 3 = 17 voxels/s over a 1 s
     // life): trilinear interpolation reproduces a linear field, so v and div v = 0.45/s match
