@@ -340,6 +340,12 @@ TEST_CASE("sequence: a frame is the same in order, out of order and on one threa
     one.execute([&] { scenes::Renderer(load_in(dir.path, text)).render(7, one_thread); });
     CHECK(in_order.data == alone.data);
     CHECK(in_order.data == one_thread.data);
+    // What the frames in use may hold, for limits.max_memory_mib (docs/scenes.md): a 2 s
+    // lifetime at 4 frames a second spans 8 frames, plus one for the step before, four for
+    // Catmull-Rom: 13, at most the 9 of the sequence, and the one read ahead; 65 x 65 samples
+    // of two floats each.
+    const scenes::Scene s = load_in(dir.path, text);
+    CHECK(s.layers[0].flow->cache_bytes({0.0, 0.0, 1.0, 1.0}) == 10.0 * 65 * 65 * 8);
 }
 
 namespace {
