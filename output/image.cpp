@@ -85,6 +85,13 @@ void write_vdb(const std::string& path, const VolumeGrid& grid, const std::strin
 VolumeGrid read_vdb(const std::string& path, const std::string& name) {
     return io_module().read_vdb(path, name);
 }
+std::vector<VdbGridHeader> list_vdb_grids(const std::string& path) {
+    return io_module().list_vdb_grids(path);
+}
+VdbVectorGrid read_vdb_vectors(const std::string& path, const std::string& name,
+                               const VdbIndexBox* box) {
+    return io_module().read_vdb_vectors(path, name, box);
+}
 std::string encode_png(int width, int height, const std::vector<float>& rgb) {
     return io_module().encode_png(width, height, rgb);
 }

@@ -140,6 +140,7 @@ bool read_pixels(const std::string& path, Pixels& px, std::string& error,
     if (!error.empty()) return false;
     px.width = spec.width, px.height = spec.height, px.channels = spec.nchannels;
     px.is_float = spec.format == OIIO::TypeDesc::FLOAT || spec.format == OIIO::TypeDesc::HALF;
+    px.channel_names = spec.channelnames;
     px.values.resize(size_t(px.width) * px.height * px.channels);
     if (!in->read_image(0, 0, 0, px.channels, OIIO::TypeDesc::FLOAT, px.values.data())) {
         error = "cannot read: " + one_line(in->geterror());

@@ -26,6 +26,9 @@ void write_exr_stack(const std::string& path, const VolumeGrid& grid,
 void write_vdb(const std::string& path, const VolumeGrid& grid, const std::string& description,
                const VdbOptions& options);
 VolumeGrid read_vdb(const std::string& path, const std::string& name);
+std::vector<VdbGridHeader> list_vdb_grids(const std::string& path);
+VdbVectorGrid read_vdb_vectors(const std::string& path, const std::string& name,
+                               const VdbIndexBox* box);
 std::string encode_png(int width, int height, const std::vector<float>& rgb);
 std::unique_ptr<VideoSink> make_video_sink();
 void quiet_video_logs();

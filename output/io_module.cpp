@@ -10,7 +10,7 @@ extern "C" const impulse::output::IoModule* impulse_io_module() {
         io::image_size_problem,        io::image_mismatch,    io::read_metadata,
         io::probe_image,               io::is_readable_image_path,
         io::read_pixels,               io::write_exr_stack,   io::write_vdb,
-        io::read_vdb,
+        io::read_vdb,                  io::list_vdb_grids,    io::read_vdb_vectors,
         io::encode_png,                io::make_video_sink,   io::quiet_video_logs,
         io::probe_video,               io::decode_video_luma,
     };

@@ -26,6 +26,7 @@ struct Pixels {
     int width = 0, height = 0, channels = 0;
     bool is_float = false;  ///< the file stores float or half samples
     std::vector<float> values;
+    std::vector<std::string> channel_names;  ///< as the file names them ("R", "vel.x", ...)
 };
 
 /// Reads an image given by a scene (orientation, velocity, colour ramp): refuses a hostile
@@ -77,6 +78,9 @@ struct IoModule {
     void (*write_vdb)(const std::string& path, const VolumeGrid& grid,
                       const std::string& description, const VdbOptions& options);
     VolumeGrid (*read_vdb)(const std::string& path, const std::string& name);
+    std::vector<VdbGridHeader> (*list_vdb_grids)(const std::string& path);
+    VdbVectorGrid (*read_vdb_vectors)(const std::string& path, const std::string& name,
+                                      const VdbIndexBox* box);
     std::string (*encode_png)(int width, int height, const std::vector<float>& rgb);
     std::unique_ptr<VideoSink> (*make_video_sink)();
     void (*quiet_video_logs)();
@@ -86,7 +90,7 @@ struct IoModule {
 };
 
 /// Bumped whenever IoModule or a type it passes changes.
-constexpr int kIoModuleAbi = 3;
+constexpr int kIoModuleAbi = 4;
 
 /// The module: the linked-in table when the program carries impulse::output_io, else
 /// libimpulse_io.so loaded on first use from beside the executable, from ../lib/impulse/ next

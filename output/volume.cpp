@@ -124,4 +124,86 @@ VolumeGrid read_vdb(const std::string& path, const std::string& name) {
     return out;
 }
 
+std::vector<VdbGridHeader> list_vdb_grids(const std::string& path) {
+    initialize_vdb();
+    std::vector<VdbGridHeader> out;
+    try {
+        openvdb::io::File file(path);
+        file.open(false);  // headers only: no delayed loading of the voxels
+        const openvdb::GridPtrVecPtr grids = file.readAllGridMetadata();  // held: the loop reads it
+        for (const auto& g : *grids) out.push_back({g->getName(), g->valueType()});
+        file.close();
+    } catch (const std::exception& e) {
+        throw IoError(path + ": cannot read: " + e.what());
+    }
+    return out;
+}
+
+namespace {
+
+/// The dense samples of `grid` (vec3s or vec3d) over `box` (empty: its active bounding box)
+/// into `out`.
+template <typename GridT>
+void copy_vectors(const GridT& grid, openvdb::CoordBBox box, VdbVectorGrid& out) {
+    if (box.empty()) box = grid.evalActiveVoxelBoundingBox();
+    if (box.empty()) return;
+    const openvdb::Coord lo = box.min(), dim = box.dim();
+    out.origin = {lo.x(), lo.y(), lo.z()};
+    out.size = {dim.x(), dim.y(), dim.z()};
+    out.values.resize(size_t(3) * out.size[0] * out.size[1] * out.size[2]);
+    auto acc = grid.getConstAccessor();
+    size_t n = 0;
+    for (int k = 0; k < out.size[2]; ++k)
+        for (int j = 0; j < out.size[1]; ++j)
+            for (int i = 0; i < out.size[0]; ++i) {
+                const auto v = acc.getValue(lo.offsetBy(i, j, k));
+                for (int c = 0; c < 3; ++c) out.values[n++] = static_cast<float>(v[c]);
+            }
+}
+
+}  // namespace
+
+VdbVectorGrid read_vdb_vectors(const std::string& path, const std::string& name,
+                               const VdbIndexBox* box) {
+    initialize_vdb();
+    openvdb::GridBase::Ptr base;
+    openvdb::CoordBBox clip;
+    try {
+        openvdb::io::File file(path);
+        file.open(false);
+        if (box) {
+            // the grid's transform first (metadata only), then the nodes that meet the box
+            clip = {{box->min[0], box->min[1], box->min[2]}, {box->max[0], box->max[1], box->max[2]}};
+            const auto head = file.readGridMetadata(name);
+            const openvdb::BBoxd index(clip.min().asVec3d() - openvdb::Vec3d(0.5),
+                                       clip.max().asVec3d() + openvdb::Vec3d(0.5));
+            const openvdb::BBoxd world = head->transform().indexToWorld(index);
+            base = file.readGrid(name, world);
+        } else {
+            base = file.readGrid(name);
+        }
+        file.close();
+    } catch (const std::exception& e) {
+        throw IoError(path + ": cannot read grid \"" + name + "\": " + e.what());
+    }
+    VdbVectorGrid out;
+    if (auto g = openvdb::gridPtrCast<openvdb::Vec3SGrid>(base)) copy_vectors(*g, clip, out);
+    else if (auto d = openvdb::gridPtrCast<openvdb::Vec3DGrid>(base)) copy_vectors(*d, clip, out);
+    else
+        throw IoError(path + ": grid \"" + name + "\" holds " + base->valueType() +
+                      " values: expected a vector grid (vec3s or vec3d)");
+    out.staggered = base->getGridClass() == openvdb::GRID_STAGGERED;
+    const auto map = base->transform().baseMap();
+    out.affine = map->isLinear();
+    if (out.affine) {
+        // OpenVDB multiplies row vectors: world = index * M, the translation in M's last row.
+        const openvdb::Mat4d m = map->getAffineMap()->getMat4();
+        for (int r = 0; r < 3; ++r) {
+            for (int c = 0; c < 3; ++c) out.linear[size_t(3 * r + c)] = m(c, r);
+            out.translation[size_t(r)] = m(3, r);
+        }
+    }
+    return out;
+}
+
 }  // namespace impulse::output::io

@@ -41,4 +41,36 @@ void write_vdb(const std::string& path, const VolumeGrid& grid, const std::strin
 /// tests and tools. Throws IoError naming the file.
 VolumeGrid read_vdb(const std::string& path, const std::string& name = "density");
 
+/// A grid's header in an OpenVDB file: its name and value type as OpenVDB names it ("vec3s",
+/// "float", ...).
+struct VdbGridHeader {
+    std::string name, type;
+};
+/// The grids of an OpenVDB file in file order, from the headers alone. Throws IoError naming
+/// the file.
+std::vector<VdbGridHeader> list_vdb_grids(const std::string& path);
+
+/// A vector grid of an OpenVDB file, dense over its active voxels' bounding box (inactive voxels
+/// read as the background).
+struct VdbVectorGrid {
+    std::array<int, 3> size{};    ///< W, H, D (0 when the grid has no active voxel)
+    std::array<int, 3> origin{};  ///< the index of sample (0, 0, 0)
+    /// 3 floats a sample (x, y, z components), sample (i, j, k) at 3 ((k H + j) W + i).
+    std::vector<float> values;
+    /// Index to world: world_r = sum_c linear[3 r + c] index_c + translation[r].
+    std::array<double, 9> linear{};
+    std::array<double, 3> translation{};
+    bool affine = true;      ///< false: the grid's transform is not affine (a frustum)
+    bool staggered = false;  ///< the grid's class is "staggered" (components on the faces)
+};
+/// An index-space box of voxels, both corners included.
+struct VdbIndexBox {
+    std::array<int, 3> min{}, max{};
+};
+/// Reads the vector grid `name` (vec3s or vec3d), dense over its active voxels' bounding box,
+/// or over `box` when given (only the file's nodes that meet it are read: a slab of a large
+/// grid). Throws IoError naming the file and the grid, also when the grid is not a vector grid.
+VdbVectorGrid read_vdb_vectors(const std::string& path, const std::string& name,
+                               const VdbIndexBox* box = nullptr);
+
 }  // namespace impulse::output

@@ -39,12 +39,12 @@ std::shared_ptr<sim::Flow> read_flows(
         layer.fail(layer.node("flow"), "flow",
                    "a flow moves particles that are born and die: set lifetime > 0 in this layer");
     auto sum = std::make_shared<sim::FlowSum>();
-    const std::array<std::string_view, 7> types = {"uniform", "shear", "vortex", "source",
-                                                   "curl",    "image", "layer"};
+    const std::array<std::string_view, 8> types = {"uniform", "shear", "vortex", "source",
+                                                   "curl",    "image", "layer",  "sequence"};
     for (auto& f : list) {
         if (!f.has("type"))
             f.fail(nullptr, "type",
-                   "missing: expected one of uniform, shear, vortex, source, curl, image, layer");
+                   "missing: expected one of uniform, shear, vortex, source, curl, image, layer, sequence");
         const size_t type = f.choice("type", types, 0);
         auto center = [&](numeric::Keyframed& x, numeric::Keyframed& y) {
             const toml::node* n = f.node("center");
@@ -138,6 +138,9 @@ std::shared_ptr<sim::Flow> read_flows(
             }
             case 6:  // another layer's field as stream function (scenes/compose_config.cpp)
                 compose.read_flow(f, index, *sum);
+                break;
+            case 7:  // a velocity sequence from files (scenes/sequence_config.cpp)
+                read_sequence_flow(f, process, layer, base, *sum);
                 break;
         }
         f.finish();

@@ -340,7 +340,7 @@ Scene read_scene(const toml::table& root, Source& src, const fs::path& base, Out
             top.fail(top.node("layer"), "layer", "a volume scene ([volume]) has no [[layer]]");
         for (const char* k : {"camera", "shading"})
             if (top.has(k)) top.fail(top.node(k), k, "a volume scene is lit and framed by [preview]");
-        s.volume = detail::read_volume_scene(top, global_seed, s.output);
+        s.volume = detail::read_volume_scene(top, global_seed, s.output, base);
         top.finish();
         return s;
     }

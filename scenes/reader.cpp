@@ -195,14 +195,17 @@ std::string Reader::location(const toml::node* n, std::string_view key) const {
     return s.str();
 }
 
-void Reader::fail(const toml::node* n, std::string_view key, const std::string& what) const {
+std::string Reader::describe(const toml::node* n, std::string_view key) const {
     std::ostringstream s;
     s << location(n, key) << ": " << key_path(key);
     // Tables and lists of tables are pointed at, not printed.
     const bool composite = n && (n->is_table() || (n->is_array() && n->as_array()->is_array_of_tables()));
     if (n && !composite) s << " = " << value_text(*n);
-    s << ": " << what;
-    throw SceneError(s.str());
+    return s.str();
+}
+
+void Reader::fail(const toml::node* n, std::string_view key, const std::string& what) const {
+    throw SceneError(describe(n, key) + ": " + what);
 }
 
 void Reader::warn(std::string_view key, const std::string& what) const {

@@ -88,6 +88,9 @@ public:
 
     /// Throws for every key present but never read.
     void finish() const;
+    /// "file:line:column: key.path = value" of `n` (or the table) for `key`: what fail prints
+    /// before its reason, for errors found later (a sequence frame read while rendering).
+    std::string describe(const toml::node* n, std::string_view key) const;
     /// One-line error at `n` (or the table) for `key`.
     [[noreturn]] void fail(const toml::node* n, std::string_view key, const std::string& what) const;
     void warn(std::string_view key, const std::string& what) const;

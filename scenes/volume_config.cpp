@@ -70,14 +70,16 @@ void read_shape(std::optional<Reader> r, volume::CloudShape& s) {
     r->finish();
 }
 
-std::shared_ptr<volume::Flow3> read_volume_flows(Reader& v, uint64_t global_seed) {
+std::shared_ptr<volume::Flow3> read_volume_flows(Reader& v, uint64_t global_seed,
+                                                 const volume::CloudConfig& c,
+                                                 const std::filesystem::path& base) {
     auto list = v.tables("flow");
     if (list.empty()) return nullptr;
     auto sum = std::make_shared<volume::FlowSum3>();
-    const std::array<std::string_view, 3> types = {"uniform", "divergent", "curl"};
+    const std::array<std::string_view, 4> types = {"uniform", "divergent", "curl", "sequence"};
     for (size_t i = 0; i < list.size(); ++i) {
         Reader& f = list[i];
-        if (!f.has("type")) f.fail(nullptr, "type", "missing: expected one of uniform, divergent, curl");
+        if (!f.has("type")) f.fail(nullptr, "type", "missing: expected one of uniform, divergent, curl, sequence");
         switch (f.choice("type", types, 0)) {
             case 0:
                 sum->push(volume::make_uniform_flow3(
@@ -85,16 +87,19 @@ std::shared_ptr<volume::Flow3> read_volume_flows(Reader& v, uint64_t global_seed
                         .value_or(std::array<double, 3>{0, 0, 0})));
                 break;
             case 1: {
-                const auto c = triple(f, "center", "[x, y, z] in voxels", kFinite);
+                const auto center = triple(f, "center", "[x, y, z] in voxels", kFinite);
                 const double rate = f.number("rate", 0.1, [](double r) { return std::abs(r) <= 10; },
                                              "a rate in 1/s within +-10");
                 const double pulse = f.number("pulse", 0.0, [](double r) { return std::abs(r) <= 10; },
                                               "a rate amplitude in 1/s within +-10");
                 const double period = f.number("period", 4.0, kPositive, "seconds > 0");
-                if (!c) f.fail(nullptr, "center", "missing: expected [x, y, z] in voxels");
-                sum->push(volume::make_divergent_flow3(*c, rate, pulse, period));
+                if (!center) f.fail(nullptr, "center", "missing: expected [x, y, z] in voxels");
+                sum->push(volume::make_divergent_flow3(*center, rate, pulse, period));
                 break;
             }
+            case 3:  // a velocity sequence (scenes/sequence_config.cpp)
+                read_volume_sequence_flow(f, c.lifetime_s, c.jacobian, v, base, *sum);
+                break;
             default: {
                 const double scale = f.number("scale", 48.0, [](double s) { return s >= 1 && s <= 1e5; },
                                               "a potential radius in voxels in [1, 1e5]");
@@ -135,7 +140,8 @@ void read_preview(std::optional<Reader> r, volume::MarchOptions& m) {
 }  // namespace
 
 std::shared_ptr<const VolumeSceneConfig> read_volume_scene(Reader& top, uint64_t global_seed,
-                                                          const OutputConfig& output) {
+                                                          const OutputConfig& output,
+                                                          const std::filesystem::path& base) {
     auto cfg = std::make_shared<VolumeSceneConfig>();
     volume::CloudConfig& c = cfg->cloud;
     Reader v = *top.table("volume");
@@ -160,7 +166,7 @@ std::shared_ptr<const VolumeSceneConfig> read_volume_scene(Reader& top, uint64_t
     c.substeps = int(v.integer("substeps", 1, 1, 64));
     read_cloud_kernel(v.table("kernel"), c);
     read_shape(v.table("shape"), c.shape);
-    c.flow = read_volume_flows(v, global_seed);
+    c.flow = read_volume_flows(v, global_seed, c, base);
     v.finish();
     read_preview(top.table("preview"), cfg->march);
     cfg->march.width = output.width, cfg->march.height = output.height;

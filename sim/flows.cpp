@@ -431,6 +431,10 @@ void FlowSum::prepare(const Box& region) {
     for (auto& f : m_terms) f->prepare(region);
 }
 
+void FlowSum::prepare_span(double t0_s, double t1_s) {
+    for (auto& f : m_terms) f->prepare_span(t0_s, t1_s);
+}
+
 double FlowSum::cache_bytes(const Box& region) const {
     double bytes = 0.0;
     for (const auto& f : m_terms) bytes += f->cache_bytes(region);

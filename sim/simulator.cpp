@@ -129,6 +129,16 @@ struct LayerSimulator::State {
         return static_cast<double>(s) * dt;
     }
 
+    /// The times the steps up to `target` of the impulses alive then evaluate: from a lifetime
+    /// and a step before to `target` (the whole loop when that span wraps round it).
+    std::pair<double, double> time_span(int64_t target) const {
+        const int64_t first =
+            target - static_cast<int64_t>(std::ceil(config.lifetime_s / dt)) - 1;
+        if (loop_steps && detail::floor_div(first, loop_steps) != detail::floor_div(target, loop_steps))
+            return {0.0, static_cast<double>(loop_steps) * dt};
+        return {time_of_step(first), time_of_step(target)};
+    }
+
     /// Birth (grid step, fraction) from the reduced birth time; copies one loop apart differ
     /// by exactly loop_steps in the step and not at all in the fraction.
     std::pair<int64_t, double> birth_grid(const BirthTime& b) const {
@@ -534,7 +544,11 @@ void LayerSimulator::impulses_at(int64_t frame, const Region& view, Impulses& ou
     // The birth region follows the view's boxes (a perspective view's wedge, say): only the
     // cells that meet one of them are generated.
     const Region region = birth_region(view);
-    if (S.flow && !still) S.flow->prepare(S.flow_region(region, travel));
+    if (S.flow && !still) {
+        S.flow->prepare(S.flow_region(region, travel));
+        const auto [t0, t1] = S.time_span(target);
+        S.flow->prepare_span(t0, t1);
+    }
     const detail::CellCover cover = detail::cell_cover(region, L);
     if (still) {
         // out.theta holds theta0 for a random orientation, and for the field's jitter until

@@ -5,8 +5,11 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
+
+#include "sim/sim.h"
 
 namespace impulse::volume {
 
@@ -32,6 +35,9 @@ public:
     /// Called single-threaded before a frame is integrated over `region` (caches). Default:
     /// nothing. Results do not depend on it, only speed.
     virtual void prepare(const Box3& region) { (void)region; }
+    /// Called single-threaded before a frame is integrated with the times its steps evaluate,
+    /// [t0_s, t1_s] (a sequence loads its frames). Default: nothing.
+    virtual void prepare_span(double t0_s, double t1_s) { (void)t0_s, (void)t1_s; }
 };
 
 /// Sum of flows (a scene's [[volume.flow]] list).
@@ -44,6 +50,7 @@ public:
     bool divergence_free() const override;
     double max_speed(const Box3& region) const override;
     void prepare(const Box3& region) override;
+    void prepare_span(double t0_s, double t1_s) override;
 
 private:
     std::vector<std::unique_ptr<Flow3>> m_terms;
@@ -62,5 +69,33 @@ std::unique_ptr<Flow3> make_divergent_flow3(const std::array<double, 3>& center,
 /// RNG from `seed`); divergence-free exactly (the curl is taken analytically). `speed` is the RMS
 /// speed (Campbell's theorem on the potential's gradient). Throws ValueError for scale <= 0.
 std::unique_ptr<Flow3> make_curl_flow3(uint64_t seed, double scale, double speed);
+
+/// One frame of a 3-D velocity sequence: 3 floats a sample (vx, vy, vz in voxels per second),
+/// sample (i, j, k) at 3 ((k H + j) W + i).
+struct VolumeFrame {
+    std::array<int, 3> size{};
+    std::vector<float> v;
+};
+/// A velocity sequence laid on the volume's voxels (docs/volume.md, docs/scenes.md "Velocity
+/// sequences").
+struct Sequence3Config {
+    std::function<VolumeFrame(int64_t)> load;  ///< frame k; thread-safe, throws on bad input
+    int64_t first = 0, last = 0;               ///< the sequence's frames, none missing
+    double start = 0.0, rate = 24.0;           ///< frame u(t) = start + rate t, held to the ends
+    sim::TimeInterpolation time = sim::TimeInterpolation::Linear;
+    sim::Outside outside = sim::Outside::Zero;
+    std::array<int, 3> size{};  ///< every frame's W, H, D (each >= 2)
+    /// Volume point to grid index, axis by axis: index_c = scale[c] x_c + offset[c], scale != 0.
+    std::array<double, 3> scale{1, 1, 1}, offset{0, 0, 0};
+    double max_sample_speed = 0.0;  ///< max |v| over every frame's samples
+    double span_s = 0.0;            ///< the lifetime (frames held: docs/scenes.md)
+    bool read_ahead = true;
+};
+/// Trilinear in space, linear or cubic in time, with the exact divergence of that interpolant
+/// (for sqrt(J), design.md §1). Throws ValueError for a malformed config.
+std::unique_ptr<Flow3> make_sequence_flow3(Sequence3Config config);
+/// The largest |div v| of the trilinear interpolant of `frame` with index scales `scale` (exact:
+/// on each cell div v is multilinear, so its extremes sit on the corners).
+double max_interpolated_divergence3(const VolumeFrame& frame, const std::array<double, 3>& scale);
 
 }  // namespace impulse::volume

@@ -29,6 +29,9 @@ double FlowSum3::max_speed(const Box3& region) const {
 void FlowSum3::prepare(const Box3& region) {
     for (auto& f : m_terms) f->prepare(region);
 }
+void FlowSum3::prepare_span(double t0_s, double t1_s) {
+    for (auto& f : m_terms) f->prepare_span(t0_s, t1_s);
+}
 
 namespace {
 

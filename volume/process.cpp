@@ -277,9 +277,12 @@ void Simulator3::impulses_at(int64_t frame, const Box3& view, Impulses3& out) {
     State& S = *m_state;
     const int64_t target = frame * S.p.substeps;
     const Box3 region = S.birth_region(view);
-    if (S.flow) S.flow->prepare(region.expanded(S.p.cell_size));
     // Births up to one lifetime (and a time cell of margin) before the frame may be alive.
     const double t = double(target) * S.dt;
+    if (S.flow) {
+        S.flow->prepare(region.expanded(S.p.cell_size));
+        S.flow->prepare_span(t - S.p.lifetime_s - S.dt, t);
+    }
     const int64_t ct0 = int64_t(std::floor((t - S.p.lifetime_s) / S.time_cell_s)) - 1;
     const int64_t ct1 = int64_t(std::floor(t / S.time_cell_s)) + 1;
     S.gather(cover(region, S.p.cell_size, ct0, ct1), target);
