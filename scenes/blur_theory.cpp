@@ -37,11 +37,11 @@ struct Legendre16 {
 double MotionBlur::spectrum_factor(double kx, double ky) const {
     if (paths.empty()) return 1.0;
     double s = 0.0;
-    for (const auto& b : paths) {
-        const double c = sinc(std::numbers::pi * (kx * b[0] + ky * b[1]));
-        s += c * c;
+    for (size_t p = 0; p < paths.size(); ++p) {
+        const double c = sinc(std::numbers::pi * (kx * paths[p][0] + ky * paths[p][1]));
+        s += weight[p] * c * c;
     }
-    return s / double(paths.size());
+    return s;
 }
 
 double MotionBlur::radial_factor(double rho) const {
@@ -59,20 +59,15 @@ double MotionBlur::variance_factor(const kernels::Kernel& k) const {
     if (paths.empty()) return 1.0;
     // Var_b / Var = mean_p 2 int_0^1 (1 - s) C(s b_p) ds / C(0), C the kernel's autocorrelation
     // (the mean of h over a segment b has the autocorrelation of h convolved with the
-    // segment's, a triangle): Gauss-Legendre in s, each distinct path once.
+    // segment's, a triangle): Gauss-Legendre in s.
     static const Legendre16 q;
     const double c0 = k.integral_sq();
-    std::map<std::array<double, 2>, double> done;
     double sum = 0.0;
-    for (const auto& b : paths) {
-        auto [it, fresh] = done.try_emplace(b, 0.0);
-        if (fresh)
-            for (int i = 0; i < 16; ++i)
-                it->second += 2.0 * q.w[i] * (1.0 - q.x[i]) *
-                              k.autocorrelation(q.x[i] * b[0], q.x[i] * b[1]) / c0;
-        sum += it->second;
-    }
-    return sum / double(paths.size());
+    for (size_t p = 0; p < paths.size(); ++p)
+        for (int i = 0; i < 16; ++i)
+            sum += weight[p] * 2.0 * q.w[i] * (1.0 - q.x[i]) *
+                   k.autocorrelation(q.x[i] * paths[p][0], q.x[i] * paths[p][1]) / c0;
+    return sum;
 }
 
 MotionBlur layer_motion_blur(const Scene& scene, size_t layer, double t_s) {
@@ -94,7 +89,10 @@ MotionBlur layer_motion_blur(const Scene& scene, size_t layer, double t_s) {
         }
     std::vector<double> vx(x.size(), 0.0), vy(x.size(), 0.0);
     l.flow->add(t, x.size(), x.data(), y.data(), vx.data(), vy.data(), nullptr, nullptr);
-    for (size_t p = 0; p < x.size(); ++p) m.paths.push_back({vx[p] * shutter_s, vy[p] * shutter_s});
+    std::map<std::array<double, 2>, double> share;  // distinct paths (a uniform flow: one)
+    for (size_t p = 0; p < x.size(); ++p)
+        share[{vx[p] * shutter_s, vy[p] * shutter_s}] += 1.0 / double(x.size());
+    for (const auto& [b, w] : share) m.paths.push_back(b), m.weight.push_back(w);
     return m;
 }
 

@@ -223,6 +223,9 @@ std::vector<double> layer_grid(const LayerSpectrum& L, int w, int h) {
     // its aliased tails are anisotropic too, which the radial table would smear.
     const bool all_exact = L.source && L.fixed_anisotropic;
     const int m = L.aliasing ? (all_exact ? 2 : 1) : 0;
+    // A blurred layer's spectrum is anisotropic (sinc^2 across the motion's nulls), and so are
+    // its aliased images: every bin and image exactly.
+    const bool blurred = !L.blur.paths.empty();
     const int side = std::min(w, h);
     tbb::parallel_for(0, h, [&](int ky) {
         const double fy = analysis::Periodogram::frequency(ky, h);
@@ -237,7 +240,7 @@ std::vector<double> layer_grid(const LayerSpectrum& L, int w, int h) {
             const bool exact = L.fixed_anisotropic && std::hypot(fx, fy) * side < kExactAnnuli;
             for (int my = -m; my <= m; ++my)
                 for (int mx = -m; mx <= m; ++mx)
-                    s += all_exact || (exact && mx == 0 && my == 0)
+                    s += all_exact || blurred || (exact && mx == 0 && my == 0)
                              ? L.exact(fx + mx, fy + my)
                              : L.table(std::hypot(fx + mx, fy + my));
             g[size_t(ky) * w + kx] = s + L.far_alias;

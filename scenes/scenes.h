@@ -327,7 +327,8 @@ Theory blurred_scene_theory(const Scene& scene, double t_s = 0.0);
 /// one path; others by this quadrature over the flow). The envelope's and sqrt(J)'s change over
 /// the shutter are neglected.
 struct MotionBlur {
-    std::vector<std::array<double, 2>> paths;  ///< b_p in texture units; empty: no blur
+    std::vector<std::array<double, 2>> paths;  ///< distinct b_p in texture units; empty: no blur
+    std::vector<double> weight;                ///< each path's share of the points (sum 1)
     /// |H_b|^2 / |H|^2 = mean_p sinc^2(pi k . b_p), k in cycles per texture unit.
     double spectrum_factor(double kx, double ky) const;
     /// spectrum_factor's angular mean over |k| = rho.
