@@ -606,33 +606,46 @@ void LayerSimulator::impulses_at(int64_t frame, const Region& view, const Shutte
 }
 
 // Each particle's number of sub-steps over the shutter, as a power of two 2^level: its travel
-// over the shutter (its speed at the shutter's middle grid state times the shutter's length)
-// against shutter.max_step (docs/motion_blur.md). 255 marks a particle the view cannot see.
+// over the shutter against shutter.max_step (docs/motion_blur.md). The travel is its chord
+// between the first and last grid states of the walk, scaled to the shutter's length; with one
+// grid state (a shutter within one grid step) or a particle born during the walk, its speed at
+// that state times the shutter's length. 255 marks a particle the view cannot see.
 std::vector<uint8_t> LayerSimulator::State::blur_levels(const Region& view, int64_t target,
                                                         const Shutter& shutter,
                                                         const std::vector<Particles>& states,
                                                         int64_t g_open) const {
     const double length = shutter.close_s - shutter.open_s;
-    const int64_t g_mid = target + static_cast<int64_t>(
-                                       std::floor(0.5 * (shutter.open_s + shutter.close_s) / dt));
-    const Particles& P = states[size_t(std::clamp<int64_t>(g_mid - g_open, 0,
-                                                           int64_t(states.size()) - 1))];
-    const size_t n = P.size();
-    std::vector<double> vx(n, 0.0), vy(n, 0.0);
-    if (flow) flow->add(time_of_step(g_mid), n, P.x.data(), P.y.data(), vx.data(), vy.data(),
-                        nullptr, nullptr);
+    const Particles& A = states.front();
+    const Particles& B = states.back();
+    const int64_t g_close = g_open + int64_t(states.size()) - 1;
+    const size_t n = A.size();
+    auto at_grid = [](const Particles& P, size_t i, int64_t g) {
+        return P.stepped[i] && P.step[i] == g;
+    };
+    std::vector<size_t> need;  // particles whose speed is taken from the flow
+    for (size_t i = 0; i < n; ++i)
+        if (g_close == g_open || !at_grid(A, i, g_open) || !at_grid(B, i, g_close)) need.push_back(i);
+    std::vector<double> px(need.size()), py(need.size()), vx(need.size(), 0.0), vy(need.size(), 0.0);
+    for (size_t q = 0; q < need.size(); ++q) px[q] = A.x[need[q]], py[q] = A.y[need[q]];
+    if (flow && !need.empty())
+        flow->add(time_of_step(g_open), need.size(), px.data(), py.data(), vx.data(), vy.data(),
+                  nullptr, nullptr);
+    std::vector<double> travel(n, 0.0);
+    const double span = static_cast<double>(g_close - g_open) * dt;
+    for (size_t i = 0; i < n; ++i)
+        if (g_close > g_open) travel[i] = std::hypot(B.x[i] - A.x[i], B.y[i] - A.y[i]) * length / span;
+    for (size_t q = 0; q < need.size(); ++q) travel[need[q]] = std::hypot(vx[q], vy[q]) * length;
     const double reach = (flow ? flow->max_speed(view.bounds().expanded(support_radius)) : 0.0) *
                          (length + dt);
     const detail::BoxIndex near(view.expanded(support_radius + reach + 1.0));
     const int max_level = std::max(0, std::ilogb(std::max(1, shutter.max_samples)));
     std::vector<uint8_t> level(n, 255);
     for (size_t i = 0; i < n; ++i) {
-        const double age = age_s(P, i, target);  // at the frame time
+        const double age = age_s(A, i, target);  // at the frame time
         if (age + shutter.close_s < 0.0 || age + shutter.open_s >= config.lifetime_s) continue;
-        if (!near.contains(P.x[i], P.y[i])) continue;
-        const double travel = std::hypot(vx[i], vy[i]) * length;
+        if (!near.contains(A.x[i], A.y[i])) continue;
         int l = 0;
-        while (l < max_level && travel > shutter.max_step * double(int64_t(1) << l)) ++l;
+        while (l < max_level && travel[i] > shutter.max_step * double(int64_t(1) << l)) ++l;
         level[i] = static_cast<uint8_t>(l);
     }
     return level;
@@ -705,7 +718,11 @@ void LayerSimulator::State::blur(const Region& view, int64_t target, int64_t g_o
             s.h[q] = G.stepped[i] && G.step[i] == g ? u : age_s(G, i, g) + u;
         }
         const double t0 = time_of_step(g);
-        if (flow) step(t0, t0 + u, t0 + 0.5 * u, m, s, x.data(), y.data(), lj.data(), th.data());
+        // A copy on a grid point from its grid state needs no step (a centred shutter's single
+        // copies: the frame's own state).
+        const bool moves = std::any_of(s.h.begin(), s.h.begin() + m, [](double h) { return h != 0.0; });
+        if (flow && moves)
+            step(t0, t0 + u, t0 + 0.5 * u, m, s, x.data(), y.data(), lj.data(), th.data());
         Impulses batch;
         batch.x = x, batch.y = y;
         batch.weight.resize(m), batch.theta.resize(m);
