@@ -593,6 +593,24 @@ int print_volume_info(const scenes::Scene& scene) {
 
 }  // namespace
 
+/// `impulse info`'s motion blur line for impulse layer i (docs/motion_blur.md): the travel over
+/// the shutter, the variance factor, the copies and the sub-stepping's error bound.
+static void print_motion_blur(const scenes::Scene& scene, size_t i) {
+    const scenes::MotionBlur m = scenes::layer_motion_blur(scene, i);
+    if (m.paths.empty()) return;
+    const auto& l = scene.layers[i];
+    const kernels::Kernel k(l.kernel);
+    const sim::Shutter sh = scene.camera.shutter_at(scene.output.fps, kernels::kernel_curvature(k));
+    double travel = 0.0;
+    for (const auto& b : m.paths) travel = std::max(travel, std::hypot(b[0], b[1]));
+    int copies = 1;
+    while (copies < sh.max_samples && travel > sh.max_step * copies) copies *= 2;
+    std::printf("           motion blur: travel up to %.3g units over the shutter, variance x %.4g; "
+                "up to %d cop%s (%.3g units apart at most), each impulse within %.3g of its peak\n",
+                travel, m.variance_factor(k), copies, copies == 1 ? "y" : "ies", sh.max_step,
+                scene.camera.shutter_error);
+}
+
 int run_info(const InfoOptions& opt) {
     const std::string path = scenes::resolve_scene(opt.scene);
     scenes::Scene scene = scenes::load_scene(path, overrides_for(opt.sets, opt.crop, ""),
@@ -647,7 +665,12 @@ int run_info(const InfoOptions& opt) {
             std::printf("           shaped to %s, F_x %s\n",
                         std::string(kernels::to_string(l.marginal->target().params().type)).c_str(),
                         std::string(kernels::kSourceCdfNames[size_t(l.marginal_cdf)]).c_str());
+        print_motion_blur(scene, i);
     }
+    if (scene.camera.shutter > 0)
+        std::printf("blurred    variance %.6g (each kernel's mean along its path over the shutter: "
+                    "docs/motion_blur.md)\n",
+                    scenes::blurred_scene_theory(scene).variance);
     std::printf("impulses   ~%.3g per frame, ~%.0f MiB", r.estimated_impulses(), r.estimated_memory_mib());
     if (const double steps = r.estimated_flow_steps(); steps > 0)
         std::printf(", ~%.3g flow steps for the first frame", steps);

@@ -549,4 +549,27 @@ double Kernel::scale_class_overlap() const {
     return m_overlap->value;
 }
 
+KernelCurvature kernel_curvature(const Kernel& k) {
+    const double R = k.radius(), d = R / 128.0;
+    constexpr int kNodes = 97;
+    constexpr double kDir[4][2] = {{1, 0}, {0, 1}, {0.70710678118654752, 0.70710678118654752},
+                                   {0.70710678118654752, -0.70710678118654752}};
+    KernelCurvature c;
+    for (int j = 0; j < kNodes; ++j)
+        for (int i = 0; i < kNodes; ++i) {
+            const double x = R * (2.0 * i / (kNodes - 1) - 1.0);
+            const double y = R * (2.0 * j / (kNodes - 1) - 1.0);
+            if (std::hypot(x, y) > R - 2.0 * d) continue;
+            const double h = k.evaluate(x, y);
+            c.peak = std::max(c.peak, std::abs(h));
+            for (const auto& e : kDir) {
+                const double second = (k.evaluate(x + d * e[0], y + d * e[1]) - 2.0 * h +
+                                       k.evaluate(x - d * e[0], y - d * e[1])) / (d * d);
+                c.curvature = std::max(c.curvature, std::abs(second));
+            }
+        }
+    return c;
+}
+
 }  // namespace impulse::kernels
+

@@ -164,4 +164,12 @@ private:
     std::shared_ptr<LazyOverlap> m_overlap;
 };
 
+/// A kernel's peak max|h| and its largest second directional derivative max|d^2 h / ds^2| over
+/// the support (central differences of step R/128 on a 97 x 97 grid and 4 directions, inside
+/// R - 2 steps): the motion blur's sub-step bound (docs/motion_blur.md).
+struct KernelCurvature {
+    double peak = 0.0, curvature = 0.0;
+};
+KernelCurvature kernel_curvature(const Kernel& k);
+
 }  // namespace impulse::kernels

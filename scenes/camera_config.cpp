@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <set>
+#include <limits>
 #include <sstream>
 
 #include "output/io_module.h"
@@ -53,10 +54,49 @@ render::AntiAlias CameraConfig::antialias_options() const {
     return a;
 }
 
+sim::Shutter CameraConfig::shutter_at(double fps, const kernels::KernelCurvature& k) const {
+    sim::Shutter s;
+    s.open_s = shutter_open / fps;
+    s.close_s = (shutter_open + shutter) / fps;
+    // The midpoint rule over n strata of a straight path of length D misses the path's mean
+    // of h by at most (D / n)^2 max|h''| / 24: within shutter_error of the peak when the
+    // travel per copy is at most sqrt(24 shutter_error peak / max|h''|).
+    s.max_step = k.curvature > 0.0 ? std::sqrt(24.0 * shutter_error * k.peak / k.curvature)
+                                    : std::numeric_limits<double>::infinity();
+    return s;
+}
+
 namespace detail {
 namespace {
 
 namespace fs = std::filesystem;
+
+}  // namespace
+
+namespace {
+
+/// shutter, shutter_offset and shutter_error (docs/motion_blur.md).
+void read_shutter(Reader& r, CameraConfig& c) {
+    c.shutter = r.number(
+        "shutter", 0.0, [](double v) { return v >= 0.0 && v <= 1.0; },
+        "a fraction of the frame interval in [0, 1] (0: no motion blur, 0.5: a 180-degree "
+        "shutter)");
+    c.shutter_open = -0.5 * c.shutter;
+    const toml::node* n = r.node("shutter_offset");
+    if (n && n->is_string()) {
+        const std::array<std::string_view, 3> names = {"center", "start", "end"};
+        const size_t k = r.choice("shutter_offset", names, 0);
+        c.shutter_open = k == 0 ? -0.5 * c.shutter : k == 1 ? 0.0 : -c.shutter;
+    } else if (n) {
+        c.shutter_open = r.number(
+            "shutter_offset", 0.0, [](double v) { return v >= -1.0 && v <= 1.0; },
+            "\"center\", \"start\", \"end\" or the shutter's opening in frame intervals from "
+            "the frame, in [-1, 1]");
+    }
+    c.shutter_error = r.number(
+        "shutter_error", 1e-3, [](double v) { return v > 0.0 && v <= 1.0; },
+        "a fraction in (0, 1] of an impulse's peak");
+}
 
 }  // namespace
 
@@ -129,6 +169,7 @@ void read_camera_view(Reader& r, CameraConfig& c, int width, int height) {
         "cutoff", 0.01, [](double v) { return v >= 1e-6 && v <= 0.5; },
         "a fraction in [1e-6, 0.5] of the texture's standard deviation");
     c.anisotropic = r.boolean("anisotropic", true);
+    read_shutter(r, c);
     if (auto sea = r.table("sea")) read_sea(*sea, c, width, height);
 }
 

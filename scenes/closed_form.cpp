@@ -105,10 +105,12 @@ struct LayerSpectrum {
     bool sampled = false;
     PixelLattice lattice;
     double t = 0.0;
+    MotionBlur blur;  ///< the camera's shutter: each kernel's mean along its path
     /// S at (fx, fy) cycles per pixel, exact (orientation and aspect included), no aliasing.
     double exact(double fx, double fy) const {
         if (source) return zoom * zoom * scale * source->power_spectrum_2d(fx * zoom, fy * zoom).value_or(0.0);
-        return zoom * zoom * scale * kernel.power_spectrum(fx * zoom, fy * zoom);
+        return zoom * zoom * scale * kernel.power_spectrum(fx * zoom, fy * zoom) *
+               blur.spectrum_factor(fx * zoom, fy * zoom);
     }
 };
 
@@ -116,8 +118,10 @@ struct LayerSpectrum {
 /// angular average of an anisotropic spectrum: there the bins are evaluated exactly.
 constexpr double kExactAnnuli = 16.0;
 
-LayerSpectrum layer_spectrum(const LayerConfig& layer, double zoom, int n_max) {
+LayerSpectrum layer_spectrum(const LayerConfig& layer, double zoom, int n_max,
+                             const MotionBlur& blur) {
     LayerSpectrum L{kernels::Kernel(layer.kernel), zoom, 0.0, false, false, {}, 0.0};
+    L.blur = blur;
     const kernels::Kernel& k = L.kernel;
     L.scale = layer_theory(layer).variance / k.integral_sq();
     const double R_px = k.radius() * zoom;
@@ -131,7 +135,9 @@ LayerSpectrum layer_spectrum(const LayerConfig& layer, double zoom, int n_max) {
     // a table whose points are 1/8 of an oscillation apart anyway).
     const auto S = [&](double rho) {
         const int n = 36;
-        if (iso) return zoom * zoom * L.scale * k.radial_power_spectrum(rho * zoom);
+        if (iso)
+            return zoom * zoom * L.scale * k.radial_power_spectrum(rho * zoom) *
+                   L.blur.radial_factor(rho * zoom);
         double sum = 0;
         for (int i = 0; i < n; ++i) {
             const double a = std::numbers::pi * (i + 0.5) / n;
@@ -217,6 +223,9 @@ std::vector<double> layer_grid(const LayerSpectrum& L, int w, int h) {
     // its aliased tails are anisotropic too, which the radial table would smear.
     const bool all_exact = L.source && L.fixed_anisotropic;
     const int m = L.aliasing ? (all_exact ? 2 : 1) : 0;
+    // A blurred layer's spectrum is anisotropic (sinc^2 across the motion's nulls), and so are
+    // its aliased images: every bin and image exactly.
+    const bool blurred = !L.blur.paths.empty();
     const int side = std::min(w, h);
     tbb::parallel_for(0, h, [&](int ky) {
         const double fy = analysis::Periodogram::frequency(ky, h);
@@ -231,7 +240,7 @@ std::vector<double> layer_grid(const LayerSpectrum& L, int w, int h) {
             const bool exact = L.fixed_anisotropic && std::hypot(fx, fy) * side < kExactAnnuli;
             for (int my = -m; my <= m; ++my)
                 for (int mx = -m; mx <= m; ++mx)
-                    s += all_exact || (exact && mx == 0 && my == 0)
+                    s += all_exact || blurred || (exact && mx == 0 && my == 0)
                              ? L.exact(fx + mx, fy + my)
                              : L.table(std::hypot(fx + mx, fy + my));
             g[size_t(ky) * w + kx] = s + L.far_alias;
@@ -589,7 +598,8 @@ LayerSums sum_layers(const Scene& scene, const AnalysisResult& R, double zoom, d
         // One table for both grids, at the window's resolution: the padded grid serves only lags
         // within the window plus the displacement, which 8 table points per window bin resolve
         // (a table at the padded grid's bins made `analyze --scene` 4x slower, issue 18).
-        const LayerSpectrum ls = layer_spectrum(layer, zoom, std::max(w, h));
+        const LayerSpectrum ls =
+            layer_spectrum(layer, zoom, std::max(w, h), layer_motion_blur(scene, li));
         add_layer_spectrum(scene, ls, ls, R, zoom, g2, S);
     }
     return S;
@@ -749,7 +759,7 @@ TheoryComparison compare_with_theory(const Scene& scene, const std::string& path
     T.map_lo = lo, T.map_hi = hi;
     T.clipped_fraction = clipped;
     T.z_limit = analysis::kZLimit;
-    const Theory th = scene_theory(scene);
+    const Theory th = blurred_scene_theory(scene);
     T.field_mean = th.mean;
     T.field_variance = th.variance;
     const bool zoom_constant = scene.camera.zoom.is_constant();

@@ -180,16 +180,30 @@ LayerMoments layer_moments(const LayerConfig& layer, double t_s) {
     return m;
 }
 
-Theory scene_theory(const Scene& scene, double t_s) {
-    // The visible layers blended in order onto the empty (zero) picture, each independent of
-    // the result before it, at frame time t_s; the weights at their largest over the animation
-    // (a fade's range is the fully faded-in one).
+namespace {
+
+/// The visible layers blended in order onto the empty (zero) picture, each independent of the
+/// result before it, at frame time t_s; the weights at their largest over the animation (a
+/// fade's range is the fully faded-in one). With `blurred`, impulse layers' variances follow the
+/// camera's motion blur.
+Theory composed_theory(const Scene& scene, double t_s, bool blurred) {
     Theory t;
-    for (const auto& l : scene.layers) {
+    for (size_t i = 0; i < scene.layers.size(); ++i) {
+        const LayerConfig& l = scene.layers[i];
         if (!l.compose.visible) continue;
-        t = detail::blend_theory(t, l, layer_theory(l, t_s), l.compose.opacity.max_abs());
+        Theory lt = layer_theory(l, t_s);
+        if (blurred && !l.marginal) lt.variance *= motion_blur_variance_factor(scene, i, t_s);
+        t = detail::blend_theory(t, l, lt, l.compose.opacity.max_abs());
     }
     return t;
+}
+
+}  // namespace
+
+Theory scene_theory(const Scene& scene, double t_s) { return composed_theory(scene, t_s, false); }
+
+Theory blurred_scene_theory(const Scene& scene, double t_s) {
+    return composed_theory(scene, t_s, true);
 }
 
 bool is_sum_of_layers(const Scene& scene) {
@@ -214,6 +228,10 @@ struct Renderer::State {
     /// each is a pure function of the layer time).
     std::vector<kernels::KernelParams> kernel_built;
     std::vector<std::vector<double>> marginal_built;
+    /// Per layer, the curvature of the kernel its motion blur's sub-steps follow, with that
+    /// kernel (docs/motion_blur.md).
+    std::vector<std::optional<std::pair<kernels::KernelParams, kernels::KernelCurvature>>>
+        curvature;
     /// Camera-dependent evaluation: pyramids, perspective (scenes/camera_render.cpp).
     std::unique_ptr<detail::CameraPipeline> camera;
     /// [camera.sea]: the same layers seen by the mirror camera (scenes/sea.cpp).
@@ -283,6 +301,8 @@ struct Renderer::State {
              sim::Impulses& impulses);
     /// The layer's impulses covering `box`, gain applied, oriented by its source layer if any.
     void layer_impulses(size_t i, const Pass& pass, const numeric::Region& box, sim::Impulses& out);
+    /// Layer i's shutter (closed without [camera] shutter) for its current kernel.
+    sim::Shutter shutter(size_t i);
     /// Samples layer i's orientation source on a lattice covering the impulses of `box`.
     void orient(size_t i, const Pass& pass, const numeric::Box& box);
     /// Rebuilds layer i's marginal transfer for layer time tl when its target or source varies.
@@ -346,6 +366,7 @@ Renderer::Renderer(Scene scene) : m_state(std::make_unique<State>()) {
         const auto& l = S.scene.layers[i];
         S.kernels.emplace_back(l.kernel);
         S.kernel_built.push_back(l.kernel);
+        S.curvature.emplace_back();
         sim::ProcessConfig process = l.process;
         if (l.compose.orientation) {
             S.orientations[i] =
@@ -744,30 +765,40 @@ void Renderer::State::draw(size_t i, const sim::Impulses& imp, const render::Vie
 void Renderer::State::layer_impulses(size_t i, const Pass& pass, const numeric::Region& box,
                                      sim::Impulses& out) {
     if (orientations[i]) orient(i, pass, box.bounds());
-    in_layer(scene, i, [&] { sims[i].impulses_at(pass.frame, box, out); });
     const LayerConfig& layer = scene.layers[i];
     const double tl = scene.layer_time(i, pass.frame);  // the layer's keys run on its own time
-    const double gain = layer.gain.value(tl) * layer.carrier_weight(tl);
-    if (gain != 1.0)
-        for (auto& w : out.weight) w = static_cast<float>(w * gain);
+    double turn = 0.0;
     if (!layer.kernel_keys.empty()) {
         // The kernel at tl; its orientation turns every impulse instead (so the pyramid of an
         // anti-aliased layer, built once, serves it too).
         kernels::KernelParams k = layer.kernel_at(tl);
-        const double turn = k.orientation - layer.kernel.orientation;
+        turn = k.orientation - layer.kernel.orientation;
         k.orientation = layer.kernel.orientation;
         if (!same_kernel(k, kernel_built[i])) {
             kernels[i] = kernels::Kernel(k);
             kernel_built[i] = k;
         }
-        if (turn != 0.0)
-            for (auto& th : out.theta) th = static_cast<float>(th + turn);
     }
+    in_layer(scene, i, [&] { sims[i].impulses_at(pass.frame, box, shutter(i), out); });
+    const double gain = layer.gain.value(tl) * layer.carrier_weight(tl);
+    if (gain != 1.0)
+        for (auto& w : out.weight) w = static_cast<float>(w * gain);
+    if (turn != 0.0)
+        for (auto& th : out.theta) th = static_cast<float>(th + turn);
     out.scale.clear();
     if (layer.scale) {  // at each impulse's position at the frame time, as orientation fields
         out.scale.resize(out.size());
         layer.scale->scales(tl, out.size(), out.x.data(), out.y.data(), out.scale.data());
     }
+}
+
+sim::Shutter Renderer::State::shutter(size_t i) {
+    const CameraConfig& c = scene.camera;
+    if (c.shutter <= 0.0) return {};
+    auto& known = curvature[i];
+    if (!known || !same_kernel(known->first, kernels[i].params()))
+        known.emplace(kernels[i].params(), kernels::kernel_curvature(kernels[i]));
+    return c.shutter_at(scene.output.fps, known->second);
 }
 
 void Renderer::State::orient(size_t i, const Pass& pass, const numeric::Box& box) {

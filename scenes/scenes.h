@@ -76,6 +76,15 @@ struct CameraConfig {
     double cutoff = 0.01;      ///< fade to the mean below this fraction of the sd, in (0, 0.5]
     bool anisotropic = true;   ///< false: isotropic levels from the footprint's major axis
     SeaConfig sea;             ///< [camera.sea] (perspective sky cameras only)
+    // motion blur (docs/motion_blur.md)
+    double shutter = 0.0;      ///< fraction of the frame interval the shutter is open, [0, 1]
+    /// When the shutter opens, in frame intervals from the frame time, in [-1, 1]: key
+    /// shutter_offset = "center" (-shutter/2, the default), "start" (0: opening at the frame),
+    /// "end" (-shutter: closing at it) or a number.
+    double shutter_open = 0.0;
+    /// Sub-step error bound: each impulse's blurred kernel within this fraction of its peak
+    /// amplitude, in (0, 1].
+    double shutter_error = 1e-3;
 
     /// The view at time t for a frame of the given size.
     render::View view(int width, int height, double t_s) const;
@@ -85,6 +94,10 @@ struct CameraConfig {
     bool antialiased() const;
     /// The anti-aliasing options for the renderer.
     render::AntiAlias antialias_options() const;
+    /// The shutter at `fps` frames a second for impulses of kernel `k`: open over
+    /// [t + shutter_open / fps, t + (shutter_open + shutter) / fps], sub-steps from
+    /// shutter_error and the kernel's curvature (docs/motion_blur.md).
+    sim::Shutter shutter_at(double fps, const kernels::KernelCurvature& k) const;
 };
 
 /// [limits]: refuse requests that would exhaust memory or time.
@@ -314,6 +327,32 @@ LayerMoments layer_moments(const LayerConfig& layer, double t_s = 0.0);
 /// alpha range in the Gaussian approximation, see docs/scenes.md "Composition"). Sums add means
 /// and variances.
 Theory scene_theory(const Scene& scene, double t_s = 0.0);
+/// The same with the camera's motion blur (docs/motion_blur.md "Theory"): each impulse layer's
+/// variance times motion_blur_variance_factor. The display mapping keeps scene_theory, so a
+/// shutter does not change a frame's exposure.
+Theory blurred_scene_theory(const Scene& scene, double t_s = 0.0);
+
+/// Motion blur's effect on an impulse layer's second-order statistics (docs/motion_blur.md
+/// "Theory"): every kernel replaced by its mean along a straight path b = v shutter / fps, v the
+/// flow's velocity at the shutter's middle at 64 points over the frame's view (a uniform flow:
+/// one path; others by this quadrature over the flow). The envelope's and sqrt(J)'s change over
+/// the shutter are neglected.
+struct MotionBlur {
+    std::vector<std::array<double, 2>> paths;  ///< distinct b_p in texture units; empty: no blur
+    std::vector<double> weight;                ///< each path's share of the points (sum 1)
+    /// |H_b|^2 / |H|^2 = mean_p sinc^2(pi k . b_p), k in cycles per texture unit.
+    double spectrum_factor(double kx, double ky) const;
+    /// spectrum_factor's angular mean over |k| = rho.
+    double radial_factor(double rho) const;
+    /// Var_b / Var = mean_p 2 int_0^1 (1 - s) C(s b_p) ds / C(0), C the autocorrelation of `k`.
+    double variance_factor(const kernels::Kernel& k) const;
+};
+/// Layer `layer`'s motion blur at frame time t_s (no paths without [camera] shutter, for a
+/// source layer, a still one or one without flow).
+MotionBlur layer_motion_blur(const Scene& scene, size_t layer, double t_s = 0.0);
+/// layer_motion_blur's variance_factor for the layer's kernel at t_s (1 without blur).
+double motion_blur_variance_factor(const Scene& scene, size_t layer, double t_s = 0.0);
+
 /// True when the frame is the plain sum of layers (every layer visible, added at opacity 1,
 /// unwarped; source layers only where they state a spectrum, LayerSource::no_spectrum_reason):
 /// what the spectral theory of `impulse analyze` covers.

@@ -445,6 +445,19 @@ void cell_impulses(const ProcessConfig& config, int64_t cx, int64_t cy, int64_t 
 /// Expected number of impulses generated for `region` (before culling): the budget estimate.
 double expected_impulses(const ProcessConfig& config, const Region& region);
 
+/// A camera shutter for motion blur (docs/motion_blur.md): open over [t + open_s, t + close_s]
+/// around the frame time t. Each live impulse is drawn as n copies at the centres of n equal
+/// strata of that interval, weight 1/n each, n the smallest power of two (at most max_samples)
+/// with the impulse's travel over the shutter / n <= max_step: an impulse that barely moves is
+/// one copy.
+struct Shutter {
+    double open_s = 0.0, close_s = 0.0;  ///< offsets from the frame time, seconds, open <= close
+    double max_step = 1.0;               ///< largest travel between copies, texture units, > 0
+    int max_samples = 64;                ///< a power of two >= 1
+    /// False for a shutter of zero length (an instant: the frame as without a shutter).
+    bool open() const { return close_s > open_s; }
+};
+
 /// Produces the live impulses of one layer at any frame. Sequential calls (frame f then f+1)
 /// reuse the previous state and step it; any other call integrates from birth. Both paths do the
 /// same floating-point operations per particle, so results are bit-identical (design.md §3).
@@ -462,6 +475,9 @@ public:
     /// writes its impulses straight into `out`, pieces of rows of cells in parallel, each in its
     /// place of the canonical order (the same values and order as cell_impulses cell by cell).
     void impulses_at(int64_t frame, const Region& view, Impulses& out);
+    /// The same, motion-blurred over `shutter`: each live impulse's copies along its path
+    /// (docs/motion_blur.md). A closed shutter gives impulses_at's impulses, bit for bit.
+    void impulses_at(int64_t frame, const Region& view, const Shutter& shutter, Impulses& out);
     /// The birth region used for `view`: expanded by support radius + travel bound.
     Box birth_region(const Box& view) const;
     /// The birth regions of every box of `view`.

@@ -187,13 +187,24 @@ struct LayerSimulator::State {
     bool alive(const Particles& P, size_t i, int64_t target) const;
     void plan_blocks(const detail::CellCover& cover, int64_t ct0, int64_t ct1, bool reuse);
     void fill_blocks();
-    void advance(int64_t target);
+    void advance(int64_t target, int64_t alive_from);
+    void blur(const Region& view, int64_t target, int64_t g_open, const Shutter& shutter,
+              std::vector<Particles>& states, Impulses& out) const;
+    std::vector<uint8_t> blur_levels(const Region& view, int64_t target, const Shutter& shutter,
+                                     const std::vector<Particles>& states, int64_t g_open) const;
     std::vector<size_t> emit(const Region& view, int64_t target, Impulses& out) const;
-    void orient(int64_t target, const std::vector<size_t>& emitted, Impulses& out) const;
+    void orient(double t_s, const std::vector<size_t>& emitted, Impulses& out) const;
     void integrate(Particles& p, const std::vector<size_t>& order, int64_t target);
+    void step(double t0, double t1, double tm, size_t n, Scratch& s, double* x, double* y,
+              double* lj, double* th) const;
+    /// ln J only matters with the compensation on, and stays exactly 0 in a divergence-free
+    /// flow; theta integrates the vorticity only in OrientationMode::Vorticity (the other modes
+    /// set it at birth or at the frame time). Skipping them changes no bit of x and y.
+    bool want_div() const { return config.jacobian && !flow->divergence_free(); }
+    bool want_curl() const { return config.orientation == OrientationMode::Vorticity; }
     void still_impulses(const detail::CellCover& cover, const Region& view, bool theta0,
                         Impulses& out);
-    void field_orientation(int64_t target, const std::vector<float>& th0, Impulses& out) const;
+    void field_orientation(double t_s, const std::vector<float>& th0, Impulses& out) const;
 };
 
 LayerSimulator::LayerSimulator(ProcessConfig config, std::shared_ptr<Flow> flow, Timing timing,
@@ -230,6 +241,60 @@ Region LayerSimulator::birth_region(const Region& view) const {
     return r;
 }
 
+// One step of the layer's integrator (Heun's RK2 or classical RK4) for particles [0, n), each by
+// its own s.h[j], from time t0 (stages at t1 = t0 + h and tm = t0 + h / 2), with ln J
+// (d ln J / dt = div v) and theta (d theta / dt = w / 2) when wanted (design.md §1).
+void LayerSimulator::State::step(double t0, double t1, double tm, size_t n, Scratch& s, double* x,
+                                 double* y, double* lj, double* th) const {
+    const bool div = want_div(), curl = want_curl();
+    auto eval = [&](int stage, double t, const double* px, const double* py) {
+        double* out[4];
+        for (int q = 0; q < 4; ++q) {
+            auto& v = s.k[stage][q];
+            out[q] = v.empty() ? nullptr : v.data();
+            if (out[q]) std::fill(out[q], out[q] + n, 0.0);
+        }
+        flow->add(t, n, px, py, out[0], out[1], out[2], out[3]);
+    };
+    eval(0, t0, x, y);
+    if (config.integrator != Integrator::RK4) {  // Heun's RK2
+        for (size_t j = 0; j < n; ++j) {
+            s.xt[j] = x[j] + s.h[j] * s.k[0][0][j];
+            s.yt[j] = y[j] + s.h[j] * s.k[0][1][j];
+        }
+        eval(1, t1, s.xt.data(), s.yt.data());
+        for (size_t j = 0; j < n; ++j) {
+            const double hh = 0.5 * s.h[j];
+            x[j] += hh * (s.k[0][0][j] + s.k[1][0][j]);
+            y[j] += hh * (s.k[0][1][j] + s.k[1][1][j]);
+        }
+        if (div)
+            for (size_t j = 0; j < n; ++j) lj[j] += 0.5 * s.h[j] * (s.k[0][2][j] + s.k[1][2][j]);
+        if (curl)
+            for (size_t j = 0; j < n; ++j)
+                th[j] += 0.5 * s.h[j] * 0.5 * (s.k[0][3][j] + s.k[1][3][j]);
+        return;
+    }
+    for (int st = 1; st < 4; ++st) {  // classical RK4
+        const double frac_h = st == 3 ? 1.0 : 0.5;
+        for (size_t j = 0; j < n; ++j) {
+            s.xt[j] = x[j] + frac_h * s.h[j] * s.k[st - 1][0][j];
+            s.yt[j] = y[j] + frac_h * s.h[j] * s.k[st - 1][1][j];
+        }
+        eval(st, st == 3 ? t1 : tm, s.xt.data(), s.yt.data());
+    }
+    for (size_t j = 0; j < n; ++j) {
+        const double h6 = s.h[j] / 6.0;
+        auto comb = [&](int q) {
+            return s.k[0][q][j] + 2.0 * s.k[1][q][j] + 2.0 * s.k[2][q][j] + s.k[3][q][j];
+        };
+        x[j] += h6 * comb(0);
+        y[j] += h6 * comb(1);
+        if (div) lj[j] += h6 * comb(2);
+        if (curl) th[j] += h6 * 0.5 * comb(3);
+    }
+}
+
 void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& order,
                                       int64_t target) {
     // `order` lists the particles to advance sorted by their first step, so at any grid step
@@ -237,11 +302,6 @@ void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& o
     // the same whichever chunk, thread or frame it is advanced in.
     constexpr size_t kChunk = 256;  // small enough to balance two threads in random access
     const size_t n = order.size();
-    // ln J only matters with the compensation on, and stays exactly 0 in a divergence-free
-    // flow; theta integrates the vorticity only in OrientationMode::Vorticity (the other modes
-    // set it at birth or at the frame time). Skipping them changes no bit of x and y.
-    const bool want_div = config.jacobian && !flow->divergence_free();
-    const bool want_curl = config.orientation == OrientationMode::Vorticity;
     const size_t chunks = (n + kChunk - 1) / kChunk;
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
         const size_t i0 = c * kChunk, i1 = std::min(n, i0 + kChunk), m = i1 - i0;
@@ -256,18 +316,8 @@ void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& o
             frac[j] = p.birth_frac[i];
         }
         Scratch s;
-        s.resize(m, want_div, want_curl);
+        s.resize(m, want_div(), want_curl());
         size_t active = 0;
-        const bool rk4 = config.integrator == Integrator::RK4;
-        auto eval = [&](int stage, double t, size_t na, const double* px, const double* py) {
-            double* out[4];
-            for (int q = 0; q < 4; ++q) {
-                auto& v = s.k[stage][q];
-                out[q] = v.empty() ? nullptr : v.data();
-                if (out[q]) std::fill(out[q], out[q] + na, 0.0);
-            }
-            flow->add(t, na, px, py, out[0], out[1], out[2], out[3]);
-        };
         for (int64_t g = m ? first[0] : target; g < target; ++g) {
             while (active < m && first[active] <= g) ++active;
             // A particle's first step runs from its birth to the next grid point.
@@ -275,46 +325,9 @@ void LayerSimulator::State::integrate(Particles& p, const std::vector<size_t>& o
                 s.h[j] = stepped[j] ? dt : (1.0 - frac[j]) * dt;
                 stepped[j] = 1;
             }
-            const double t0 = time_of_step(g), t1 = time_of_step(g + 1);
-            const double tm = t0 + 0.5 * dt;
-            eval(0, t0, active, x.data(), y.data());
-            if (!rk4) {  // Heun's RK2
-                for (size_t j = 0; j < active; ++j) {
-                    s.xt[j] = x[j] + s.h[j] * s.k[0][0][j];
-                    s.yt[j] = y[j] + s.h[j] * s.k[0][1][j];
-                }
-                eval(1, t1, active, s.xt.data(), s.yt.data());
-                for (size_t j = 0; j < active; ++j) {
-                    const double hh = 0.5 * s.h[j];
-                    x[j] += hh * (s.k[0][0][j] + s.k[1][0][j]);
-                    y[j] += hh * (s.k[0][1][j] + s.k[1][1][j]);
-                }
-                if (want_div)  // d ln J / dt = div v
-                    for (size_t j = 0; j < active; ++j)
-                        lj[j] += 0.5 * s.h[j] * (s.k[0][2][j] + s.k[1][2][j]);
-                if (want_curl)  // d theta / dt = w / 2
-                    for (size_t j = 0; j < active; ++j)
-                        th[j] += 0.5 * s.h[j] * 0.5 * (s.k[0][3][j] + s.k[1][3][j]);
-            } else {  // classical RK4
-                for (int st = 1; st < 4; ++st) {
-                    const double frac_h = st == 3 ? 1.0 : 0.5;
-                    for (size_t j = 0; j < active; ++j) {
-                        s.xt[j] = x[j] + frac_h * s.h[j] * s.k[st - 1][0][j];
-                        s.yt[j] = y[j] + frac_h * s.h[j] * s.k[st - 1][1][j];
-                    }
-                    eval(st, st == 3 ? t1 : tm, active, s.xt.data(), s.yt.data());
-                }
-                for (size_t j = 0; j < active; ++j) {
-                    const double h6 = s.h[j] / 6.0;
-                    auto comb = [&](int q) {
-                        return s.k[0][q][j] + 2.0 * s.k[1][q][j] + 2.0 * s.k[2][q][j] + s.k[3][q][j];
-                    };
-                    x[j] += h6 * comb(0);
-                    y[j] += h6 * comb(1);
-                    if (want_div) lj[j] += h6 * comb(2);
-                    if (want_curl) th[j] += h6 * 0.5 * comb(3);
-                }
-            }
+            const double t0 = time_of_step(g);
+            step(t0, time_of_step(g + 1), t0 + 0.5 * dt, active, s, x.data(), y.data(), lj.data(),
+                 th.data());
         }
         for (size_t j = 0; j < m; ++j) {
             const size_t i = order[i0 + j];
@@ -367,14 +380,14 @@ void LayerSimulator::State::still_impulses(const detail::CellCover& cover, const
     });
 }
 
-void LayerSimulator::State::field_orientation(int64_t target, const std::vector<float>& th0,
+void LayerSimulator::State::field_orientation(double t_s, const std::vector<float>& th0,
                                               Impulses& out) const {
     // theta(x, t) at the particle's current position at the frame time (loop-wrapped like the
     // flow, so a looped layer repeats), plus the per-particle jitter from th0, its birth angle
     // (`th0` is only read when the jitter is not 0).
-    config.orientation_field->angles(time_of_step(target), out.size(), out.x.data(),
-                                     out.y.data(), out.theta.data());
-    const double jitter = config.orientation_jitter.value(time_of_step(target));
+    config.orientation_field->angles(t_s, out.size(), out.x.data(), out.y.data(),
+                                     out.theta.data());
+    const double jitter = config.orientation_jitter.value(t_s);
     if (jitter != 0.0) {
         constexpr double kInvPi = 1.0 / 3.14159265358979323846;
         for (size_t j = 0; j < out.size(); ++j)
@@ -461,16 +474,17 @@ void LayerSimulator::State::fill_blocks() {
     });
 }
 
-// The live particles of `next` behind `target`, ordered by the step they start from (then by
+// The particles of `next` behind `target` alive at it (or at `alive_from`: the motion blur's
+// walk also moves those that die between the two steps), ordered by the step they start from (then by
 // index): a counting sort, as those steps span about one lifetime. The order only groups
 // particles that move together; it changes no particle's arithmetic.
-void LayerSimulator::State::advance(int64_t target) {
+void LayerSimulator::State::advance(int64_t target, int64_t alive_from) {
     Particles& P = next;
     std::vector<size_t> todo;
     int64_t lowest = target;
     auto first_of = [&](size_t i) { return P.stepped[i] ? P.step[i] : P.birth_step[i]; };
     for (size_t i = 0; i < P.size(); ++i) {
-        if (!alive(P, i, target)) continue;
+        if (!alive(P, i, target) && !(alive_from < target && alive(P, i, alive_from))) continue;
         const int64_t first = first_of(i);
         if (first < target) todo.push_back(i), lowest = std::min(lowest, first);
     }
@@ -508,28 +522,32 @@ std::vector<size_t> LayerSimulator::State::emit(const Region& view, int64_t targ
 
 // Kernel angles that depend on where the impulses are now: along the local flow, or from an
 // orientation field (with the birth angles of `emitted` for its jitter).
-void LayerSimulator::State::orient(int64_t target, const std::vector<size_t>& emitted,
+void LayerSimulator::State::orient(double t_s, const std::vector<size_t>& emitted,
                                    Impulses& out) const {
     const ProcessConfig& c = config;
     if (c.orientation == OrientationMode::Flow && flow) {
         const size_t n = out.size();
         std::vector<double> vx(n, 0.0), vy(n, 0.0);
-        flow->add(time_of_step(target), n, out.x.data(), out.y.data(), vx.data(), vy.data(),
-                  nullptr, nullptr);
+        flow->add(t_s, n, out.x.data(), out.y.data(), vx.data(), vy.data(), nullptr, nullptr);
         for (size_t j = 0; j < n; ++j) out.theta[j] = static_cast<float>(std::atan2(vy[j], vx[j]));
     }
     if (c.orientation == OrientationMode::Field && c.orientation_field) {
         // Birth angles only for the jitter (field_orientation reads them only then).
         std::vector<float> th0;
-        if (c.orientation_jitter.value(time_of_step(target)) != 0.0) {
+        if (c.orientation_jitter.value(t_s) != 0.0) {
             th0.resize(emitted.size());
             for (size_t j = 0; j < emitted.size(); ++j) th0[j] = next.th0[emitted[j]];
         }
-        field_orientation(target, th0, out);
+        field_orientation(t_s, th0, out);
     }
 }
 
 void LayerSimulator::impulses_at(int64_t frame, const Region& view, Impulses& out) {
+    impulses_at(frame, view, Shutter{}, out);
+}
+
+void LayerSimulator::impulses_at(int64_t frame, const Region& view, const Shutter& shutter,
+                                 Impulses& out) {
     State& S = *m_state;
     const ProcessConfig& c = S.config;
     const Layout& L = S.layout;
@@ -552,32 +570,198 @@ void LayerSimulator::impulses_at(int64_t frame, const Region& view, Impulses& ou
     const detail::CellCover cover = detail::cell_cover(region, L);
     if (still) {
         // out.theta holds theta0 for a random orientation, and for the field's jitter until
-        // field_orientation overwrites it (kept aside first).
+        // field_orientation overwrites it (kept aside first). A still layer neither moves nor
+        // fades: a shutter changes nothing.
         const bool field = c.orientation == OrientationMode::Field && c.orientation_field;
         const bool jitter = field && c.orientation_jitter.value(S.time_of_step(target)) != 0.0;
         S.still_impulses(cover, view, c.orientation == OrientationMode::Random || jitter, out);
         if (field) {
             const std::vector<float> th0 = jitter ? out.theta : std::vector<float>{};
-            S.field_orientation(target, th0, out);
+            S.field_orientation(S.time_of_step(target), th0, out);
         }
         S.valid = false;
         return;
     }
+    // A shutter [t + open_s, t + close_s] is walked on the global grid from the step at or
+    // before its opening to the one at or before its closing; without one both are the frame.
+    const bool blur = shutter.open();
+    auto steps_before = [&](double offset_s) {
+        return target + static_cast<int64_t>(std::floor(offset_s / S.dt));
+    };
+    const int64_t g_open = blur ? steps_before(shutter.open_s) : target;
+    const int64_t g_close = blur ? steps_before(shutter.close_s) : target;
     // Reuse the previous frame's particles only when moving forward in time.
-    const bool reuse = S.valid && S.last_step <= target;
+    const bool reuse = S.valid && S.last_step <= g_open;
     const double t_frame = static_cast<double>(target) * S.dt;
+    const double t_first = t_frame + std::min(0.0, blur ? shutter.open_s : 0.0);
+    const double t_last = t_frame + std::max(0.0, blur ? shutter.close_s : 0.0);
     const int64_t ct0 =
-        static_cast<int64_t>(std::floor((t_frame - c.lifetime_s) / L.time_cell_s)) - 1;
-    const int64_t ct1 = static_cast<int64_t>(std::floor(t_frame / L.time_cell_s)) + 1;
+        static_cast<int64_t>(std::floor((t_first - c.lifetime_s) / L.time_cell_s)) - 1;
+    const int64_t ct1 = static_cast<int64_t>(std::floor(t_last / L.time_cell_s)) + 1;
     S.plan_blocks(cover, ct0, ct1, reuse);
     S.fill_blocks();
-    if (S.flow) S.advance(target);
-    S.orient(target, S.emit(view, target, out), out);
+    if (!blur) {
+        if (S.flow) S.advance(target, target);
+        S.orient(S.time_of_step(target), S.emit(view, target, out), out);
+    } else {
+        // The particles' states at every grid step of the shutter (the last one is kept).
+        std::vector<Particles> states;
+        for (int64_t g = g_open; g <= g_close; ++g) {
+            if (S.flow) S.advance(g, g == g_open ? g : g - 1);
+            states.push_back(S.next);
+        }
+        S.blur(view, target, g_open, shutter, states, out);
+    }
 
     std::swap(S.live, S.next);
     std::swap(S.blocks, S.next_blocks);
-    S.last_step = target;
+    S.last_step = g_close;
     S.valid = true;
+}
+
+// Each particle's number of sub-steps over the shutter, as a power of two 2^level: its travel
+// over the shutter against shutter.max_step (docs/motion_blur.md). The travel is its chord
+// between the first and last grid states of the walk, scaled to the shutter's length; with one
+// grid state (a shutter within one grid step) or a particle born during the walk, its speed at
+// that state times the shutter's length. 255 marks a particle the view cannot see.
+std::vector<uint8_t> LayerSimulator::State::blur_levels(const Region& view, int64_t target,
+                                                        const Shutter& shutter,
+                                                        const std::vector<Particles>& states,
+                                                        int64_t g_open) const {
+    const double length = shutter.close_s - shutter.open_s;
+    const Particles& A = states.front();
+    const Particles& B = states.back();
+    const int64_t g_close = g_open + int64_t(states.size()) - 1;
+    const size_t n = A.size();
+    auto at_grid = [](const Particles& P, size_t i, int64_t g) {
+        return P.stepped[i] && P.step[i] == g;
+    };
+    std::vector<size_t> need;  // particles whose speed is taken from the flow
+    for (size_t i = 0; i < n; ++i)
+        if (g_close == g_open || !at_grid(A, i, g_open) || !at_grid(B, i, g_close)) need.push_back(i);
+    std::vector<double> px(need.size()), py(need.size()), vx(need.size(), 0.0), vy(need.size(), 0.0);
+    for (size_t q = 0; q < need.size(); ++q) px[q] = A.x[need[q]], py[q] = A.y[need[q]];
+    if (flow && !need.empty())
+        flow->add(time_of_step(g_open), need.size(), px.data(), py.data(), vx.data(), vy.data(),
+                  nullptr, nullptr);
+    std::vector<double> travel(n, 0.0);
+    const double span = static_cast<double>(g_close - g_open) * dt;
+    for (size_t i = 0; i < n; ++i)
+        if (g_close > g_open) travel[i] = std::hypot(B.x[i] - A.x[i], B.y[i] - A.y[i]) * length / span;
+    for (size_t q = 0; q < need.size(); ++q) travel[need[q]] = std::hypot(vx[q], vy[q]) * length;
+    const double reach = (flow ? flow->max_speed(view.bounds().expanded(support_radius)) : 0.0) *
+                         (length + dt);
+    const detail::BoxIndex near(view.expanded(support_radius + reach + 1.0));
+    const int max_level = std::max(0, std::ilogb(std::max(1, shutter.max_samples)));
+    std::vector<uint8_t> level(n, 255);
+    for (size_t i = 0; i < n; ++i) {
+        const double age = age_s(A, i, target);  // at the frame time
+        if (age + shutter.close_s < 0.0 || age + shutter.open_s >= config.lifetime_s) continue;
+        if (!near.contains(A.x[i], A.y[i])) continue;
+        int l = 0;
+        while (l < max_level && travel[i] > shutter.max_step * double(int64_t(1) << l)) ++l;
+        level[i] = static_cast<uint8_t>(l);
+    }
+    return level;
+}
+
+// Motion blur (docs/motion_blur.md): particle i becomes n_i = 2^level copies at the centres of
+// n_i equal strata of the shutter, each weighted 1 / n_i with its own envelope, sqrt(J) and
+// angle there. A copy's state is one partial step of the layer's integrator from the grid state
+// at or before its time (`states`, from g_open): a pure function of the particle, so frames stay
+// identical for any order, thread count or frame range. Copies are in canonical order
+// (particles in order, each one's in time order); those whose support misses the view dropped.
+void LayerSimulator::State::blur(const Region& view, int64_t target, int64_t g_open,
+                                 const Shutter& shutter, std::vector<Particles>& states,
+                                 Impulses& out) const {
+    const ProcessConfig& c = config;
+    const Particles& P = states.back();  // birth data and amplitudes are the same in every state
+    const std::vector<uint8_t> level = blur_levels(view, target, shutter, states, g_open);
+    const double length = shutter.close_s - shutter.open_s;
+    auto offset = [&](int l, int64_t j) {  // sub-time j of 2^l, seconds from the frame time
+        return shutter.open_s + (static_cast<double>(j) + 0.5) * length / double(int64_t(1) << l);
+    };
+    // Slots in canonical order; `members[key]` the (particle, slot) pairs of sub-time key
+    // 2^l - 1 + j, whose copies share a time and a grid state.
+    const int max_level = std::max(0, std::ilogb(std::max(1, shutter.max_samples)));
+    std::vector<std::vector<std::pair<size_t, size_t>>> members(size_t(2) << max_level);
+    size_t slots = 0;
+    for (size_t i = 0; i < P.size(); ++i) {
+        if (level[i] == 255) continue;
+        const int l = level[i];
+        const double age = age_s(P, i, target);
+        for (int64_t j = 0; j < (int64_t(1) << l); ++j) {
+            const double a = age + offset(l, j);
+            if (a < 0.0 || a >= c.lifetime_s) continue;
+            members[size_t((int64_t(1) << l) - 1 + j)].push_back({i, slots++});
+        }
+    }
+    Impulses all;
+    all.x.resize(slots), all.y.resize(slots), all.weight.resize(slots), all.theta.resize(slots);
+    constexpr size_t kChunk = 256;
+    struct Task {
+        int l;
+        int64_t j;
+        size_t from, to;
+    };
+    std::vector<Task> tasks;
+    for (int l = 0; l <= max_level; ++l)
+        for (int64_t j = 0; j < (int64_t(1) << l); ++j) {
+            const size_t m = members[size_t((int64_t(1) << l) - 1 + j)].size();
+            for (size_t a = 0; a < m; a += kChunk) tasks.push_back({l, j, a, std::min(m, a + kChunk)});
+        }
+    tbb::parallel_for(size_t(0), tasks.size(), [&](size_t k) {
+        const Task& T = tasks[k];
+        const auto& mem = members[size_t((int64_t(1) << T.l) - 1 + T.j)];
+        const double off = offset(T.l, T.j);
+        const int64_t whole = static_cast<int64_t>(std::floor(off / dt));
+        const int64_t g = target + whole;
+        const double u = off - static_cast<double>(whole) * dt;  // from grid step g, in [0, dt)
+        const Particles& G =
+            states[size_t(std::clamp<int64_t>(g - g_open, 0, int64_t(states.size()) - 1))];
+        const size_t m = T.to - T.from;
+        std::vector<double> x(m), y(m), lj(m), th(m);
+        std::vector<size_t> who(m);
+        Scratch s;
+        s.resize(m, flow && want_div(), flow && want_curl());
+        for (size_t q = 0; q < m; ++q) {
+            const size_t i = mem[T.from + q].first;
+            who[q] = i;
+            x[q] = G.x[i], y[q] = G.y[i], lj[q] = G.lnj[i], th[q] = G.th[i];
+            // From the grid state, or from the birth for a particle born after step g.
+            s.h[q] = G.stepped[i] && G.step[i] == g ? u : age_s(G, i, g) + u;
+        }
+        const double t0 = time_of_step(g);
+        // A copy on a grid point from its grid state needs no step (a centred shutter's single
+        // copies: the frame's own state).
+        const bool moves = std::any_of(s.h.begin(), s.h.begin() + m, [](double h) { return h != 0.0; });
+        if (flow && moves)
+            step(t0, t0 + u, t0 + 0.5 * u, m, s, x.data(), y.data(), lj.data(), th.data());
+        Impulses batch;
+        batch.x = x, batch.y = y;
+        batch.weight.resize(m), batch.theta.resize(m);
+        for (size_t q = 0; q < m; ++q) {
+            const size_t i = who[q];
+            double w = P.amp[i] / double(int64_t(1) << T.l);
+            w *= envelope_weight(c.envelope, age_s(P, i, g) + u, c.lifetime_s);
+            if (c.jacobian) w *= std::exp(0.5 * lj[q]);  // s_k = sqrt(J_k)
+            batch.weight[q] = static_cast<float>(w);
+            batch.theta[q] = detail::theta_of(th[q]);
+        }
+        orient(t0 + u, who, batch);
+        for (size_t q = 0; q < m; ++q) {
+            const size_t slot = mem[T.from + q].second;
+            all.x[slot] = batch.x[q], all.y[slot] = batch.y[q];
+            all.weight[slot] = batch.weight[q], all.theta[slot] = batch.theta[q];
+        }
+    });
+    out.clear();
+    const detail::BoxIndex keep(view.expanded(support_radius));
+    for (size_t k = 0; k < slots; ++k) {
+        if (!keep.contains(all.x[k], all.y[k])) continue;
+        out.x.push_back(all.x[k]), out.y.push_back(all.y[k]);
+        out.weight.push_back(all.weight[k]), out.theta.push_back(all.theta[k]);
+    }
 }
 
 }  // namespace impulse::sim

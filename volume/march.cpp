@@ -89,8 +89,17 @@ V3 sky(const MarchOptions& o, const V3& d) {
     return (1.0 - t) * V3{o.sky_horizon} + t * V3{o.sky_zenith};
 }
 
+/// Linear radiance to display radiance: the identity below kKnee, then an exponential shoulder
+/// of slope 1 at the knee that tends to 1 (docs/volume.md "Preview"): sunlit tops roll off
+/// towards white instead of clipping to a flat plate (a clamp put 9.8 % of cloudvolume's frame
+/// 0 at the top code value). The top 8-bit code takes linear radiance above 1.56.
+double shoulder(double x) {
+    constexpr double kKnee = 0.8;
+    return x <= kKnee ? x : kKnee + (1.0 - kKnee) * (1.0 - std::exp(-(x - kKnee) / (1.0 - kKnee)));
+}
+
 double srgb(double x) {
-    x = std::clamp(x, 0.0, 1.0);
+    x = std::clamp(shoulder(x), 0.0, 1.0);
     return x <= 0.0031308 ? 12.92 * x : 1.055 * std::pow(x, 1.0 / 2.4) - 0.055;
 }
 
