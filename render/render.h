@@ -6,4 +6,5 @@
 // nothing of images, video, scene files or the CLI (those are output/, scenes/, app/).
 
 #include "render/evaluate.h"     // orthographic frames
+#include "render/gradient.h"     // exact df/dx, df/dy of orthographic frames
 #include "render/perspective.h"  // cameras with anti-aliasing (kernel pyramid)
