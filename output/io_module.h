@@ -83,10 +83,16 @@ struct IoModule {
     VideoInfo (*probe_video)(const std::string& path);
     std::vector<std::vector<float>> (*decode_video_luma)(const std::string& path, int& width,
                                                          int& height);
+    void (*write_named_pixels)(const std::string& path, int width, int height,
+                               const std::vector<std::string>& names, const float* pixels,
+                               const Metadata& metadata, bool bits16,
+                               const std::string& compression);
+    Frame (*read_channel)(const std::string& path, const std::string& name);
+    std::vector<std::string> (*channel_names)(const std::string& path);
 };
 
 /// Bumped whenever IoModule or a type it passes changes.
-constexpr int kIoModuleAbi = 3;
+constexpr int kIoModuleAbi = 4;
 
 /// The module: the linked-in table when the program carries impulse::output_io, else
 /// libimpulse_io.so loaded on first use from beside the executable, from ../lib/impulse/ next

@@ -15,6 +15,7 @@
 #include "kernels/kernels.h"
 #include "output/output.h"
 #include "render/render.h"
+#include "scenes/channels.h"
 #include "scenes/source.h"
 #include "sim/sim.h"
 
@@ -32,6 +33,9 @@ struct OutputConfig {
     std::optional<std::array<double, 2>> range;  ///< value -> display mapping; default mean +- 3 sd
     int bits = 8;                    ///< 8 or 16 bits per channel for PNG/TIFF
     std::string compression;         ///< EXR compression, one of output::kExrCompressions
+    /// [output] channels: what `render` writes besides the field (names of kChannelNames;
+    /// empty: the field alone), as --channels (docs/channels.md).
+    std::vector<std::string> channels;
 };
 
 /// [camera.sea]: a sea below a sky camera's horizon (docs/perspective.md §9). Each pixel below
@@ -328,6 +332,14 @@ public:
     /// The float field of frame `frame` (0-based) into `out` (resized): the sum of the layers,
     /// through the scene's transform when it has one.
     void render(int64_t frame, render::Frame& out, const render::EvalOptions& options = {});
+    /// Frame `frame`'s channels (docs/channels.md): the field as render gives it (always), and
+    /// as `set` asks, each visible layer's own field, the exact df/dx and df/dy (composite and
+    /// per layer; render::accumulate_gradient at the pixel centres) and forward and backward
+    /// motion vectors. Deterministic as render. Throws SceneError naming `what` (the flag or
+    /// key) when the scene cannot give them (perspective cameras, shaped or warped layers...).
+    void render_channels(int64_t frame, const ChannelSet& set, FrameChannels& out,
+                         const render::EvalOptions& options = {},
+                         const std::string& what = "channels");
     /// Live impulses of layer `layer` at frame `frame` (for analysis and tests).
     const sim::Impulses& impulses(size_t layer) const;
     /// Estimated live impulses per frame over all layers, and peak memory in MiB.
