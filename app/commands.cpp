@@ -345,7 +345,8 @@ output::Metadata run_metadata(const scenes::Scene& sc, const output::ValueMappin
                           {"range", std::to_string(mapping.lo) + " " + std::to_string(mapping.hi)}};
     // The framing the frames were rendered at, for `impulse analyze --scene` (its theory is
     // taken at the same --size and --crop; docs/channels.md "Camera metadata").
-    if (!opt.size.empty()) m.emplace_back("size", opt.size);
+    if (sc.resized.width > 0)
+        m.emplace_back("size", std::to_string(sc.resized.width) + "x" + std::to_string(sc.resized.height));
     if (!opt.crop.empty()) m.emplace_back("crop", opt.crop);
     return m;
 }

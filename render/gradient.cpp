@@ -122,7 +122,10 @@ void add_kernel(const kernels::Kernel& k, const sim::Impulses& imp, const View& 
     auto run = [&](size_t b) {
         const int x0 = int(b % size_t(tx)) * tile, y0 = int(b / size_t(tx)) * tile;
         const int x1 = std::min(view.width, x0 + tile), y1 = std::min(view.height, y0 + tile);
-        std::vector<double> gx(size_t(tile) * tile, 0.0), gy(gx.size(), 0.0);
+        // Reused by each thread: a fresh pair of buffers per tile cost more in page faults
+        // than the tile's arithmetic (bench/README.md "impulse_bench_channels").
+        thread_local std::vector<double> gx, gy;
+        gx.assign(size_t(tile) * tile, 0.0), gy.assign(gx.size(), 0.0);
         for (uint32_t id : bins[b]) {
             const Reach a = reach(p[id], R, view, x0, y0, x1, y1);
             if (a.i0 >= a.i1 || a.j0 >= a.j1) continue;

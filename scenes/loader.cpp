@@ -621,8 +621,10 @@ Scene load_scene_string(std::string_view text, const std::string& name,
     OutputSize own;
     Scene s = read_scene(root, src, base, size, &own);
     // Another resolution is another picture: the hash says so (the scene's own size does not).
-    if (s.output.width != own.width || s.output.height != own.height)
+    if (s.output.width != own.width || s.output.height != own.height) {
         all += "\n--size " + std::to_string(s.output.width) + "x" + std::to_string(s.output.height);
+        s.resized = {s.output.width, s.output.height};
+    }
     s.path = name;
     s.hash = fnv1a_hex(all);
     s.warnings = std::move(warnings);

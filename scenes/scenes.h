@@ -229,6 +229,11 @@ struct ShadingKeys {
     numeric::Keyframed relief = 0.0, light_azimuth = 135.0, light_elevation = 35.0, ambient = 0.25;
 };
 
+/// A picture size in pixels (render's --size; {0, 0}: none).
+struct OutputSize {
+    int width = 0, height = 0;
+};
+
 /// A volume scene's content (scenes/volume_scene.h).
 struct VolumeSceneConfig;
 
@@ -247,6 +252,9 @@ struct Scene {
     /// (type None: the field as it is).
     output::FieldTransform transform;
     std::string hash;  ///< FNV-1a of the scene text, included files and overrides, hex
+    /// The `size` it was loaded at (render's --size) when that is not the file's own
+    /// output.size; {0, 0} otherwise (recorded in the frames' metadata as impulse:size).
+    OutputSize resized;
     std::vector<std::string> warnings;  ///< accepted but suspicious values, one line each
 
     /// Time of frame `frame` (0-based) in seconds: (start_s fps + frame) / fps.
@@ -276,9 +284,6 @@ void prepare_layer(LayerConfig& layer);
 /// camera's vertical fov does (another aspect ratio shows more or less at the sides); centres
 /// that default to the middle of the frame stay where the scene's own size puts them. {0, 0} or
 /// the scene's own size: nothing changes (same bits). `--set output.size` crops instead.
-struct OutputSize {
-    int width = 0, height = 0;
-};
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {},
                  OutputSize size = {});
 /// Same for scene text; `name` stands in for the file name in messages.
