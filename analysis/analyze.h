@@ -19,6 +19,12 @@ struct AnalyzeOptions {
     std::string input;              ///< image, sequence pattern (f_####.exr, f_%04d.png) or video
     std::string scene;              ///< scene file or built-in name; empty: no theory
     std::vector<std::string> sets;  ///< --set overrides of the scene
+    /// --size WxH: the scene's theory at render's --size ("": as the frames' metadata records,
+    /// impulse:size and impulse:crop, else the scene's own framing)
+    std::string size;
+    /// --channel NAME: the channel of a multi-channel image to analyse ("": `value` when the
+    /// image has one, else the luminance)
+    std::string channel;
     std::string frames;             ///< "A-B" or "A", inclusive and 0-based; empty: from 0
     long long max_frames = 0;       ///< > 0: analyse at most this many frames
     bool structure = false;         ///< structure function and H(s) (Kaplan & Kuo eq. 21)

@@ -60,8 +60,16 @@ std::string unknown_type_message(const std::string& path) {
            "sequence pattern (frame_####.exr, frame_%04d.png) or a video (.mp4 .mov .mkv .webm)";
 }
 
-Image read_frame(const std::string& path) {
+/// The field of an image: `channel` when given; a multi-channel EXR's `value` (render
+/// --channels, docs/channels.md); else the luminance (output::read_image).
+Image read_frame(const std::string& path, const std::string& channel) {
     try {
+        if (!channel.empty()) return to_image(output::read_channel(path, channel));
+        if (output::lower_extension(path) == ".exr") {
+            const auto names = output::channel_names(path);
+            if (std::find(names.begin(), names.end(), "value") != names.end())
+                return to_image(output::read_channel(path, "value"));
+        }
         return to_image(output::read_image(path));
     } catch (const IoError& e) {
         throw IoError(one_line(e.what()));
@@ -90,6 +98,9 @@ Loaded load_input(const AnalyzeOptions& opt) {
     std::error_code ec;
 
     if (output::is_video_path(in)) {
+        if (!opt.channel.empty())
+            throw ValueError("--channel " + opt.channel + ": " + in + " is a video (one picture a "
+                             "frame): channels are read from multi-channel images (EXR)");
         if (!fs::exists(in, ec)) throw IoError(in + ": no such file");
         output::quiet_video_logs();
         int w = 0, h = 0;
@@ -132,7 +143,7 @@ Loaded load_input(const AnalyzeOptions& opt) {
         for (long long f = a; f <= b && static_cast<long long>(L.frames.size()) < cap; ++f) {
             const std::string name = expand_pattern(in, f);
             if (!fs::exists(name, ec)) break;  // the sequence ends at the first missing frame
-            L.frames.push_back(read_frame(name));
+            L.frames.push_back(read_frame(name, opt.channel));
             const Image& im = L.frames.back();
             if (im.width != L.frames.front().width || im.height != L.frames.front().height)
                 throw ValueError(name + ": frame is " + std::to_string(im.width) + "x" +
@@ -151,7 +162,7 @@ Loaded load_input(const AnalyzeOptions& opt) {
     if (ranged && (a != 0 || b != 0))
         throw ValueError("--frames " + opt.frames + ": " + in + " is one image (frame 0)");
     const output::ImageInfo info = probe(in);
-    L.frames.push_back(read_frame(in));
+    L.frames.push_back(read_frame(in, opt.channel));
     L.kind = "image";
     L.raw = info.is_float;
     L.bits = info.bits;
@@ -167,14 +178,48 @@ void write_atomically(const std::string& path, const std::string& text) {
     output::write_file_atomic(path, text.data(), text.size());
 }
 
+/// The first file of the input (an image or a sequence's first frame present; "" for a video).
+std::string first_file(const AnalyzeOptions& opt, long long first) {
+    if (output::is_video_path(opt.input)) return "";
+    const std::string name = expand_pattern(opt.input, first);
+    return name.empty() ? opt.input : name;
+}
+
+/// The framing the theory is taken at: --size, else what the frames' metadata records
+/// (impulse:size, impulse:crop: render's --size and --crop); `sets` gains the crop.
+scenes::OutputSize framing(const AnalyzeOptions& opt, const std::string& file,
+                           std::vector<std::string>& sets, std::vector<std::string>& notes) {
+    if (!opt.size.empty()) return parse_size("--size", opt.size);
+    if (file.empty() || !output::keeps_metadata(file)) return {};
+    std::string size, crop;
+    for (const auto& [k, v] : output::read_metadata(file)) {
+        if (k == "size") size = v;
+        if (k == "crop") crop = v;
+    }
+    if (!crop.empty()) {
+        const scenes::OutputSize c = parse_size(file + ": impulse:crop", crop);
+        sets.push_back("output.size=[" + std::to_string(c.width) + "," + std::to_string(c.height) + "]");
+        notes.push_back("theory at the frames' --crop " + crop + " (their impulse:crop)");
+    }
+    if (size.empty()) return {};
+    notes.push_back("theory at the frames' --size " + size + " (their impulse:size)");
+    return parse_size(file + ": impulse:size", size);
+}
 
 }  // namespace
 
 AnalysisResult analyze_input(const AnalyzeOptions& options) {
     Loaded L = load_input(options);
-    const auto theory = scenes::closed_form(options.scene, options.sets);
-    return analyze_frames(std::move(L.frames), options, L.kind, L.raw, L.bits, L.first,
-                          theory.get());
+    std::vector<std::string> sets = options.sets, notes;
+    std::unique_ptr<analysis::ClosedForm> theory;
+    if (!options.scene.empty()) {
+        const scenes::OutputSize size = framing(options, first_file(options, L.first), sets, notes);
+        theory = scenes::closed_form(options.scene, sets, size);
+    }
+    AnalysisResult r = analyze_frames(std::move(L.frames), options, L.kind, L.raw, L.bits, L.first,
+                                      theory.get());
+    r.notes.insert(r.notes.begin(), notes.begin(), notes.end());
+    return r;
 }
 
 int run_analyze(const AnalyzeOptions& options) {

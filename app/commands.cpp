@@ -2,6 +2,7 @@
 // `impulse render`, `impulse scenes`, `impulse info`.
 
 #include "app/commands.h"
+#include "app/channels.h"
 #include "app/render_volume.h"
 
 #include <tbb/global_control.h>
@@ -147,7 +148,8 @@ private:
     std::chrono::steady_clock::time_point m_start;
 };
 
-/// --size or --crop "WxH" in [1, 32768]^2 ({0, 0} when not given).
+}  // namespace
+
 scenes::OutputSize parse_size(const std::string& option, const std::string& text) {
     if (text.empty()) return {};
     static const std::regex re(R"((\d{1,5})x(\d{1,5}))");
@@ -158,6 +160,8 @@ scenes::OutputSize parse_size(const std::string& option, const std::string& text
                          ": expected WxH in pixels, each in [1, 32768], e.g. 1920x1080");
     return {std::stoi(m[1].str()), std::stoi(m[2].str())};
 }
+
+namespace {
 
 /// The scene overrides of --set, --crop (output.size: a window at the scene's own scale) and
 /// --seed.
@@ -174,9 +178,10 @@ std::vector<std::string> overrides_for(const std::vector<std::string>& sets, con
 
 /// Why the file `target` present for --resume is not frame `f` of `sc` as this run would
 /// write it ("" when it is): output::image_mismatch with the run's size, channels and metadata.
-std::string present_frame_mismatch(const std::string& target, const scenes::Scene& sc, long long f) {
+std::string present_frame_mismatch(const std::string& target, const scenes::Scene& sc, long long f,
+                                   const ChannelPlan& plan) {
     const bool exr = fs::path(target).extension() == ".exr";
-    const int channels = !exr && colour_shading(sc) ? 3 : 1;
+    const int channels = plan.active ? int(plan.names.size()) : !exr && colour_shading(sc) ? 3 : 1;
     const output::Metadata expected = {
         {"seed", std::to_string(sc.seed)}, {"frame", std::to_string(f)}, {"scene_hash", sc.hash}};
     return output::image_mismatch(target, sc.output.width, sc.output.height, channels,
@@ -328,15 +333,30 @@ OutputKind output_kind(const std::string& output, long long first, long long las
 }
 
 /// The metadata every frame of the run carries (frame and time are added per frame).
-output::Metadata run_metadata(const scenes::Scene& sc, const output::ValueMapping& mapping) {
+output::Metadata run_metadata(const scenes::Scene& sc, const output::ValueMapping& mapping,
+                              const RenderOptions& opt) {
     std::string layer_seeds;
     for (const auto& l : sc.layers) layer_seeds += (layer_seeds.empty() ? "" : " ") + std::to_string(l.process.seed);
-    return {{"seed", std::to_string(sc.seed)},
-            {"layer_seeds", layer_seeds},
-            {"scene", sc.path},
-            {"scene_hash", sc.hash},
-            {"fps", std::to_string(sc.output.fps)},
-            {"range", std::to_string(mapping.lo) + " " + std::to_string(mapping.hi)}};
+    output::Metadata m = {{"seed", std::to_string(sc.seed)},
+                          {"layer_seeds", layer_seeds},
+                          {"scene", sc.path},
+                          {"scene_hash", sc.hash},
+                          {"fps", std::to_string(sc.output.fps)},
+                          {"range", std::to_string(mapping.lo) + " " + std::to_string(mapping.hi)}};
+    // The framing the frames were rendered at, for `impulse analyze --scene` (its theory is
+    // taken at the same --size and --crop; docs/channels.md "Camera metadata").
+    if (sc.resized.width > 0)
+        m.emplace_back("size", std::to_string(sc.resized.width) + "x" + std::to_string(sc.resized.height));
+    if (!opt.crop.empty()) m.emplace_back("crop", opt.crop);
+    return m;
+}
+
+/// Frame f's own metadata: frame number, time and the camera that saw it.
+void add_frame_metadata(const scenes::Scene& sc, long long f, output::Metadata& m) {
+    const double t = sc.frame_time(f);
+    m.emplace_back("frame", std::to_string(f));
+    m.emplace_back("time", std::to_string(t));
+    m.emplace_back("camera", scenes::camera_text(sc, t));
 }
 
 /// How each layer is evaluated (docs/multirate.md §5), for the frames' metadata:
@@ -383,8 +403,7 @@ void write_frame_image(const scenes::Scene& sc, const render::Frame& frame, long
     const auto& out = sc.output;
     const double t = sc.frame_time(f);
     const output::Shading shading = sc.shading_at(t);  // keyframed shading at the frame time
-    m.emplace_back("frame", std::to_string(f));
-    m.emplace_back("time", std::to_string(t));
+    add_frame_metadata(sc, f, m);
     m.emplace_back("display", output::format_display({mapping, shading}));
     m.emplace_back("encoder", "codec=" + out.codec + " crf=" + std::to_string(out.crf) +
                                   " preset=" + out.preset);
@@ -427,6 +446,8 @@ int run_render(const RenderOptions& opt) {
     }
     const auto [video, sequence] = output_kind(output, first, last, opt.resume);
     ensure_directory(sequence ? expand_pattern(output, first) : output);
+    const ChannelPlan plan =
+        plan_channels(scene, opt.channels, sequence ? expand_pattern(output, first) : output, video);
 
     // Held by pointer so it can be freed before the encoder's flush (below).
     auto renderer = std::make_unique<scenes::Renderer>(std::move(scene));
@@ -437,7 +458,7 @@ int run_render(const RenderOptions& opt) {
     render::EvalOptions eo;
     eo.tile_size = opt.tile;
 
-    const output::Metadata meta = run_metadata(sc, mapping);
+    const output::Metadata meta = run_metadata(sc, mapping, opt);
     // Images also say how their layers were evaluated (a video's metadata stays what `impulse
     // encode` rebuilds from the frames).
     output::Metadata image_meta = meta;
@@ -456,6 +477,7 @@ int run_render(const RenderOptions& opt) {
     // does not depend on the overlap or on --threads (x264's own threads: output::
     // kEncoderThreads, fixed).
     render::Frame frames[2];
+    scenes::FrameChannels channels[2];
     std::vector<float> rgb;
     long long written = 0, skipped = 0, redone = 0;
     // --threads caps TBB's workers process-wide (a task arena would serialise the two threads
@@ -476,13 +498,27 @@ int run_render(const RenderOptions& opt) {
         if (g_signal) break;
         const std::string target = sequence ? expand_pattern(output, f) : output;
         if (sequence && opt.resume && fs::exists(target)) {
-            const std::string why = present_frame_mismatch(target, sc, f);
+            const std::string why = present_frame_mismatch(target, sc, f, plan);
             if (why.empty()) {
                 ++skipped;
                 continue;
             }
             std::cerr << target << ": rendering again: " << why << "\n";
             ++redone;
+        }
+        if (plan.active) {  // channels beside the field (docs/channels.md)
+            renderer->render_channels(f, plan.set, channels[slot], eo, plan.what);
+            finish_pending();
+            pending = std::async(std::launch::async, [&, s = slot, f, target] {
+                output::Metadata m = meta;
+                add_frame_metadata(sc, f, m);
+                std::string names;
+                for (const auto& n : plan.names) names += (names.empty() ? "" : " ") + n;
+                m.emplace_back("channels", names);
+                write_channel_frame(sc, plan, channels[s], f, target, mapping, m);
+            });
+            slot ^= 1;
+            continue;
         }
         renderer->render(f, frames[slot], eo);
         finish_pending();

@@ -7,12 +7,14 @@
 
 namespace impulse::scenes {
 struct Scene;
+struct OutputSize;
 }
 
 namespace impulse::app {
 
 struct RenderOptions {
     std::string scene, output, frames, size, crop, codec;
+    std::string channels;  ///< --channels LIST ("": the scene's output.channels, if any)
     std::vector<std::string> sets;
     std::string seed;  ///< --seed as given ("": the scene's own); checked to be in [0, 2^63 - 1]
     int threads = 0;
@@ -35,6 +37,9 @@ scenes::Scene load_render_scene(const RenderOptions& options);
 /// CLI11 clamp).
 long long whole_number(const std::string& option, const std::string& text, const std::string& digits,
                        const std::string& expected);
+/// --size or --crop `text` "WxH" in [1, 32768]^2 ({0, 0} when empty); ValueError naming
+/// `option` otherwise.
+scenes::OutputSize parse_size(const std::string& option, const std::string& text);
 int run_scenes();
 int run_info(const InfoOptions& options);
 

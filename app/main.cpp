@@ -68,6 +68,9 @@ CLI::App* add_render(CLI::App& app, impulse::app::RenderOptions& ro) {
         ->check(CLI::Range(1, 1024));
     render->add_option("--tile", ro.tile, "Tile size in pixels (default 128); output does not depend on it")
         ->check(CLI::Range(8, 4096));
+    render->add_option("--channels", ro.channels,
+                       "Channels besides the field, comma-separated: value, dx, dy, normal, "
+                       "motion (docs/channels.md); an EXR holds any, a PNG normal or value alone");
     render->add_option("--codec", ro.codec, "Video codec: auto, h264, prores, ffv1, vp9 (overrides output.codec)");
     render->add_flag("--resume", ro.resume,
                      "Image sequences: keep the frames already present that check out (they decode "
@@ -85,6 +88,12 @@ CLI::App* add_analyze(CLI::App& app, impulse::app::AnalyzeOptions& ao) {
                         "first frame present) or a video");
     analyze->add_option("--scene", ao.scene, "Scene file or built-in name to compare with");
     analyze->add_option("--set", ao.sets, "Override a scene key (with --scene)");
+    analyze->add_option("--size", ao.size,
+                        "The scene's theory at WxH pixels, as render --size (default: the size and "
+                        "crop the frames' metadata records)");
+    analyze->add_option("--channel", ao.channel,
+                        "The channel of a multi-channel image to analyse (default: value if the "
+                        "image has one, else the luminance)");
     analyze->add_option("--json", ao.json_file,
                         "Print one JSON object instead of text; --json FILE writes it to FILE")
         ->expected(0, 1);

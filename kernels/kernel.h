@@ -102,6 +102,17 @@ public:
     double envelope(double q) const;
     /// h at texture offset (dx, dy), kernel additionally rotated by `theta` radians (exact).
     double evaluate(double dx, double dy, double theta = 0.0) const;
+    /// h and its gradient {h, dh/dx, dh/dy} at texture offset (dx, dy) (per texture unit), the
+    /// kernel rotated by `theta` as in evaluate (kernels/gradient.cpp). Analytic for cosine,
+    /// Gaussian and Gabor; for sampled kernels the exact gradient of the interpolant evaluate
+    /// uses (the Catmull–Rom cubic's derivative, a combination of differences of the radial
+    /// table; the bilinear grid's cell differences), zero outside the support.
+    std::array<double, 3> value_gradient(double dx, double dy, double theta = 0.0) const;
+    /// The same in the kernel's own frame: {h, dh/du, dh/dv} at (u, v), u along the kernel's
+    /// orientation (for evaluators that rotate each impulse once).
+    std::array<double, 3> frame_value_gradient(double u, double v) const;
+    /// de/dq, the envelope's derivative in q (0 for q >= 1; q > 0 for sampled radial kernels).
+    double envelope_derivative(double q) const;
 
     /// int h over the plane.
     double integral() const { return m_integral; }

@@ -44,6 +44,19 @@ void write_rgb_image(const std::string& path, int width, int height, const std::
     io_module().write_pixels(path, width, height, 3, rgb.data(), metadata, bits16, "");
 }
 
+void write_named_channels(const std::string& path, int width, int height,
+                          const std::vector<std::string>& names, const std::vector<float>& pixels,
+                          const Metadata& metadata, bool bits16, const std::string& compression) {
+    io_module().write_named_pixels(path, width, height, names, pixels.data(), metadata, bits16,
+                                   compression);
+}
+Frame read_channel(const std::string& path, const std::string& name) {
+    return io_module().read_channel(path, name);
+}
+std::vector<std::string> channel_names(const std::string& path) {
+    return io_module().channel_names(path);
+}
+
 std::string nonfinite_pixel(const float* px, size_t count, int width, int channels) {
     for (size_t i = 0; i < count; ++i)
         if (!std::isfinite(px[i])) {

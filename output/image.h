@@ -42,6 +42,19 @@ void write_image(const std::string& path, const Frame& frame, const ValueMapping
 /// Same for an RGB float frame (3 floats per pixel, display values in [0, 1] already mapped).
 void write_rgb_image(const std::string& path, int width, int height, const std::vector<float>& rgb,
                      const Metadata& metadata, bool bits16 = false);
+/// Writes `names.size()` named channels (interleaved floats, `names` in order) as one image:
+/// a multi-channel EXR (float, `compression` as write_image's), or a PNG/TIFF of at most four
+/// channels whose values are display values in [0, 1] already (`bits16` as write_image's).
+/// A channel named "A" is the alpha channel. Atomic as write_image; throws IoError.
+void write_named_channels(const std::string& path, int width, int height,
+                          const std::vector<std::string>& names, const std::vector<float>& pixels,
+                          const Metadata& metadata, bool bits16 = false,
+                          const std::string& compression = "");
+/// The channel `name` of an image (a multi-channel EXR's "value", "N.X" ...) as float. Throws
+/// IoError naming the file and listing its channels when it has none of that name.
+Frame read_channel(const std::string& path, const std::string& name);
+/// The channel names of an image, in the order OpenImageIO reads them. Throws IoError.
+std::vector<std::string> channel_names(const std::string& path);
 /// Reads an image as single-channel float (luminance of RGB; raw floats for EXR, [0,1] for
 /// integer formats). Throws IoError.
 Frame read_image(const std::string& path);

@@ -96,13 +96,13 @@ void save_atomically(const std::string& path, const std::vector<unsigned char>& 
 
 namespace io {
 
-void write_pixels(const std::string& path, int width, int height, int channels,
-                  const float* pixels, const Metadata& metadata, bool bits16,
-                  const std::string& compression) {
+/// The spec write_pixels and write_named_pixels encode with: the sample type of the
+/// extension, the metadata, and each format's settings.
+OIIO::ImageSpec output_spec(const std::string& path, int width, int height, int channels,
+                            const Metadata& metadata, bool bits16, const std::string& compression) {
     check_directory(path);
     const std::string ext = lower_extension(path);
     OIIO::ImageSpec spec(width, height, channels, sample_type(ext, bits16));
-    if (channels == 1) spec.channelnames = {"Y"};
     for (const auto& [k, v] : metadata) spec.attribute("impulse:" + k, v);
     spec.attribute("Software", "impulse");
     if (ext == ".exr")
@@ -119,8 +119,60 @@ void write_pixels(const std::string& path, int width, int height, int channels,
     // OIIO stamps files with the wall-clock time unless told otherwise; a frame must be a pure
     // function of the scene (design.md §4), so the stamp is a fixed value.
     spec.attribute("DateTime", "1970:01:01 00:00:00");
+    return spec;
+}
+
+void write_pixels(const std::string& path, int width, int height, int channels,
+                  const float* pixels, const Metadata& metadata, bool bits16,
+                  const std::string& compression) {
+    OIIO::ImageSpec spec = output_spec(path, width, height, channels, metadata, bits16, compression);
+    if (channels == 1) spec.channelnames = {"Y"};
     // Quantisation to integer formats is OIIO's: clamp to [0, 1], scale, round to nearest.
     save_atomically(path, encode(path, spec, pixels));
+}
+
+void write_named_pixels(const std::string& path, int width, int height,
+                        const std::vector<std::string>& names, const float* pixels,
+                        const Metadata& metadata, bool bits16, const std::string& compression) {
+    OIIO::ImageSpec spec =
+        output_spec(path, width, height, int(names.size()), metadata, bits16, compression);
+    spec.channelnames = names;
+    const auto a = std::find(names.begin(), names.end(), "A");
+    spec.alpha_channel = a == names.end() ? -1 : int(a - names.begin());
+    save_atomically(path, encode(path, spec, pixels));
+}
+
+Frame read_channel(const std::string& path, const std::string& name) {
+    std::string error;
+    auto in = open_image_input(path, error);
+    if (!in) throw IoError(path + ": " + error);
+    const OIIO::ImageSpec& spec = in->spec();
+    if (const std::string bad = image_size_problem(spec.width, spec.height, spec.depth, 1);
+        !bad.empty())
+        throw IoError(path + ": " + bad);
+    const auto& names = spec.channelnames;
+    const auto it = std::find(names.begin(), names.end(), name);
+    if (it == names.end()) {
+        std::string list;
+        for (const auto& n : names) list += (list.empty() ? "" : " ") + n;
+        throw IoError(path + ": no channel \"" + name + "\": the file has " + list);
+    }
+    const int c = int(it - names.begin());
+    Frame f;
+    f.resize(spec.width, spec.height);
+    if (!in->read_image(0, 0, c, c + 1, OIIO::TypeDesc::FLOAT, f.data.data()))
+        throw IoError(path + ": cannot read: " + one_line(in->geterror()));
+    if (const std::string bad = nonfinite_pixel(f.data.data(), f.data.size(), f.width, 1);
+        !bad.empty())
+        throw IoError(path + ": channel " + name + ": " + bad);
+    return f;
+}
+
+std::vector<std::string> channel_names(const std::string& path) {
+    std::string error;
+    auto in = open_image_input(path, error);
+    if (!in) throw IoError(path + ": " + error);
+    return in->spec().channelnames;
 }
 
 std::string encode_png(int width, int height, const std::vector<float>& rgb) {

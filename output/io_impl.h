@@ -13,6 +13,11 @@ void write_pixels(const std::string& path, int width, int height, int channels,
                   const float* pixels, const Metadata& metadata, bool bits16,
                   const std::string& compression);
 Frame read_image(const std::string& path);
+void write_named_pixels(const std::string& path, int width, int height,
+                        const std::vector<std::string>& names, const float* pixels,
+                        const Metadata& metadata, bool bits16, const std::string& compression);
+Frame read_channel(const std::string& path, const std::string& name);
+std::vector<std::string> channel_names(const std::string& path);
 std::string image_size_problem(int width, int height, int depth, int channels);
 std::string image_mismatch(const std::string& path, int width, int height, int channels,
                            bool bits16, const Metadata& metadata);

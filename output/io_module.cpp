@@ -13,6 +13,7 @@ extern "C" const impulse::output::IoModule* impulse_io_module() {
         io::read_vdb,                  io::list_vdb_grids,    io::read_vdb_vectors,
         io::encode_png,                io::make_video_sink,   io::quiet_video_logs,
         io::probe_video,               io::decode_video_luma,
+        io::write_named_pixels,        io::read_channel,      io::channel_names,
     };
     return &table;
 }

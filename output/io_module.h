@@ -87,6 +87,12 @@ struct IoModule {
     VideoInfo (*probe_video)(const std::string& path);
     std::vector<std::vector<float>> (*decode_video_luma)(const std::string& path, int& width,
                                                          int& height);
+    void (*write_named_pixels)(const std::string& path, int width, int height,
+                               const std::vector<std::string>& names, const float* pixels,
+                               const Metadata& metadata, bool bits16,
+                               const std::string& compression);
+    Frame (*read_channel)(const std::string& path, const std::string& name);
+    std::vector<std::string> (*channel_names)(const std::string& path);
 };
 
 /// Bumped whenever IoModule or a type it passes changes.

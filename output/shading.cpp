@@ -141,4 +141,16 @@ void shade(const Frame& field, const ValueMapping& mapping, const Shading& sh,
     tbb::parallel_for(0, h, [&](int y) { shader.rows(field, y, y + 1, rgb.data() + size_t(y) * w * 3); });
 }
 
+void shading_alpha(const Frame& field, const ValueMapping& mapping, const Shading& sh,
+                   std::vector<float>& alpha) {
+    alpha.assign(field.data.size(), 1.0f);
+    if (sh.ramp.empty()) return;
+    const double inv = 1.0 / (mapping.hi - mapping.lo);
+    for (size_t i = 0; i < alpha.size(); ++i) {
+        float c[4];
+        ramp_at(sh.ramp, tone_curve((field.data[i] - mapping.lo) * inv, sh.toe, sh.shoulder), c);
+        alpha[i] = std::clamp(c[3], 0.0f, 1.0f);
+    }
+}
+
 }  // namespace impulse::output

@@ -59,6 +59,12 @@ double tone_curve(double x, double toe, double shoulder);
 void shade(const Frame& field, const ValueMapping& mapping, const Shading& shading,
            std::vector<float>& rgb);
 
+/// The coverage of each pixel of `field` under `shading`: the ramp's alpha at the pixel's
+/// display value (through the tone curve), 1 without a ramp; one float per pixel into `alpha`.
+/// `shade` with a black background gives the matching premultiplied colour.
+void shading_alpha(const Frame& field, const ValueMapping& mapping, const Shading& shading,
+                   std::vector<float>& alpha);
+
 /// Where the rows of an 8-bit YUV 4:2:0 picture go: three planes (the encoder's input picture,
 /// or any buffer laid out like it), each pointer at the band's first row (its luma row y0 and
 /// chroma row y0 / 2). Strides in bytes.

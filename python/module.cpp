@@ -121,6 +121,52 @@ py::array_t<float> render_rgb(SceneObject& s, int64_t frame) {
     return view_of(std::move(rgb), data, s.scene().output.height, s.scene().output.width, 3);
 }
 
+/// A copy of a frame as a float32 H x W array.
+py::array_t<float> frame_array(const numeric::Frame& f) {
+    py::array_t<float> a({py::ssize_t(f.height), py::ssize_t(f.width)});
+    std::copy(f.data.begin(), f.data.end(), a.mutable_data());
+    return a;
+}
+
+/// The channels named in `names` (docs/channels.md) as a dict of H x W arrays keyed by their
+/// EXR names: value, LAYER.value, dx, LAYER.dx, dy, LAYER.dy, N.X N.Y N.Z, forward.u ...
+py::dict render_channels(SceneObject& s, int64_t frame, const std::vector<std::string>& names) {
+    const scenes::ChannelSet set = scenes::parse_channels(names, "render_channels");
+    scenes::FrameChannels ch;
+    {
+        py::gil_scoped_release release;
+        ch = s.render_channels(frame, set);
+    }
+    py::dict d;
+    auto field = [&](bool on, const char* c, const numeric::Frame& all,
+                     const std::vector<numeric::Frame>& per) {
+        if (!on) return;
+        d[c] = frame_array(all);
+        for (size_t k = 0; k < per.size(); ++k)
+            d[py::str(ch.layer_names[k] + "." + c)] = frame_array(per[k]);
+    };
+    field(set.value, "value", ch.value, ch.layer_value);
+    field(set.dx, "dx", ch.dx, ch.layer_dx);
+    field(set.dy, "dy", ch.dy, ch.layer_dy);
+    if (set.normal) {
+        std::vector<float> xyz;
+        const scenes::Scene& sc = s.scene();
+        scenes::normal_map(ch.dx, ch.dy, scenes::normal_relief(sc, sc.frame_time(frame)), xyz);
+        const char* axis[3] = {"N.X", "N.Y", "N.Z"};
+        for (int k = 0; k < 3; ++k) {
+            numeric::Frame f;
+            f.resize(ch.dx.width, ch.dx.height);
+            for (size_t i = 0; i < f.data.size(); ++i) f.data[i] = xyz[3 * i + k];
+            d[axis[k]] = frame_array(f);
+        }
+    }
+    if (set.motion) {
+        const char* name[4] = {"forward.u", "forward.v", "backward.u", "backward.v"};
+        for (int k = 0; k < 4; ++k) d[name[k]] = frame_array(ch.motion[k]);
+    }
+    return d;
+}
+
 /// Frequencies 0 .. 0.5 cycles per pixel in `n` steps: the range a periodogram covers.
 std::vector<double> nyquist_grid(int n) {
     std::vector<double> k(size_t(n) + 1);
@@ -323,6 +369,10 @@ PYBIND11_MODULE(impulse, m) {
         .def("render", &render, py::arg("frame") = 0,
              "The float field of a frame as a float32 H x W array (the values `impulse render` "
              "writes to EXR, bit for bit). The GIL is released while it renders.")
+        .def("render_channels", &render_channels, py::arg("frame"), py::arg("channels"),
+             "The channels named in `channels` (value, dx, dy, normal, motion; docs/channels.md) "
+             "of a frame as a dict of float32 H x W arrays keyed as `impulse render --channels` "
+             "names them in an EXR (value, layer0.value, dx, dy, N.X, forward.u ...).")
         .def("render_rgb", &render_rgb, py::arg("frame") = 0,
              "Display colour of a frame as a float32 H x W x 3 array in [0, 1]: the scene's "
              "value mapping and shading (what PNG and video output show).")

@@ -30,6 +30,14 @@ std::unique_ptr<numeric::Frame> SceneObject::render(int64_t frame) {
     return out;
 }
 
+scenes::FrameChannels SceneObject::render_channels(int64_t frame, const scenes::ChannelSet& set) {
+    check_frame(frame);
+    scenes::FrameChannels out;
+    const std::lock_guard<std::mutex> lock(m_mutex);
+    renderer().render_channels(frame, set, out, {}, "render_channels");
+    return out;
+}
+
 std::vector<float> SceneObject::render_rgb(int64_t frame) {
     const std::unique_ptr<numeric::Frame> field = render(frame);
     std::vector<float> rgb;

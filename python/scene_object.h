@@ -33,6 +33,8 @@ public:
     void check_frame(int64_t frame) const;
     /// The float field of `frame` (the CLI's EXR values, bit for bit).
     std::unique_ptr<numeric::Frame> render(int64_t frame);
+    /// The channels of `frame` (scenes::Renderer::render_channels; docs/channels.md).
+    scenes::FrameChannels render_channels(int64_t frame, const scenes::ChannelSet& set);
     /// Display RGB of `frame` in [0, 1], 3 floats per pixel (the shading of PNG output).
     std::vector<float> render_rgb(int64_t frame);
     /// The value -> display mapping (output.range, else mean +- 3 sd).

@@ -7,4 +7,5 @@
 
 #include "render/evaluate.h"     // orthographic frames
 #include "render/lattice.h"      // multi-rate: a lattice from the spectrum, then reconstruction
+#include "render/gradient.h"     // exact df/dx, df/dy of orthographic frames
 #include "render/perspective.h"  // cameras with anti-aliasing (kernel pyramid)

@@ -106,11 +106,19 @@ struct LayerSpectrum {
     PixelLattice lattice;
     double t = 0.0;
     MotionBlur blur;  ///< the camera's shutter: each kernel's mean along its path
+    /// An anti-aliased orthographic camera's pixel filter (camera.filter, a Gaussian of this sd
+    /// in pixels; 0: none): the kernels are low-passed by it before sampling (docs/scenes.md
+    /// "Anti-aliasing"), so S is multiplied by its |G|^2 = exp(-4 pi^2 filter^2 |k|^2).
+    double filter_px = 0.0;
+    double filtered(double fx, double fy) const {
+        const double f = 2.0 * std::numbers::pi * filter_px;
+        return filter_px > 0.0 ? std::exp(-f * f * (fx * fx + fy * fy)) : 1.0;
+    }
     /// S at (fx, fy) cycles per pixel, exact (orientation and aspect included), no aliasing.
     double exact(double fx, double fy) const {
         if (source) return zoom * zoom * scale * source->power_spectrum_2d(fx * zoom, fy * zoom).value_or(0.0);
         return zoom * zoom * scale * kernel.power_spectrum(fx * zoom, fy * zoom) *
-               blur.spectrum_factor(fx * zoom, fy * zoom);
+               blur.spectrum_factor(fx * zoom, fy * zoom) * filtered(fx, fy);
     }
 };
 
@@ -119,9 +127,10 @@ struct LayerSpectrum {
 constexpr double kExactAnnuli = 16.0;
 
 LayerSpectrum layer_spectrum(const LayerConfig& layer, double zoom, int n_max,
-                             const MotionBlur& blur) {
+                             const MotionBlur& blur, double filter_px) {
     LayerSpectrum L{kernels::Kernel(layer.kernel), zoom, 0.0, false, false, {}, 0.0};
     L.blur = blur;
+    L.filter_px = filter_px;
     const kernels::Kernel& k = L.kernel;
     L.scale = layer_theory(layer).variance / k.integral_sq();
     const double R_px = k.radius() * zoom;
@@ -137,7 +146,7 @@ LayerSpectrum layer_spectrum(const LayerConfig& layer, double zoom, int n_max,
         const int n = 36;
         if (iso)
             return zoom * zoom * L.scale * k.radial_power_spectrum(rho * zoom) *
-                   L.blur.radial_factor(rho * zoom);
+                   L.blur.radial_factor(rho * zoom) * L.filtered(rho, 0.0);
         double sum = 0;
         for (int i = 0; i < n; ++i) {
             const double a = std::numbers::pi * (i + 0.5) / n;
@@ -598,8 +607,14 @@ LayerSums sum_layers(const Scene& scene, const AnalysisResult& R, double zoom, d
         // One table for both grids, at the window's resolution: the padded grid serves only lags
         // within the window plus the displacement, which 8 table points per window bin resolve
         // (a table at the padded grid's bins made `analyze --scene` 4x slower, issue 18).
-        const LayerSpectrum ls =
-            layer_spectrum(layer, zoom, std::max(w, h), layer_motion_blur(scene, li));
+        // The pixel filter of an anti-aliased orthographic camera (a zoom below 1, e.g. render
+        // --size at fewer pixels): the level blend of the kernel pyramid approximates it, exact
+        // to the pyramid's 1 % rms for kernels left unfiltered (docs/scenes.md "Orthographic").
+        const bool filters = scene.camera.type == CameraConfig::Type::Orthographic &&
+                             scene.camera.antialiased();
+        const LayerSpectrum ls = layer_spectrum(layer, zoom, std::max(w, h),
+                                                layer_motion_blur(scene, li),
+                                                filters ? scene.camera.filter : 0.0);
         add_layer_spectrum(scene, ls, ls, R, zoom, g2, S);
     }
     return S;
@@ -846,10 +861,11 @@ private:
 }  // namespace
 
 std::unique_ptr<analysis::ClosedForm> closed_form(const std::string& scene,
-                                                  const std::vector<std::string>& sets) {
+                                                  const std::vector<std::string>& sets,
+                                                  OutputSize size) {
     if (scene.empty()) return nullptr;
     const std::string path = resolve_scene(scene);
-    return std::make_unique<SceneClosedForm>(load_scene(path, sets), path);
+    return std::make_unique<SceneClosedForm>(load_scene(path, sets, size), path);
 }
 
 }  // namespace impulse::scenes

@@ -11,13 +11,16 @@
 #include <vector>
 
 #include "analysis/theory.h"
+#include "scenes/scenes.h"
 
 namespace impulse::scenes {
 
-/// The scene `scene` (a file or a built-in name) with its --set overrides, loaded, as a closed
+/// The scene `scene` (a file or a built-in name) with its --set overrides, loaded at `size`
+/// (render's --size: the same view at another resolution; {0, 0}: the scene's own), as a closed
 /// form for analysis::analyze_frames; nullptr when `scene` is empty. Throws what load_scene
 /// throws.
 std::unique_ptr<analysis::ClosedForm> closed_form(const std::string& scene,
-                                                  const std::vector<std::string>& sets);
+                                                  const std::vector<std::string>& sets,
+                                                  OutputSize size = {});
 
 }  // namespace impulse::scenes

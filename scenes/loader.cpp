@@ -183,6 +183,27 @@ void apply_override(toml::table& root, const std::string& text, Source& src) {
 
 
 
+/// output.channels: names of kChannelNames (docs/channels.md); empty when absent.
+std::vector<std::string> output_channels(Reader& o) {
+    o.refuse_keyframes("channels");
+    const toml::node* n = o.node("channels");
+    if (!n) return {};
+    const toml::array* a = n->as_array();
+    if (!a || a->empty()) o.fail(n, "channels", "expected a list of channel names, e.g. [\"value\", \"dx\", \"dy\"]");
+    std::vector<std::string> names;
+    for (const toml::node& e : *a) {
+        if (!e.is_string()) o.fail(&e, "channels", "expected channel names (strings), found " + detail::type_name(e));
+        names.push_back(*e.value<std::string>());
+    }
+    try {
+        parse_channels(names, "channels");
+    } catch (const ValueError& e) {
+        const std::string why = e.what();
+        o.fail(n, "channels", why.substr(why.find(": ") + 2));
+    }
+    return names;
+}
+
 /// [output]: size, frames, timing, codec and its settings, display range, bits, compression.
 void read_output(Reader& o, OutputConfig& out) {
     o.refuse_keyframes("size");
@@ -212,6 +233,7 @@ void read_output(Reader& o, OutputConfig& out) {
     out.bits = static_cast<int>(o.integer("bits", 8, 8, 16));
     if (out.bits != 8 && out.bits != 16) o.fail(o.node("bits"), "bits", "expected 8 or 16");
     out.compression = exr_compression(o);
+    out.channels = output_channels(o);
     o.finish();
 }
 
@@ -606,8 +628,10 @@ Scene load_scene_string(std::string_view text, const std::string& name,
     OutputSize own;
     Scene s = read_scene(root, src, base, size, &own);
     // Another resolution is another picture: the hash says so (the scene's own size does not).
-    if (s.output.width != own.width || s.output.height != own.height)
+    if (s.output.width != own.width || s.output.height != own.height) {
         all += "\n--size " + std::to_string(s.output.width) + "x" + std::to_string(s.output.height);
+        s.resized = {s.output.width, s.output.height};
+    }
     s.path = name;
     s.hash = fnv1a_hex(all);
     s.warnings = std::move(warnings);

@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "scenes/camera_detail.h"
+#include "scenes/channels_detail.h"
 #include "scenes/compose_detail.h"
 #include "scenes/marginal.h"
 #include "scenes/reader.h"
@@ -609,6 +610,49 @@ void Renderer::render(int64_t frame, render::Frame& out, const render::EvalOptio
             throw SceneError(S.scene.path + ": shading.transform: " + e.what());
         }
     }
+}
+
+void Renderer::render_channels(int64_t frame, const ChannelSet& set, FrameChannels& out,
+                               const render::EvalOptions& options, const std::string& what) {
+    State& S = *m_state;
+    detail::check_channels(S.scene, set, what);
+    render(frame, out.value, options);
+    const auto& o = S.scene.output;
+    const double t = S.scene.frame_time(frame);
+    const render::View view = S.scene.camera.view(o.width, o.height, t);
+    const State::Pass pass{frame, t, &options};
+    out.layers.clear(), out.layer_names.clear();
+    for (size_t i = 0; i < S.scene.layers.size(); ++i)
+        if (S.scene.layers[i].compose.visible) {
+            out.layers.push_back(i);
+            const std::string& n = S.scene.layers[i].compose.name;
+            out.layer_names.push_back(n.empty() ? "layer" + std::to_string(i) : n);
+        }
+    const size_t n = out.layers.size();
+    out.layer_value.assign(set.value ? n : 0, {});
+    out.layer_dx.assign(set.gradient() ? n : 0, {});
+    out.layer_dy.assign(set.gradient() ? n : 0, {});
+    out.dx = {}, out.dy = {};
+    sim::Impulses imp;
+    for (size_t k = 0; k < n; ++k) {
+        const size_t i = out.layers[k];
+        if (set.value) S.field(i, pass, view, State::Space::Camera, false, out.layer_value[k], imp);
+        if (!set.gradient()) continue;
+        // check_channels admits only added impulse layers: the composite's derivative is the
+        // sum of theirs times their opacity.
+        S.layer_impulses(i, pass, S.camera->region(i, view, t), imp);
+        render::accumulate_gradient(S.kernels[i], imp, view, out.layer_dx[k], out.layer_dy[k],
+                                    options);
+        const double opacity = S.scene.layers[i].compose.opacity.value(t);
+        if (k == 0) out.dx.resize(o.width, o.height), out.dy.resize(o.width, o.height);
+        for (size_t p = 0; p < out.dx.data.size(); ++p) {
+            out.dx.data[p] = static_cast<float>(out.dx.data[p] + opacity * out.layer_dx[k].data[p]);
+            out.dy.data[p] = static_cast<float>(out.dy.data[p] + opacity * out.layer_dy[k].data[p]);
+        }
+    }
+    if (set.gradient() && n == 0) out.dx.resize(o.width, o.height), out.dy.resize(o.width, o.height);
+    for (auto& m : out.motion) m = {};
+    if (set.motion) detail::motion_vectors(S.scene, frame, out.layers, out.motion);
 }
 
 const render::Frame& Renderer::State::main_field(size_t i, const Pass& pass,

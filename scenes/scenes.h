@@ -15,6 +15,7 @@
 #include "kernels/kernels.h"
 #include "output/output.h"
 #include "render/render.h"
+#include "scenes/channels.h"
 #include "scenes/source.h"
 #include "sim/sim.h"
 
@@ -32,6 +33,9 @@ struct OutputConfig {
     std::optional<std::array<double, 2>> range;  ///< value -> display mapping; default mean +- 3 sd
     int bits = 8;                    ///< 8 or 16 bits per channel for PNG/TIFF
     std::string compression;         ///< EXR compression, one of output::kExrCompressions
+    /// [output] channels: what `render` writes besides the field (names of kChannelNames;
+    /// empty: the field alone), as --channels (docs/channels.md).
+    std::vector<std::string> channels;
 };
 
 /// [camera.sea]: a sea below a sky camera's horizon (docs/perspective.md §9). Each pixel below
@@ -241,6 +245,11 @@ struct ShadingKeys {
     numeric::Keyframed relief = 0.0, light_azimuth = 135.0, light_elevation = 35.0, ambient = 0.25;
 };
 
+/// A picture size in pixels (render's --size; {0, 0}: none).
+struct OutputSize {
+    int width = 0, height = 0;
+};
+
 /// A volume scene's content (scenes/volume_scene.h).
 struct VolumeSceneConfig;
 
@@ -267,6 +276,9 @@ struct Scene {
     /// (type None: the field as it is).
     output::FieldTransform transform;
     std::string hash;  ///< FNV-1a of the scene text, included files and overrides, hex
+    /// The `size` it was loaded at (render's --size) when that is not the file's own
+    /// output.size; {0, 0} otherwise (recorded in the frames' metadata as impulse:size).
+    OutputSize resized;
     std::vector<std::string> warnings;  ///< accepted but suspicious values, one line each
 
     /// Time of frame `frame` (0-based) in seconds: (start_s fps + frame) / fps.
@@ -296,9 +308,6 @@ void prepare_layer(LayerConfig& layer);
 /// camera's vertical fov does (another aspect ratio shows more or less at the sides); centres
 /// that default to the middle of the frame stay where the scene's own size puts them. {0, 0} or
 /// the scene's own size: nothing changes (same bits). `--set output.size` crops instead.
-struct OutputSize {
-    int width = 0, height = 0;
-};
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {},
                  OutputSize size = {});
 /// Same for scene text; `name` stands in for the file name in messages.
@@ -378,6 +387,14 @@ public:
     /// The float field of frame `frame` (0-based) into `out` (resized): the sum of the layers,
     /// through the scene's transform when it has one.
     void render(int64_t frame, render::Frame& out, const render::EvalOptions& options = {});
+    /// Frame `frame`'s channels (docs/channels.md): the field as render gives it (always), and
+    /// as `set` asks, each visible layer's own field, the exact df/dx and df/dy (composite and
+    /// per layer; render::accumulate_gradient at the pixel centres) and forward and backward
+    /// motion vectors. Deterministic as render. Throws SceneError naming `what` (the flag or
+    /// key) when the scene cannot give them (perspective cameras, shaped or warped layers...).
+    void render_channels(int64_t frame, const ChannelSet& set, FrameChannels& out,
+                         const render::EvalOptions& options = {},
+                         const std::string& what = "channels");
     /// Live impulses of layer `layer` at frame `frame` (for analysis and tests).
     const sim::Impulses& impulses(size_t layer) const;
     /// Estimated live impulses per frame over all layers, and peak memory in MiB.
