@@ -22,6 +22,8 @@ import re
 import subprocess
 import sys
 
+# This check and its self-test quote bogus citations on purpose (tests/docs/test_citations.sh).
+SELF_TEST = "tests/docs/"
 SOURCE_PATTERNS = ["*.cpp", "*.h", "*.inc", "*.py", "*.sh", "*CMakeLists.txt", "*.md"]
 
 # A document name not preceded by a path character (so "$out/gallery.md", a file a script
@@ -41,11 +43,12 @@ def tracked_sources(root, only):
     listed = subprocess.run(["git", "-C", str(root), "ls-files", "--", *SOURCE_PATTERNS],
                             capture_output=True, text=True)
     if listed.returncode == 0:
-        return [root / f for f in listed.stdout.split()]
+        return [root / f for f in listed.stdout.split() if not f.startswith(SELF_TEST)]
     # Not a git checkout (a source archive): every matching file but the build trees'.
     return sorted(p for pattern in SOURCE_PATTERNS for p in root.rglob(pattern)
                   if not any(part.startswith("build") or part.startswith(".")
-                             for part in p.relative_to(root).parts[:-1]))
+                             for part in p.relative_to(root).parts[:-1])
+                  and not p.relative_to(root).as_posix().startswith(SELF_TEST))
 
 
 def resolve(root, name):
