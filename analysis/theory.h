@@ -2,7 +2,7 @@
 #pragma once
 // What the analysis needs from a closed-form theory (Campbell's theorem, design.md §1) and the
 // sampling-error helpers it judges measurements with (design.md §5). The theory of a scene is
-// stated by scenes/ (scenes/closed_form.h), which sits above analysis/ in design.md's levels:
+// stated by scenes/ (scenes/closed_form.h), which sits above analysis/ (design.md §2):
 // it is passed in as a ClosedForm, so the dependency runs one way.
 
 #include <cstddef>

@@ -3,6 +3,7 @@
 
 #include "app/commands.h"
 #include "app/channels.h"
+#include "app/parse.h"
 #include "app/render_volume.h"
 
 #include <tbb/global_control.h>
@@ -152,13 +153,12 @@ private:
 
 scenes::OutputSize parse_size(const std::string& option, const std::string& text) {
     if (text.empty()) return {};
-    static const std::regex re(R"((\d{1,5})x(\d{1,5}))");
-    std::smatch m;
-    if (!std::regex_match(text, m, re) || std::stoi(m[1].str()) < 1 || std::stoi(m[2].str()) < 1 ||
-        std::stoi(m[1].str()) > 32768 || std::stoi(m[2].str()) > 32768)
+    const std::vector<long long> n = parse_dimensions(text);
+    const auto in_range = [](long long v) { return v >= 1 && v <= 32768; };
+    if (n.size() != 2 || !in_range(n[0]) || !in_range(n[1]))
         throw ValueError(option + " " + text.substr(0, 40) +
                          ": expected WxH in pixels, each in [1, 32768], e.g. 1920x1080");
-    return {std::stoi(m[1].str()), std::stoi(m[2].str())};
+    return {static_cast<int>(n[0]), static_cast<int>(n[1])};
 }
 
 namespace {

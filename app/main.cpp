@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The `impulse` command-line tool: parse, call the libraries, report. Library errors are typed
-// exceptions; here they become one line on stderr and a non-zero exit (style.md "Errors").
+// exceptions; here they become one line on stderr and a non-zero exit
+// (docs/contributing.md "Errors").
 
 #include <CLI/CLI.hpp>
 #include <unistd.h>

@@ -21,12 +21,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string lower_extension(const std::string& path) {
-    std::string e = fs::path(path).extension().string();
-    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
-    return e;
-}
-
 /// What the job writes, checked before any frame is rendered (nothing written on bad input).
 struct Target {
     bool vdb = false, video = false, sequence = false;
@@ -34,7 +28,7 @@ struct Target {
 
 Target classify(const VolumeJob& job) {
     Target t;
-    t.vdb = lower_extension(job.output) == ".vdb";
+    t.vdb = output::lower_extension(job.output) == ".vdb";
     t.video = output::is_video_path(job.output);
     t.sequence = !t.video && !expand_pattern(job.output, 0).empty();
     if (!t.vdb && !t.video && !output::is_image_path(job.output))

@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "app/synth_fbm.h"
+#include "app/parse.h"
 
 #include <CLI/CLI.hpp>
 #include <unistd.h>
@@ -17,24 +18,8 @@
 namespace impulse::app {
 namespace {
 
-// The whole of `text` as a number, else ValueError "option text: expected ...".
-template <class T>
-T parse_number(const std::string& option, const std::string& text, const std::string& expected) {
-    T v{};
-    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-    if (ec != std::errc() || end != text.data() + text.size())
-        throw ValueError(option + " " + text + ": expected " + expected);
-    return v;
-}
-
-std::string lower_extension(const std::string& path) {
-    std::string e = std::filesystem::path(path).extension().string();
-    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
-    return e;
-}
-
 void check_output(const std::string& path) {
-    const std::string e = lower_extension(path);
+    const std::string e = output::lower_extension(path);
     if (e != ".exr" && e != ".png" && e != ".tif" && e != ".tiff")
         throw ValueError("-o " + path + ": expected .exr (float heights) or .png/.tif (16-bit)");
     const std::filesystem::path dir = std::filesystem::path(path).parent_path();
@@ -69,15 +54,15 @@ CLI::App* add_synth_fbm(CLI::App& synth, SynthFbmOptions& o) {
 int run_synth_fbm(const SynthFbmOptions& o) {
     synth::FbmOptions f;
     f.method = synth::parse_fbm_method(o.method);
-    f.hurst = parse_number<double>("--hurst", o.hurst, "a number in (0, 1)");
-    f.size = parse_number<int>("--size", o.size, "a power of two from 2 to 8192");
+    f.hurst = parse_whole<double>("--hurst", o.hurst, "a number in (0, 1)");
+    f.size = parse_whole<int>("--size", o.size, "a power of two from 2 to 8192");
     f.seamless = o.seamless;
     const auto seed =
-        parse_number<long long>("--seed", o.seed, "an integer in [0, 9223372036854775807]");
+        parse_whole<long long>("--seed", o.seed, "an integer in [0, 9223372036854775807]");
     if (seed < 0) throw ValueError("--seed " + o.seed + ": expected an integer in [0, 2^63 - 1]");
     double budget = synth::default_memory_budget();
     if (!o.memory_budget.empty()) {
-        budget = parse_number<double>("--memory-budget", o.memory_budget, "GiB, > 0");
+        budget = parse_whole<double>("--memory-budget", o.memory_budget, "GiB, > 0");
         if (!(budget > 0)) throw ValueError("--memory-budget " + o.memory_budget + ": expected > 0");
         budget *= double(1ull << 30);
     }
@@ -94,7 +79,7 @@ int run_synth_fbm(const SynthFbmOptions& o) {
                                    {"fbm:min", std::to_string(*lo)},
                                    {"fbm:max", std::to_string(*hi)}};
     output::write_image(o.output, frame, {*lo, *hi > *lo ? *hi : *lo + 1.0}, meta,
-                        lower_extension(o.output) != ".exr");
+                        output::lower_extension(o.output) != ".exr");
     return 0;
 }
 

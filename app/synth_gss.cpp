@@ -15,6 +15,7 @@
 #include <sstream>
 
 #include "app/commands.h"
+#include "app/parse.h"
 #include "output/output.h"
 #include "render/render.h"
 #include "synth/synth.h"
@@ -54,21 +55,17 @@ std::vector<synth::AcfParam> parse_params(const std::vector<std::string>& params
 
 /// "N" or "WxH" (1-D: "N" only).
 std::pair<int, int> parse_size(const std::string& text, int dim) {
-    const size_t x = text.find('x');
-    auto number = [&](const std::string& t) {
-        const long long v = whole_number(
-            "--size", text, t, dim == 1 ? "N samples, e.g. 1025" : "WxH samples, e.g. 513x513");
+    if (dim == 1 && text.find('x') != std::string::npos)
+        throw ValueError("--size " + text + ": expected N samples for --dim 1, e.g. 1025");
+    const std::vector<long long> n = parse_dimensions(text);
+    if (n.empty() || n.size() > 2)
+        throw ValueError("--size " + text + ": expected " +
+                         (dim == 1 ? "N samples, e.g. 1025" : "WxH samples, e.g. 513x513"));
+    for (const long long v : n)
         if (v < 1 || v > (1 << 20))
             throw ValueError("--size " + text + ": expected 1 .. 2^20 per axis");
-        return int(v);
-    };
-    if (x == std::string::npos) {
-        const int n = number(text);
-        return {n, dim == 1 ? 1 : n};
-    }
-    if (dim == 1)
-        throw ValueError("--size " + text + ": expected N samples for --dim 1, e.g. 1025");
-    return {number(text.substr(0, x)), number(text.substr(x + 1))};
+    const int w = static_cast<int>(n[0]);
+    return {w, n.size() == 2 ? static_cast<int>(n[1]) : dim == 1 ? 1 : w};
 }
 
 /// 1-D data for --refine from a CSV of rows "i,value" (or one value per row).

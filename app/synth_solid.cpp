@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #include "app/synth_solid.h"
 #include "app/synth_solid_design.h"
+#include "app/parse.h"
 
 #include <CLI/CLI.hpp>
 #include <unistd.h>
@@ -17,6 +18,7 @@
 #include <sstream>
 
 #include "numeric/errors.h"
+#include "output/files.h"
 #include "output/volume.h"
 #include "synth/synth.h"
 
@@ -25,37 +27,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-template <class T>
-T parse_number(const std::string& option, const std::string& text, const std::string& expected) {
-    T v{};
-    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
-    if (ec != std::errc() || end != text.data() + text.size() || text.empty())
-        throw ValueError(option + " " + text + ": expected " + expected);
-    return v;
-}
-
-std::string extension(const std::string& path) {
-    std::string e = fs::path(path).extension().string();
-    std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
-    return e;
-}
-
 std::array<int, 3> parse_size(const std::string& s) {
-    std::array<int, 3> n{};
-    std::istringstream in(s);
-    std::string part;
-    int i = 0;
-    while (std::getline(in, part, 'x')) {
-        if (i == 3) break;
-        long long v = 0;
-        const auto [end, ec] = std::from_chars(part.data(), part.data() + part.size(), v);
-        if (ec != std::errc() || end != part.data() + part.size() || part.empty() || v <= 0 || v > 1 << 20)
-            throw ValueError("--size " + s + ": expected WxHxD, three positive integers up to 1048576");
-        n[i++] = static_cast<int>(v);
-    }
-    if (i != 3 || std::count(s.begin(), s.end(), 'x') != 2)
-        throw ValueError("--size " + s + ": expected WxHxD, three positive integers");
-    return n;
+    const std::vector<long long> n = parse_dimensions(s);
+    if (n.empty() || std::any_of(n.begin(), n.end(), [](long long v) { return v <= 0 || v > 1 << 20; }))
+        throw ValueError("--size " + s + ": expected WxHxD, three positive integers up to 1048576");
+    if (n.size() != 3) throw ValueError("--size " + s + ": expected WxHxD, three positive integers");
+    return {static_cast<int>(n[0]), static_cast<int>(n[1]), static_cast<int>(n[2])};
 }
 
 /// The points of a CSV of x,y,z lines (blank lines and # comments skipped); names a bad line.
@@ -86,24 +63,8 @@ std::vector<synth::SolidPoint> read_points(const std::string& path) {
     return pts;
 }
 
-std::string temp_name(const std::string& path) {
-    const fs::path p(path);
-    return (p.parent_path() / ("." + p.stem().string() + ".partial-" + std::to_string(::getpid()) +
-                               p.extension().string())).string();
-}
-
-/// Renames the finished temporary into place (nothing half-written under `path`).
-void commit(const std::string& tmp, const std::string& path) {
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) {
-        fs::remove(tmp, ec);
-        throw IoError(path + ": cannot rename temporary file into place: " + ec.message());
-    }
-}
-
 void write_csv(const std::string& path, const std::vector<synth::SolidPoint>& p, const std::vector<float>& v) {
-    const std::string tmp = temp_name(path);
+    const std::string tmp = output::partial_path(path);
     {
         std::ofstream out(tmp);
         char buf[128];
@@ -118,7 +79,7 @@ void write_csv(const std::string& path, const std::vector<synth::SolidPoint>& p,
             throw IoError(path + ": write failed: " + std::strerror(errno));
         }
     }
-    commit(tmp, path);
+    output::commit_partial(tmp, path);  // flushed, renamed, its folder flushed
 }
 
 }  // namespace
@@ -154,16 +115,16 @@ int run_synth_solid(const SynthSolidOptions& o) {
         throw ValueError("--method " + method + ": expected one of sparse, perlin, value, wiener");
     const bool designed = method == "sparse" && is_designed_kernel(o.kernel);
     const std::string radius_text = o.radius.empty() ? (designed ? "0" : "8") : o.radius;
-    const double radius = parse_number<double>("--radius", radius_text, "a number > 0");
+    const double radius = parse_whole<double>("--radius", radius_text, "a number > 0");
     if (!(radius > 0.0 || (designed && o.radius.empty())) || !(radius <= 1e6))
         throw ValueError("--radius " + radius_text + ": expected a number in (0, 1e6]");
-    const auto seed = parse_number<long long>("--seed", o.seed, "an integer in [0, 9223372036854775807]");
+    const auto seed = parse_whole<long long>("--seed", o.seed, "an integer in [0, 9223372036854775807]");
     if (seed < 0) throw ValueError("--seed " + o.seed + ": expected an integer in [0, 2^63 - 1]");
     const bool points = !o.points.empty();
     if (points == !o.size.empty())
         throw ValueError(points ? "--points and --size: give one (points or a grid)"
                                 : "--size WxHxD or --points FILE: one is required");
-    const std::string e = extension(o.output);
+    const std::string e = output::lower_extension(o.output);
     if (points ? e != ".csv" : (e != ".exr" && e != ".vdb"))
         throw ValueError("-o " + o.output + (points ? ": expected a .csv for point values" : ": expected .exr or .vdb"));
     const fs::path dir = fs::path(o.output).parent_path();
@@ -176,7 +137,7 @@ int run_synth_solid(const SynthSolidOptions& o) {
         n = parse_size(o.size);
         double budget = synth::default_memory_budget();
         if (!o.memory_budget.empty()) {
-            budget = parse_number<double>("--memory-budget", o.memory_budget, "GiB, > 0");
+            budget = parse_whole<double>("--memory-budget", o.memory_budget, "GiB, > 0");
             if (!(budget > 0)) throw ValueError("--memory-budget " + o.memory_budget + ": expected > 0");
             budget *= double(1ull << 30);
         }
@@ -198,7 +159,7 @@ int run_synth_solid(const SynthSolidOptions& o) {
     desc << "impulse synth solid --method " << method << " --radius " << radius_text << " --seed " << seed;
     if (method == "sparse") {
         synth::SolidParams p;
-        p.density = parse_number<double>("--density", o.density, "impulses per kernel volume in (0, 1000]");
+        p.density = parse_whole<double>("--density", o.density, "impulses per kernel volume in (0, 1000]");
         if (designed) {
             if (!(p.density > 0.0)) throw ValueError("--density " + o.density + ": expected a number in (0, 1000]");
             p.kernel = solid_design_kernel(o, radius, p.density, desc);
@@ -225,7 +186,7 @@ int run_synth_solid(const SynthSolidOptions& o) {
         p.seed = uint64_t(seed);
         if (p.method == synth::LatticeMethod::Wiener) {
             const std::string length = o.length.empty() ? "1" : o.length;
-            const double l = parse_number<double>("--length", length, "a number > 0");
+            const double l = parse_whole<double>("--length", length, "a number > 0");
             p.covariance = synth::wiener_covariance(o.covariance, l);
             desc << " --covariance " << o.covariance << " --length " << length;
         }

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Small typed exceptions shared by every impulse library. Library code throws; `main` catches,
-// prints the one-line message and exits non-zero (style.md "Errors").
+// prints the one-line message and exits non-zero (docs/contributing.md "Errors").
 
 #include <stdexcept>
 #include <string>

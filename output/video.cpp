@@ -669,8 +669,8 @@ void LibavSink::encode_staged() {
     ++m.frames;
 }
 
-/// Flush the encoder, write the trailer and rename; on any failure the temporary file is
-/// removed and the error rethrown.
+/// Flush the encoder, write the trailer, flush the file to the disk and rename; on any failure
+/// the temporary file is removed and the error rethrown.
 void LibavSink::close() {
     if (!is_open()) return;
     Encoder& m = *m_impl;
@@ -688,11 +688,8 @@ void LibavSink::close() {
         err = av_write_trailer(m.format.get());
         if (err < 0) throw_av(m.path, "cannot write trailer", err);
         m.release();
-        std::error_code ec;
-        fs::rename(m.temp_path, m.path, ec);
-        if (ec) {
-            throw IoError(m.path + ": cannot rename " + m.temp_path.string() + ": " + ec.message());
-        }
+        // Flushed to the disk, renamed, the folder flushed (output/files.h).
+        commit_partial(m.temp_path.string(), m.path);
         m.temp_created = false;
         m.open = false;
     } catch (...) {

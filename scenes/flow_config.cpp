@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// [[layer.flow]]: the flows that carry a layer's impulses (docs/scenes.md "Flows").
+// [[layer.flow]]: the flows that carry a layer's impulses (docs/scenes.md "[[layer.flow]]").
 
 #include <algorithm>
 #include <cmath>

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // [layer.kernel]: the analytic kernels and those designed from a spectrum, an autocorrelation or
-// an exemplar image (docs/scenes.md "Kernels", "Designed kernels").
+// an exemplar image (docs/scenes.md "[layer.kernel]", "Designed kernels").
 
 #include <algorithm>
 #include <cmath>

@@ -109,11 +109,11 @@ private:
                 if (x != 0 || y != 0) sum += std::pow(double(x) * x + double(y) * y, -(hurst + 1.0));
         return sum;
     }
-    /// The Fourier method's spectrum as the layer draws it (docs/fbm.md "As a layer"): line m of
-    /// the tile (side L = n cell) has variance v_m = R(0) |m|^{-(2H+2)} / sum |m'|^{-(2H+2)}, the
-    /// lattice folded into the samples' band; spread over its cell of the frequency plane that is
-    /// a density v_m L^2 (exact at the lines, which are the DFT bins of a frame spanning one
-    /// tile). The bilinear read multiplies it by the tent's transfer sinc^4(kx c) sinc^4(ky c).
+    /// The Fourier method's spectrum as the layer draws it
+    /// (docs/scenes.md "Analysis of source layers"): line m of the tile (side L = n cell) has
+    /// variance v_m = R(0) |m|^{-(2H+2)} / sum |m'|^{-(2H+2)}, the lattice folded into the
+    /// samples' band; spread over its cell of the frequency plane that is a density v_m L^2
+    /// (exact at the lines, which are the DFT bins of a frame spanning one tile). The bilinear read multiplies it by the tent's transfer sinc^4(kx c) sinc^4(ky c).
     double spectrum(double kx, double ky) const {
         const double L = m_grid.cell * m_grid.n;
         const double line = line_variance(kx * L, ky * L);

@@ -31,7 +31,7 @@ if [ -z "$impulse" ]; then
     impulse=build/app/impulse
 fi
 for tool in img2webp cwebp; do
-    command -v "$tool" >/dev/null || { echo "gallery.sh: $tool not found (Debian package webp; scripts/setup.sh installs it)" >&2; exit 1; }
+    command -v "$tool" >/dev/null || { echo "gallery.sh: $tool not found (Debian package webp; scripts/setup.sh --tests installs it)" >&2; exit 1; }
 done
 [ -x "$impulse" ] || { echo "gallery.sh: $impulse: not an executable" >&2; exit 1; }
 

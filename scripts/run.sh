@@ -1,5 +1,7 @@
 #!/usr/bin/env bash
-# Sets everything up, then renders the default scene (drift: flowing clouds) to out/drift.mp4.
+# Installs the tool's Debian packages and builds the tool alone (scripts/setup.sh: no tests,
+# benches or Python module; scripts/test.sh builds those), then renders the default scene
+# (drift: flowing clouds) to out/drift.mp4.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh

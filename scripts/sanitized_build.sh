@@ -6,7 +6,7 @@
 #   scripts/sanitized_build.sh TARGET...
 set -euo pipefail
 cd "$(dirname "$0")/.."
-bash scripts/setup.sh --deps-only
+bash scripts/setup.sh --tests --deps-only
 missing=()
 for p in clang libclang-rt-dev; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

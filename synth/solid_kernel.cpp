@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // A 2-D kernel's radial shape in 3-D and 4-D, with its integrals and 3-D spectrum
-// (docs/solid.md "Kernels in 3-D").
+// (docs/solid.md "Statistics").
 
 #include <algorithm>
 #include <cmath>
