@@ -48,7 +48,7 @@ void check_still_camera(const scenes::Scene& sc, const std::string& why) {
                          " needs a still camera (the camera's keys are not looped)");
 }
 
-/// The loop every moving layer shares, in seconds (scenes.md "loop"); throws naming the key.
+/// The loop every moving layer shares, in seconds (docs/scenes.md "[[layer]]", its `loop` key); throws naming the key.
 double shared_loop(const scenes::Scene& sc) {
     double loop_s = 0.0;
     for (size_t i = 0; i < sc.layers.size(); ++i) {

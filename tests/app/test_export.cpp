@@ -30,7 +30,7 @@ Result run(const TempDir& dir, const std::string& args) { return shell(dir, quot
 constexpr int kW = 96, kH = 64, kLoopFrames = 24;  // loop = 2 s at 12 fps
 
 /// A small tileable looping scene: one period across the picture (zoom 1), births repeating
-/// every 2 s, carried by a uniform wind (which keeps both, docs/scenes.md "loop").
+/// every 2 s, carried by a uniform wind (which keeps both, docs/scenes.md "[[layer]]", its `loop` key).
 std::string loop_scene(bool period = true, bool loop = true) {
     return std::string("[output]\nsize = [96, 64]\nframes = 48\nfps = 12\n") +
            "[[layer]]\nseed = 3\ndensity = 16.0\nlifetime = 1.0\n" + (loop ? "loop = 2.0\n" : "") +
