@@ -88,7 +88,7 @@ void still_row(const Layer& L, double tolerance, int reps, tbb::task_arena& two)
 void scene_row(const std::string& name, int frames, int reps, tbb::task_arena& two) {
     const std::string path = scenes::resolve_scene(name);
     scenes::Renderer direct(scenes::load_scene(path, {"render.tolerance=0"}));
-    scenes::Renderer lattice(scenes::load_scene(path));
+    scenes::Renderer lattice(scenes::load_scene(path, {"render.tolerance=0.005"}));
     render::Frame a, b;
     std::vector<double> td, tl;
     double err = 0.0, predicted = 0.0;
@@ -122,7 +122,7 @@ int main(int argc, char** argv) {
     bool quick = argc > 1 && std::string(argv[1]) == "--quick";
     if (quick) reps = 3;
     tbb::task_arena two(2);
-    const double tol = render::kDefaultLatticeTolerance;
+    const double tol = render::kRecommendedLatticeTolerance;
     std::printf("impulse_bench_multirate: 1920x1080, 2 threads, render.tolerance %g; times in ms, "
                 "median [min-max] of %d runs; load %s\n",
                 tol, reps, loadavg().c_str());

@@ -17,9 +17,11 @@ namespace impulse::render {
 /// The largest tolerance a scene may ask for (rms error / the layer's sd): beyond it a frame's
 /// reconstruction error would be plain to see.
 inline constexpr double kMaxLatticeTolerance = 0.1;
-/// The default tolerance (render.tolerance): 0.5 % of a layer's sd, under an 8-bit frame's
-/// quantisation noise (1/sqrt(12) of a code in +-3 sd over 255 codes: 0.57 %).
-inline constexpr double kDefaultLatticeTolerance = 0.005;
+/// The recommended tolerance (render.tolerance = 0.005): 0.5 % of a layer's sd, under an 8-bit
+/// frame's quantisation noise (1/sqrt(12) of a code in +-3 sd over 255 codes: 0.57 %). Not yet
+/// the default: per-annulus spectral tests still see the lattice's signature near its Nyquist
+/// frequency (docs/multirate.md §5).
+inline constexpr double kRecommendedLatticeTolerance = 0.005;
 /// The coarsest lattice tried, pixels.
 inline constexpr int kMaxLatticeSpacing = 64;
 

@@ -341,7 +341,8 @@ kernels::KernelParams read_designed_kernel(Reader& r, std::string_view type, Rea
 /// A Gaussian's radius cuts it with a step exp(-R^2 / (2 sigma^2)) of its peak, which is not
 /// band-limited (docs/multirate.md §4): an unset radius follows sigma to a step of 1e-3
 /// (R = sqrt(2 ln 1000) sigma, the largest sigma when it is keyed); a given one leaving a step
-/// above 1 % is warned about.
+/// above exp(-9/2) = 1.1 % (R < 3 sigma, the common cut, which the scenes and tests use) is
+/// warned about.
 void gaussian_radius(Reader& r, const std::vector<KernelKey>& keys, kernels::KernelParams& k) {
     constexpr double kFollow = 3.7169221888498383;  // sqrt(2 ln 1000)
     double sigma = k.sigma;
@@ -355,12 +356,12 @@ void gaussian_radius(Reader& r, const std::vector<KernelKey>& keys, kernels::Ker
         return;
     }
     const double step = std::exp(-0.5 * (k.radius / sigma) * (k.radius / sigma));
-    if (!radius_keyed && step > 0.01) {
+    if (!radius_keyed && k.radius < 3.0 * sigma * (1.0 - 1e-9)) {
         std::ostringstream s;
         s << std::setprecision(3) << "cuts the Gaussian (sigma = " << sigma << ") with a step of "
-          << 100.0 * step << " % of its peak, which is not band-limited (aliasing, and the "
-          << "lattice rule keeps it at every pixel); radius >= " << 3.035 * sigma
-          << " keeps the step under 1 %, or leave radius unset (" << kFollow * sigma
+          << 100.0 * step  << " % of its peak, which is not band-limited (aliasing, and the "
+          << "lattice rule keeps it at every pixel); radius >= " << 3.0 * sigma
+          << " keeps the step at 1.1 %, or leave radius unset (" << kFollow * sigma
           << ": a step of 1e-3)";
         r.warn("radius", s.str());
     }

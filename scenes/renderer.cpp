@@ -269,7 +269,8 @@ struct Renderer::State {
     /// Whether layer i's impulses on a view in `space` go through a lattice: a tolerance above
     /// 0 and an orthographic view (through the camera's pyramid too, but for a scale field).
     bool multirate(size_t i, Space space) const {
-        if (!(scene.render.tolerance > 0.0) || read_for_position(i)) return false;
+        if (!(scene.render.tolerance > 0.0) || read_for_position(i) || scene.layers[i].compose.warp)
+            return false;
         if (space == Space::Texture || !camera->active()) return true;
         return !camera->perspective() && !scene.layers[i].scale;
     }

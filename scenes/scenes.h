@@ -256,8 +256,9 @@ struct VolumeSceneConfig;
 /// [render]: how frames are evaluated (docs/multirate.md).
 struct RenderConfig {
     /// rms error allowed to multi-rate evaluation, as a fraction of each layer's sd, in
-    /// [0, render::kMaxLatticeTolerance]; 0: every impulse at every pixel (direct evaluation).
-    double tolerance = render::kDefaultLatticeTolerance;
+    /// [0, render::kMaxLatticeTolerance]; 0 (the default): every impulse at every pixel (direct
+    /// evaluation); render::kRecommendedLatticeTolerance for speed.
+    double tolerance = 0.0;
 };
 
 struct Scene {

@@ -89,7 +89,7 @@ Measured measure(const render::Frame& direct, const render::Frame& approx, int b
 
 TEST_CASE("a lattice's measured error is within its predicted error, and the prediction is tight",
           "[render][lattice]") {
-    const double tolerance = render::kDefaultLatticeTolerance;
+    const double tolerance = render::kRecommendedLatticeTolerance;
     kernels::KernelParams aniso = cosine(24.0);
     aniso.aspect = 2.5;
     const std::vector<Case> cases = {

@@ -122,6 +122,8 @@ TEST_CASE("built-in cloud frames keep at most 0.5 % of pixels at the top code va
     const double with = top_code_share(shaded_builtin("drift", 60, 480, 270));
     const double without = top_code_share(shaded_builtin("drift", 60, 480, 270, {"shading.shoulder=0"}));
     INFO("top code share at frame 60: " << with << " with the shoulder, " << without << " without");
-    CHECK(without > 0.001);
+    // drift's sixth octave (sigma 1.2, issue 35) made its field closer to Gaussian: 0.03 % of
+    // the pixels pass the top without the shoulder (0.25 % before), none with it.
+    CHECK(without > 0.0002);
     CHECK(with < 0.2 * without);
 }
