@@ -25,6 +25,9 @@ std::string exr_header_problem(const std::string& path);
 /// length (up to 2^31 - 1) before reading it: fuzzing found a 322-byte file whose text chunk
 /// asked for 1.97 GB.
 std::string png_chunk_problem(const std::string& path);
+/// "" unless `path` is a JPEG whose Photoshop (APP13) segment holds an IPTC record or an 8BIM
+/// resource longer than what holds it: "truncated or hostile JPEG: ..." then.
+std::string jpeg_segment_problem(const std::string& path);
 
 /// OIIO::ImageInput::open after exr_header_problem and png_chunk_problem; nullptr with `error`
 /// set (one line) when the file is refused or OpenImageIO cannot open it.

@@ -130,3 +130,20 @@ TEST_CASE("a PNG chunk declaring more bytes than the file holds is refused befor
     CHECK(impulse::output::png_chunk_problem(good).empty());
     CHECK(impulse::output::read_image(good).width == 6);
 }
+
+// A fuzzing finding (fuzz_image, probe_image of a .jpg): OpenImageIO 2.4 decodes a JPEG's IPTC
+// records (a Photoshop APP13 segment) without checking their lengths, and read past its buffer.
+// The segments before the scan are walked first. tests/render/hostile_iptc.jpg is the
+// reproducer (989 bytes); a JPEG that OpenImageIO writes passes the walk.
+TEST_CASE("a JPEG whose IPTC records run past their segment is refused before reading",
+          "[render][errors]") {
+    const std::string hostile = std::string(IMPULSE_SOURCE_DIR) + "/tests/render/hostile_iptc.jpg";
+    CHECK_THAT(impulse::output::jpeg_segment_problem(hostile), Contains("truncated or hostile JPEG"));
+    CHECK_THROWS_WITH(impulse::output::probe_image(hostile), Contains("truncated or hostile JPEG"));
+    impulse::test::TempDir dir;
+    const std::string good = dir / "good.jpg";
+    impulse::numeric::Frame f;
+    f.resize(6, 5);
+    impulse::output::write_image(good, f, {}, {{"scene", "metadata"}});
+    CHECK(impulse::output::jpeg_segment_problem(good).empty());
+}
