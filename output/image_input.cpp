@@ -5,6 +5,7 @@
 #include <array>
 #include <cctype>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -106,77 +107,81 @@ std::string png_chunk_problem(const std::string& path) {
 
 namespace {
 
-/// The IPTC records of a Photoshop APP13 segment's 8BIM resources (`seg`: the segment's bytes
-/// after its length): "" when every resource and every record fits inside what holds it.
-std::string iptc_problem(const std::vector<unsigned char>& seg) {
-    static const std::string kPhotoshop("Photoshop 3.0", 14);  // with its terminating NUL
-    if (seg.size() < kPhotoshop.size() || !std::equal(kPhotoshop.begin(), kPhotoshop.end(), seg.begin()))
-        return "";
-    size_t i = kPhotoshop.size();
-    auto u16 = [&](size_t at) { return size_t(seg[at]) << 8 | seg[at + 1]; };
-    while (i + 4 <= seg.size() && std::equal(seg.begin() + long(i), seg.begin() + long(i) + 4, "8BIM")) {
-        const size_t id_at = i + 4;
-        if (id_at + 3 > seg.size()) return "an 8BIM resource header runs past its segment";
-        size_t name = 1 + seg[id_at + 2];  // Pascal string, padded to an even length
-        name += name & 1;
-        const size_t size_at = id_at + 2 + name;
-        if (size_at + 4 > seg.size()) return "an 8BIM resource header runs past its segment";
-        const size_t size = size_t(seg[size_at]) << 24 | size_t(seg[size_at + 1]) << 16 |
-                            size_t(seg[size_at + 2]) << 8 | seg[size_at + 3];
-        const size_t data = size_at + 4;
-        if (size > seg.size() - data)
-            return "an 8BIM resource declares " + std::to_string(size) + " bytes, more than the " +
-                   std::to_string(seg.size() - data) + " left in its segment";
-        if (u16(id_at) == 0x0404)  // IPTC-NAA: records 0x1C, record, dataset, 2-byte length
-            for (size_t r = data; r < data + size;) {
-                if (seg[r] != 0x1C) break;
-                if (r + 5 > data + size) return "an IPTC record header runs past its resource";
-                const size_t len = u16(r + 3);
-                if (len & 0x8000) return "an IPTC record uses an extended length";
-                if (len > data + size - (r + 5))
-                    return "an IPTC record declares " + std::to_string(len) +
-                           " bytes, more than its resource holds";
-                r += 5 + len;
-            }
-        i = data + size + (size & 1);
-    }
-    return "";
+/// Markers that carry metadata, not pixels: APP1..APP13, APP15 (Exif, XMP, ICC, Photoshop and
+/// IPTC, ...) and COM. APP0 (JFIF) and APP14 (Adobe: the colour transform) are kept: libjpeg
+/// reads them itself to decode the pixels.
+bool is_metadata_marker(unsigned char m) {
+    return (m >= 0xE1 && m <= 0xED) || m == 0xEF || m == 0xFE;
+}
+
+std::vector<unsigned char> read_file_bytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    if (!in) return {};
+    std::vector<unsigned char> bytes(size_t(in.tellg()));
+    in.seekg(0);
+    if (!in.read(reinterpret_cast<char*>(bytes.data()), std::streamsize(bytes.size()))) return {};
+    return bytes;
 }
 
 }  // namespace
 
-std::string jpeg_segment_problem(const std::string& path) {
-    // OpenImageIO 2.4 decodes a JPEG's IPTC records without checking their lengths against
-    // the segment (a heap overflow fuzz_image found); the segments before the scan are walked
-    // here first.
-    std::ifstream in(path, std::ios::binary);
-    std::array<unsigned char, 2> soi{};
-    if (!in.read(reinterpret_cast<char*>(soi.data()), 2) || soi[0] != 0xFF || soi[1] != 0xD8) return "";
-    for (;;) {
-        std::array<unsigned char, 4> m{};
-        if (!in.read(reinterpret_cast<char*>(m.data()), 4) || m[0] != 0xFF) return "";
-        if (m[1] == 0xDA || m[1] == 0xD9) return "";  // the scan (or the end): no more headers
-        const size_t length = size_t(m[2]) << 8 | m[3];
-        if (length < 2) return "";
-        std::vector<unsigned char> seg(length - 2);
-        if (!in.read(reinterpret_cast<char*>(seg.data()), std::streamsize(seg.size()))) return "";
-        if (m[1] != 0xED) continue;
-        if (const std::string why = iptc_problem(seg); !why.empty())
-            return "truncated or hostile JPEG: " + why;
+std::optional<std::vector<unsigned char>> jpeg_pixels_only(const std::string& path) {
+    const std::vector<unsigned char> b = read_file_bytes(path);
+    if (b.size() < 2 || b[0] != 0xFF || b[1] != 0xD8) return std::nullopt;
+    std::vector<unsigned char> kept(b.begin(), b.begin() + 2);
+    auto copy = [&](size_t from, size_t to) {
+        kept.insert(kept.end(), b.begin() + long(from), b.begin() + long(to));
+    };
+    // Markers are found the way libjpeg finds them, wherever they are: bytes up to the next
+    // 0xFF (entropy-coded data, or garbage libjpeg skips with a warning) are copied; 0xFF fill
+    // bytes are skipped; 0xFF00 (a stuffed byte), RSTn, TEM and SOI stand alone; EOI ends the
+    // file; every other marker has a big-endian length that counts itself.
+    for (size_t i = 2; i < b.size();) {
+        size_t ff = i;
+        while (ff < b.size() && b[ff] != 0xFF) ++ff;
+        copy(i, ff);
+        size_t m = ff;
+        while (m < b.size() && b[m] == 0xFF) ++m;
+        if (m >= b.size()) break;  // the file ends in fill bytes: libjpeg says it is cut short
+        const unsigned char marker = b[m];
+        const bool alone = marker == 0x00 || marker == 0x01 || (marker >= 0xD0 && marker <= 0xD8);
+        if (alone || marker == 0xD9) {
+            kept.push_back(0xFF), kept.push_back(marker);
+            i = m + 1;
+            if (marker == 0xD9) break;
+            continue;
+        }
+        if (m + 3 > b.size()) break;
+        const size_t end = m + 1 + (size_t(b[m + 1]) << 8 | b[m + 2]);
+        if (end > b.size()) break;  // a segment cut short: the file ends before it
+        if (!is_metadata_marker(marker)) kept.push_back(0xFF), copy(m, end);
+        i = end;
     }
+    return kept;
 }
 
-std::unique_ptr<OIIO::ImageInput> open_image_input(const std::string& path, std::string& error) {
+OpenedImage open_image_input(const std::string& path, std::string& error) {
+    OpenedImage opened;
     error = exr_header_problem(path);
     if (error.empty()) error = png_chunk_problem(path);
-    if (error.empty()) error = jpeg_segment_problem(path);
-    if (!error.empty()) return nullptr;
-    auto in = OIIO::ImageInput::open(path);
-    if (!in) {
+    if (!error.empty()) return opened;
+    if (auto jpeg = jpeg_pixels_only(path)) {
+        opened.bytes = std::make_unique<std::vector<unsigned char>>(std::move(*jpeg));
+        opened.proxy = std::make_unique<OIIO::Filesystem::IOMemReader>(opened.bytes->data(),
+                                                                       opened.bytes->size());
+        // OpenImageIO 2.4 reads the file itself unless the proxy is also named in the config.
+        OIIO::ImageSpec config;
+        void* proxy = opened.proxy.get();
+        config.attribute("oiio:ioproxy", OIIO::TypeDesc::PTR, &proxy);
+        opened.input = OIIO::ImageInput::open(path, &config, opened.proxy.get());
+    } else {
+        opened.input = OIIO::ImageInput::open(path);
+    }
+    if (!opened.input) {
         error = "cannot read: " + OIIO::geterror();
         std::replace(error.begin(), error.end(), '\n', ' ');
     }
-    return in;
+    return opened;
 }
 
 }  // namespace impulse::output

@@ -6,8 +6,11 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
+#include <vector>
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 
 namespace impulse::output {
@@ -25,12 +28,27 @@ std::string exr_header_problem(const std::string& path);
 /// length (up to 2^31 - 1) before reading it: fuzzing found a 322-byte file whose text chunk
 /// asked for 1.97 GB.
 std::string png_chunk_problem(const std::string& path);
-/// "" unless `path` is a JPEG whose Photoshop (APP13) segment holds an IPTC record or an 8BIM
-/// resource longer than what holds it: "truncated or hostile JPEG: ..." then.
-std::string jpeg_segment_problem(const std::string& path);
+/// The bytes of the JPEG at `path` with its metadata segments left out (Exif, XMP, ICC, IPTC and
+/// the other APP1..APP15 but APP14, and comments); std::nullopt when the file is not a JPEG.
+/// impulse reads a JPEG's pixels, never its metadata, and OpenImageIO 2.4 decodes that
+/// metadata without holding every length against its segment: fuzz_image found heap overflows
+/// in its IPTC and then in another metadata reader. Leaving the segments out closes the whole
+/// class rather than one reader at a time.
+std::optional<std::vector<unsigned char>> jpeg_pixels_only(const std::string& path);
 
-/// OIIO::ImageInput::open after exr_header_problem and png_chunk_problem; nullptr with `error`
-/// set (one line) when the file is refused or OpenImageIO cannot open it.
-std::unique_ptr<OIIO::ImageInput> open_image_input(const std::string& path, std::string& error);
+/// An opened image: OpenImageIO's reader and, for a JPEG, the bytes it reads from memory (kept
+/// alive as long as the reader; destroyed after it). Used like the reader's pointer.
+struct OpenedImage {
+    std::unique_ptr<std::vector<unsigned char>> bytes;
+    std::unique_ptr<OIIO::Filesystem::IOProxy> proxy;
+    std::unique_ptr<OIIO::ImageInput> input;
+    explicit operator bool() const { return bool(input); }
+    OIIO::ImageInput* operator->() const { return input.get(); }
+};
+
+/// OIIO::ImageInput::open after exr_header_problem and png_chunk_problem, and of a JPEG's
+/// jpeg_pixels_only; an empty OpenedImage with `error` set (one line) when the file is refused
+/// or OpenImageIO cannot open it.
+OpenedImage open_image_input(const std::string& path, std::string& error);
 
 }  // namespace impulse::output
