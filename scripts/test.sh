@@ -3,11 +3,11 @@
 # Python module built beside the tool), then runs the whole test suite (Catch2 tests and
 # scripts through CTest), the fast subset again under AddressSanitizer and UBSan
 # (scripts/sanitize.sh --fast; the whole suite under them is scripts/sanitize.sh, too long for
-# CI), then fuzzes the scene target and the image readers for a bounded minute each (libFuzzer,
+# CI), then fuzzes the scene target and the image readers for 45 s each after their corpora (libFuzzer,
 # ASan, UBSan) in the same sanitized build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh --tests
 ctest --test-dir build --output-on-failure -j"$(nproc)"
 bash scripts/sanitize.sh --fast
-bash scripts/fuzz.sh 60 fuzz_scene fuzz_image
+bash scripts/fuzz.sh 45 fuzz_scene fuzz_image
