@@ -360,7 +360,7 @@ void add_frame_metadata(const scenes::Scene& sc, long long f, output::Metadata& 
 }
 
 /// How each layer is evaluated (docs/multirate.md §5), for the frames' metadata:
-/// "tolerance 0.005; layer 0 h=32 error 0.0031; layer 1 h=1 ..." ("direct" for layers the
+/// "tolerance 0.005; layer 0 h=16 error 0.00033 spectral 0.00056; layer 1 h=1 ..." ("direct" for layers the
 /// camera's pyramid draws, "source" for source layers).
 std::string lattice_text(scenes::Renderer& r) {
     const scenes::Scene& sc = r.scene();
@@ -369,7 +369,8 @@ std::string lattice_text(scenes::Renderer& r) {
     for (size_t i = 0; i < sc.layers.size(); ++i) {
         s << "; layer " << i << " ";
         if (const auto rule = r.lattice(i))
-            s << "h=" << rule->spacing << " error " << rule->predicted_error;
+            s << "h=" << rule->spacing << " error " << rule->predicted_error << " spectral "
+              << rule->spectral_error;
         else
             s << (sc.layers[i].source ? "source" : "direct");
     }
@@ -684,14 +685,19 @@ int run_info(const InfoOptions& opt) {
         if (const auto rule = r.lattice(i)) {
             if (rule->spacing > 1)
                 std::printf("           lattice h=%d px, predicted rms error %.2g of the layer's sd "
-                            "(render.tolerance %g)\n",
-                            rule->spacing, rule->predicted_error, scene.render.tolerance);
+                            "(render.tolerance %g), spectral error %.2g (<= %g)\n",
+                            rule->spacing, rule->predicted_error, scene.render.tolerance,
+                            rule->spectral_error, render::kSpectralFidelity);
             else if (scene.render.tolerance > 0 && rule->next_error == 0.0)
                 std::printf("           lattice h=1 px (direct): the kernel is under 2 px wide\n");
-            else if (scene.render.tolerance > 0)
+            else if (scene.render.tolerance > 0 && rule->next_error > scene.render.tolerance)
                 std::printf("           lattice h=1 px (direct): h=2 would give %.2g of the sd, over "
                             "render.tolerance %g\n",
                             rule->next_error, scene.render.tolerance);
+            else if (scene.render.tolerance > 0)
+                std::printf("           lattice h=1 px (direct): h=2 would give a frequency %.2g of "
+                            "its power in error, over %g (docs/multirate.md §5)\n",
+                            rule->next_spectral, render::kSpectralFidelity);
         }
         const auto lm = scenes::layer_moments(l);
         std::printf("           overlap %.3g effective impulses, excess kurtosis %.3g%s\n",

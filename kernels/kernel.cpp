@@ -8,6 +8,8 @@
 #include <numbers>
 #include <sstream>
 
+#include <tbb/parallel_for.h>
+
 #include "kernels/kernels.h"
 #include "kernels/quadrature.h"
 #include "numeric/errors.h"
@@ -447,6 +449,11 @@ std::vector<double> Kernel::envelope_transform_table(double dk, int count, int f
 }
 
 std::vector<double> Kernel::power_spectrum_grid(double K, int n, double rotation) const {
+    return std::move(power_spectrum_grids(K, n, {rotation}).front());
+}
+
+std::vector<std::vector<double>> Kernel::power_spectrum_grids(
+    double K, int n, const std::vector<double>& rotations) const {
     const double dk = 2.0 * K / n;
     // The envelope's Hankel transform E(k), tabulated once over every radius the grid reaches
     // (a carrier shifts it by f, the aspect stretches it by a) and interpolated (cubic): a
@@ -465,12 +472,19 @@ std::vector<double> Kernel::power_spectrum_grid(double K, int n, double rotation
         return e[0] * (-t * (t - 1) * (t - 2) / 6) + e[1] * ((t + 1) * (t - 1) * (t - 2) / 2) +
                e[2] * (-(t + 1) * t * (t - 2) / 2) + e[3] * ((t + 1) * t * (t - 1) / 6);
     };
-    std::vector<double> out(size_t(n) * n);
-    for (int j = 0; j < n; ++j)
-        for (int i = 0; i < n; ++i)
-            out[size_t(j) * n + i] = spectrum_with(-K + (i + 0.5) * dk, -K + (j + 0.5) * dk,
-                                                   m_params.orientation + rotation, transform);
-    return out;
+    std::vector<std::vector<double>> grids(rotations.size());
+    for (size_t r = 0; r < rotations.size(); ++r) {
+        std::vector<double>& out = grids[r];
+        out.resize(size_t(n) * n);
+        // Rows side by side: every value is computed alone, the same for any thread count.
+        tbb::parallel_for(0, n, [&](int j) {
+            for (int i = 0; i < n; ++i)
+                out[size_t(j) * n + i] =
+                    spectrum_with(-K + (i + 0.5) * dk, -K + (j + 0.5) * dk,
+                                  m_params.orientation + rotations[r], transform);
+        });
+    }
+    return grids;
 }
 
 double Kernel::radial_power_spectrum(double k) const {

@@ -133,6 +133,10 @@ public:
     /// envelope's transform is tabulated once (2048 points, cubic interpolation: relative error
     /// ~(reach R / 2048)^4), so a grid costs n^2 look-ups (render's lattice rule).
     std::vector<double> power_spectrum_grid(double K, int n, double rotation = 0.0) const;
+    /// The same for several turns of the kernel, the envelope's transform tabulated once for
+    /// all (it does not depend on the turn): grids[t] for rotations[t].
+    std::vector<std::vector<double>> power_spectrum_grids(double K, int n,
+                                                          const std::vector<double>& rotations) const;
     /// Autocorrelation (h * h~)(tau) = int h(x) h(x + tau) dx, by quadrature (relative error
     /// about 1e-4 for kernels truncated with a jump, far smaller for the cosine kernel).
     double autocorrelation(double tx, double ty) const;

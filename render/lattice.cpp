@@ -93,8 +93,8 @@ struct Turn {
     std::vector<double> P;
     double beyond = 0.0;
 };
-Turn turn(const kernels::Kernel& kernel, const Quadrature& q, double rotation) {
-    Turn t{kernel.power_spectrum_grid(q.K, q.n, rotation), 0.0};
+Turn turn(const kernels::Kernel& kernel, const Quadrature& q, std::vector<double> grid) {
+    Turn t{std::move(grid), 0.0};
     double inside = 0.0;
     for (double p : t.P) inside += p;
     inside *= q.dk * q.dk;
@@ -116,8 +116,12 @@ public:
     ErrorModel(const kernels::Kernel& kernel, double units_per_pixel, int h_max, int margin)
         : m_kernel(kernel), m_s(units_per_pixel), m_margin(margin),
           m_q(quadrature(kernel, units_per_pixel, h_max)) {
+        // The turns share the envelope's transform table (Kernel::power_spectrum_grids).
         const int turns = turns_matter(kernel) ? 8 : 1;
-        for (int t = 0; t < turns; ++t) m_turns.push_back(turn(kernel, m_q, 0.5 * kPi * t / turns));
+        std::vector<double> rotations;
+        for (int t = 0; t < turns; ++t) rotations.push_back(0.5 * kPi * t / turns);
+        auto grids = kernel.power_spectrum_grids(m_q.K, m_q.n, rotations);
+        for (auto& g : grids) m_turns.push_back(turn(kernel, m_q, std::move(g)));
     }
     LatticeError at(int h) const {
         const size_t n = size_t(m_q.n);
@@ -128,21 +132,45 @@ public:
             gr[i] = r.mean.real(), gi[i] = r.mean.imag(), A[i] = r.mean_sq;
         }
         const double a = max_mean_sq(h);
-        LatticeError e;
-        for (const Turn& t : m_turns) {
-            double sum = 0.0;
+        // The 8-bit noise floor in |H|^2's units: kQuantisationDensity of the variance per
+        // (cycle/px)^2 is that times s^2 per (cycle/unit)^2 (docs/multirate.md §5).
+        // A frequency's error may reach kSpectralFidelity of its power, or the floor where
+        // that is more: err <= max(fidelity P, floor), i.e. err / max(P, floor / fidelity)
+        // <= fidelity.
+        const double floor = kQuantisationDensity * m_s * m_s * m_kernel.integral_sq() /
+                             kSpectralFidelity;
+        // The turns side by side, each into its own slot, then taken in order: the same
+        // numbers for any thread count.
+        std::vector<LatticeError> per_turn(m_turns.size());
+        tbb::parallel_for(size_t(0), m_turns.size(), [&](size_t ti) {
+            const Turn& t = m_turns[ti];
+            LatticeError& e = per_turn[ti];
+            double sum = 0.0, worst = 0.0;
             for (size_t j = 0; j < n; ++j) {
                 const double* P = t.P.data() + j * n;
                 // 1 - 2 Re(G_i G_j) + A_i A_j, with Re(G_i G_j) = gr_i gr_j - gi_i gi_j
                 const double cr = 2.0 * gr[j], ci = 2.0 * gi[j], ca = A[j];
                 double row = 0.0;
-                for (size_t i = 0; i < n; ++i)
-                    row += P[i] * (1.0 - cr * gr[i] + ci * gi[i] + ca * A[i]);
+                for (size_t i = 0; i < n; ++i) {
+                    const double err = P[i] * (1.0 - cr * gr[i] + ci * gi[i] + ca * A[i]);
+                    row += err;
+                    const double against = std::max(P[i], floor);
+                    if (err > worst * against) worst = err / against;  // rarely: no division a point
+                }
                 sum += row;
             }
             const double interp = std::max(0.0, sum * m_q.dk * m_q.dk / m_kernel.integral_sq());
             e.interpolation = std::max(e.interpolation, std::sqrt(interp));
             e.beyond = std::max(e.beyond, std::sqrt(t.beyond) * (1.0 + a));
+            // The energy past the quadrature (a truncated kernel's tail, spread thin beyond 24
+            // cycles across it) is bounded in the rms error (beyond), not per frequency.
+            e.spectral = std::max(e.spectral, worst);
+        });
+        LatticeError e;
+        for (const LatticeError& t : per_turn) {
+            e.interpolation = std::max(e.interpolation, t.interpolation);
+            e.beyond = std::max(e.beyond, t.beyond);
+            e.spectral = std::max(e.spectral, t.spectral);
         }
         e.boundary = 3.0 * std::pow(std::abs(kPole), m_margin);
         return e;
@@ -229,7 +257,7 @@ int lattice_margin(double tolerance) {
 }
 
 LatticeRule choose_lattice(const kernels::Kernel& kernel, double units_per_pixel,
-                           double tolerance) {
+                           double tolerance, bool keep_spectrum) {
     check_tolerance(tolerance);
     LatticeRule rule;
     // A grid kernel's spectrum is a sum over its samples at every frequency (n^2 x the
@@ -246,12 +274,14 @@ LatticeRule choose_lattice(const kernels::Kernel& kernel, double units_per_pixel
     const int margin = lattice_margin(tolerance);
     const ErrorModel model(kernel, units_per_pixel, spacings.back(), margin);
     for (int h : spacings) {  // the error grows with h: stop at the first over the tolerance
-        const double total = model.at(h).total();
-        if (total > tolerance) {
-            rule.next_error = total;
+        const LatticeError e = model.at(h);
+        const double total = e.total(), spectral = keep_spectrum ? e.spectral : 0.0;
+        if (total > tolerance || spectral > kSpectralFidelity) {
+            rule.next_error = total, rule.next_spectral = spectral;
             break;
         }
         rule.spacing = h, rule.margin = margin, rule.predicted_error = total;
+        rule.spectral_error = spectral;
     }
     return rule;
 }

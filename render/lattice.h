@@ -17,11 +17,20 @@ namespace impulse::render {
 /// The largest tolerance a scene may ask for (rms error / the layer's sd): beyond it a frame's
 /// reconstruction error would be plain to see.
 inline constexpr double kMaxLatticeTolerance = 0.1;
-/// The recommended tolerance (render.tolerance = 0.005): 0.5 % of a layer's sd, under an 8-bit
-/// frame's quantisation noise (1/sqrt(12) of a code in +-3 sd over 255 codes: 0.57 %). Not yet
-/// the default: per-annulus spectral tests still see the lattice's signature near its Nyquist
-/// frequency (docs/multirate.md §5).
+/// The default tolerance (render.tolerance = 0.005): 0.5 % of a layer's sd, under an 8-bit
+/// frame's quantisation noise (1/sqrt(12) of a code in +-3 sd over 255 codes: 0.57 %). With it
+/// the rule also keeps the spectrum (kSpectralFidelity; docs/multirate.md §5).
 inline constexpr double kRecommendedLatticeTolerance = 0.005;
+/// The spectral density of that quantisation noise, white over the pixels' band: (6/255)^2 / 12
+/// of the field's variance per (cycle/px)^2. Below it a frequency's power is not seen in an
+/// 8-bit frame.
+inline constexpr double kQuantisationDensity = (6.0 / 255.0) * (6.0 / 255.0) / 12.0;
+/// The largest mean-square error the lattice may add at any one frequency, as a fraction of
+/// that frequency's power; where that is below kQuantisationDensity, up to the latter (the
+/// error is then under the noise every 8-bit frame carries at that frequency). The frame's
+/// power spectrum is within ~2 sqrt(1e-3) = 6 % of the kernel's wherever the power is 1000x
+/// the quantisation density, within the density itself below.
+inline constexpr double kSpectralFidelity = 1e-3;
 /// The coarsest lattice tried, pixels.
 inline constexpr int kMaxLatticeSpacing = 64;
 
@@ -33,6 +42,9 @@ struct LatticeRule {
     /// The error the next coarser spacing would have (why it was not taken); 0 when none was
     /// tried.
     double next_error = 0.0;
+    /// The chosen spacing's and the next one's worst per-frequency error (LatticeError::spectral;
+    /// 0 when the spectrum was not asked to be kept or none was tried).
+    double spectral_error = 0.0, next_spectral = 0.0;
 };
 
 /// The parts of the predicted rms error (each / the field's sd) of sampling a layer of
@@ -43,11 +55,16 @@ struct LatticeRule {
 /// response, A the phase-averaged squared response; docs/multirate.md §2), by a midpoint rule
 /// fine enough to be exact for the kernel's support (§3), the energy beyond the quadrature's
 /// reach bounded, the prefilter's cut at `margin` nodes bounded by 3 |z|^margin.
+/// `spectral` is the worst over the quadrature's frequencies of |H|^2 e(k) / max(|H|^2, floor /
+/// kSpectralFidelity), the floor kQuantisationDensity of the variance in the kernel's units:
+/// the error a frequency adds against its own power, or against the 8-bit noise where the power
+/// is low (the energy beyond the quadrature's reach is bounded in `beyond`, not per frequency).
 struct LatticeError {
     double interpolation = 0.0;  ///< aliasing and interpolation, quadrature
     double beyond = 0.0;         ///< bound on the energy the quadrature does not reach
     double boundary = 0.0;       ///< the recursive prefilter cut at the margin
-    double total() const;        ///< the three added in quadrature
+    double spectral = 0.0;       ///< worst per-frequency error (above)
+    double total() const;        ///< the first three added in quadrature
 };
 /// `units_per_pixel` is the view's scale (texture units per pixel). Anisotropic, Gabor and grid
 /// kernels take the largest error over eight turns of the kernel in [0, pi/2) (orientation
@@ -59,9 +76,12 @@ LatticeError lattice_error(const kernels::Kernel& kernel, double units_per_pixel
 int lattice_margin(double tolerance);
 
 /// The coarsest spacing (1, 2, 3, ... up to kMaxLatticeSpacing) whose predicted error is within
-/// `tolerance` (rms / sd, in [0, kMaxLatticeTolerance]); spacing 1 for tolerance 0 or when
-/// even spacing 2 misses it. Throws ValueError for a tolerance outside that range.
-LatticeRule choose_lattice(const kernels::Kernel& kernel, double units_per_pixel, double tolerance);
+/// `tolerance` (rms / sd, in [0, kMaxLatticeTolerance]) and, with `keep_spectrum`, whose
+/// spectral error is within kSpectralFidelity; spacing 1 for tolerance 0 or when even spacing 2
+/// misses them. Throws ValueError for a tolerance outside that range. The renderer always keeps
+/// the spectrum: the rms criterion alone is for measuring it (tests, benches).
+LatticeRule choose_lattice(const kernels::Kernel& kernel, double units_per_pixel, double tolerance,
+                           bool keep_spectrum = true);
 
 /// The lattice of `rule` over `view`: node n (n = -margin ..) sits on the centre of pixel n h,
 /// its view's pixels are the nodes. Spacing 1 with margin 0: the view itself.

@@ -110,6 +110,11 @@ struct LayerSpectrum {
     /// in pixels; 0: none): the kernels are low-passed by it before sampling (docs/scenes.md
     /// "Anti-aliasing"), so S is multiplied by its |G|^2 = exp(-4 pi^2 filter^2 |k|^2).
     double filter_px = 0.0;
+    /// The multi-rate lattice the layer is evaluated on (render/lattice.h; 1: every pixel) and
+    /// the largest |k| (cycles per pixel) where its spectrum is not negligible, which bounds the
+    /// lattice images summed (docs/multirate.md §6).
+    int lattice_h = 1;
+    double reach = 0.0;
     double filtered(double fx, double fy) const {
         const double f = 2.0 * std::numbers::pi * filter_px;
         return filter_px > 0.0 ? std::exp(-f * f * (fx * fx + fy * fy)) : 1.0;
@@ -127,10 +132,11 @@ struct LayerSpectrum {
 constexpr double kExactAnnuli = 16.0;
 
 LayerSpectrum layer_spectrum(const LayerConfig& layer, double zoom, int n_max,
-                             const MotionBlur& blur, double filter_px) {
+                             const MotionBlur& blur, double filter_px, int lattice_h = 1) {
     LayerSpectrum L{kernels::Kernel(layer.kernel), zoom, 0.0, false, false, {}, 0.0};
     L.blur = blur;
     L.filter_px = filter_px;
+    L.lattice_h = lattice_h;
     const kernels::Kernel& k = L.kernel;
     L.scale = layer_theory(layer).variance / k.integral_sq();
     const double R_px = k.radius() * zoom;
@@ -169,6 +175,14 @@ LayerSpectrum layer_spectrum(const LayerConfig& layer, double zoom, int n_max,
     L.table.value.assign(n, 0.0);
     tbb::parallel_for(size_t(0), n,
                       [&](size_t i) { L.table.value[i] = S(double(i) * L.table.step); });
+    // The reach: past the last table point above 1e-10 of the peak, what a lattice image
+    // carries is under the frames' float rounding (the table is 0 beyond its end anyway).
+    L.reach = 0.0;
+    for (size_t i = n; i-- > 0;)
+        if (L.table.value[i] > 1e-10 * L.table.value[0]) {
+            L.reach = double(i + 1) * L.table.step;
+            break;
+        }
     if (L.aliasing) {
         // Kernels cut off with a jump (a Gabor or Gaussian truncated at R) have spectra with
         // slow power-law tails whose far images still add up: sum the images with
@@ -224,6 +238,28 @@ LayerSpectrum source_spectrum(const Scene& scene, const LayerConfig& layer, doub
     return L;
 }
 
+/// The centred cubic B-spline.
+double beta3(double x) {
+    x = std::abs(x);
+    if (x < 1.0) return 2.0 / 3.0 - x * x + 0.5 * x * x * x;
+    if (x < 2.0) return (2.0 - x) * (2.0 - x) * (2.0 - x) / 6.0;
+    return 0.0;
+}
+
+/// Power transfer along one axis of a field sampled every h pixels and reconstructed at the
+/// pixels by the interpolating cubic B-spline, over the h^2 of the samples' own spectrum:
+/// |sum_d beta3(d / h) e^{-2 pi i f d}|^2 / (h B(f h))^2, B(v) = (2 + cos 2 pi v) / 3 the
+/// prefilter's inverse (docs/multirate.md §6). 1 at f = 0; 1 at every f for h = 1.
+double lattice_transfer(double f, int h) {
+    double re = 0.0, im = 0.0;
+    for (int d = -2 * h + 1; d <= 2 * h - 1; ++d) {
+        const double b = beta3(double(d) / h), a = -2.0 * std::numbers::pi * f * d;
+        re += b * std::cos(a), im += b * std::sin(a);
+    }
+    const double B = (2.0 + std::cos(2.0 * std::numbers::pi * f * h)) / 3.0;
+    return (re * re + im * im) / (double(h) * h * B * B);
+}
+
 /// The layer's expected periodogram on the DFT grid of a w x h frame (aliasing included).
 std::vector<double> layer_grid(const LayerSpectrum& L, int w, int h) {
     std::vector<double> g(size_t(w) * h);
@@ -236,6 +272,14 @@ std::vector<double> layer_grid(const LayerSpectrum& L, int w, int h) {
     // its aliased images: every bin and image exactly.
     const bool blurred = !L.blur.paths.empty();
     const int side = std::min(w, h);
+    // The lattice's transfer per column and per row (it is separable).
+    std::vector<double> tx, ty;
+    if (L.lattice_h > 1) {
+        for (int kx = 0; kx < w; ++kx)
+            tx.push_back(lattice_transfer(analysis::Periodogram::frequency(kx, w), L.lattice_h));
+        for (int ky = 0; ky < h; ++ky)
+            ty.push_back(lattice_transfer(analysis::Periodogram::frequency(ky, h), L.lattice_h));
+    }
     tbb::parallel_for(0, h, [&](int ky) {
         const double fy = analysis::Periodogram::frequency(ky, h);
         for (int kx = 0; kx < w; ++kx) {
@@ -247,6 +291,22 @@ std::vector<double> layer_grid(const LayerSpectrum& L, int w, int h) {
             }
             double s = 0;
             const bool exact = L.fixed_anisotropic && std::hypot(fx, fy) * side < kExactAnnuli;
+            if (L.lattice_h > 1) {
+                // Sampled every h pixels: the images at multiples of 1/h (the pixels' own among
+                // them) within the spectrum's reach, through the spline's transfer.
+                const int H = L.lattice_h;
+                const int ax0 = int(std::ceil((-L.reach - fx) * H)), ax1 = int(std::floor((L.reach - fx) * H));
+                const int ay0 = int(std::ceil((-L.reach - fy) * H)), ay1 = int(std::floor((L.reach - fy) * H));
+                for (int ay = ay0; ay <= ay1; ++ay)
+                    for (int ax = ax0; ax <= ax1; ++ax) {
+                        const double gx = fx + double(ax) / H, gy = fy + double(ay) / H;
+                        s += all_exact || blurred || (exact && ax == 0 && ay == 0)
+                                 ? L.exact(gx, gy)
+                                 : L.table(std::hypot(gx, gy));
+                    }
+                g[size_t(ky) * w + kx] = tx[size_t(kx)] * ty[size_t(ky)] * (s + L.far_alias);
+                continue;
+            }
             for (int my = -m; my <= m; ++my)
                 for (int mx = -m; mx <= m; ++mx)
                     s += all_exact || blurred || (exact && mx == 0 && my == 0)
@@ -559,9 +619,23 @@ int covariance_reach(const Scene& scene, double zoom) {
     return reach;
 }
 
+/// Each layer's multi-rate lattice spacing for the scene's first frame, as the renderer takes
+/// it (1 for direct evaluation): the frames' spectrum follows it (docs/multirate.md §6).
+std::vector<int> lattice_spacings(const Scene& scene) {
+    std::vector<int> spacing(scene.layers.size(), 1);
+    if (!(scene.render.tolerance > 0.0) || scene.volume ||
+        scene.camera.type != CameraConfig::Type::Orthographic)
+        return spacing;
+    Renderer renderer(scene);
+    for (size_t i = 0; i < spacing.size(); ++i)
+        if (const auto rule = renderer.lattice(i, 0)) spacing[i] = rule->spacing;
+    return spacing;
+}
+
 LayerSums sum_layers(const Scene& scene, const AnalysisResult& R, double zoom, double g2,
                      double quant, const FrameLags& F) {
     const int w = R.width, h = R.height;
+    const std::vector<int> spacing = lattice_spacings(scene);
     const double N = double(w) * h;
     LayerSums S;
     S.grid.assign(size_t(w) * h, quant);
@@ -614,7 +688,7 @@ LayerSums sum_layers(const Scene& scene, const AnalysisResult& R, double zoom, d
                              scene.camera.antialiased();
         const LayerSpectrum ls = layer_spectrum(layer, zoom, std::max(w, h),
                                                 layer_motion_blur(scene, li),
-                                                filters ? scene.camera.filter : 0.0);
+                                                filters ? scene.camera.filter : 0.0, spacing[li]);
         add_layer_spectrum(scene, ls, ls, R, zoom, g2, S);
     }
     return S;

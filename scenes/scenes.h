@@ -256,9 +256,10 @@ struct VolumeSceneConfig;
 /// [render]: how frames are evaluated (docs/multirate.md).
 struct RenderConfig {
     /// rms error allowed to multi-rate evaluation, as a fraction of each layer's sd, in
-    /// [0, render::kMaxLatticeTolerance]; 0 (the default): every impulse at every pixel (direct
-    /// evaluation); render::kRecommendedLatticeTolerance for speed.
-    double tolerance = 0.0;
+    /// [0, render::kMaxLatticeTolerance]; the default 0.005 (render::kRecommendedLatticeTolerance)
+    /// with the spectrum kept at every frequency an 8-bit frame shows (render/lattice.h); 0:
+    /// every impulse at every pixel (direct evaluation), bit for bit.
+    double tolerance = 0.005;
 };
 
 struct Scene {

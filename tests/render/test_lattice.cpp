@@ -89,6 +89,8 @@ Measured measure(const render::Frame& direct, const render::Frame& approx, int b
 
 TEST_CASE("a lattice's measured error is within its predicted error, and the prediction is tight",
           "[render][lattice]") {
+    // The rms rule alone (keep_spectrum = false): its coarser spacings measure the prediction
+    // where the error is largest; the renderer's rule (below) is finer still.
     const double tolerance = render::kRecommendedLatticeTolerance;
     kernels::KernelParams aniso = cosine(24.0);
     aniso.aspect = 2.5;
@@ -105,7 +107,7 @@ TEST_CASE("a lattice's measured error is within its predicted error, and the pre
     view.width = 480, view.height = 240;  // whole multiples of every spacing up to 16 but 7..
     for (const Case& c : cases) {
         const kernels::Kernel k(c.params);
-        const render::LatticeRule rule = render::choose_lattice(k, view.scale, tolerance);
+        const render::LatticeRule rule = render::choose_lattice(k, view.scale, tolerance, false);
         const render::LatticeError e = render::lattice_error(k, view.scale, rule.spacing, rule.margin);
         INFO(c.name << ": h = " << rule.spacing << ", predicted " << rule.predicted_error
                     << " (interpolation " << e.interpolation << ", beyond " << e.beyond
@@ -142,12 +144,48 @@ TEST_CASE("a lattice's measured error is within its predicted error, and the pre
 
 TEST_CASE("a truncated Gaussian is not band-limited: the rule keeps it direct", "[render][lattice]") {
     // sigma 8 cut at the default radius 16 (2 sigma): a 13.5 % step, ~1 % of the power above
-    // 0.1 cycles per pixel.
+    // 0.1 cycles per pixel. The rms error alone already keeps it direct.
     kernels::KernelParams p;
     p.type = kernels::KernelType::Gaussian, p.sigma = 8.0, p.radius = 16.0;
-    const render::LatticeRule rule = render::choose_lattice(kernels::Kernel(p), 1.0, 0.005);
-    CHECK(rule.spacing == 1);
-    CHECK(rule.next_error > 0.005);
+    CHECK(render::choose_lattice(kernels::Kernel(p), 1.0, 0.005).spacing == 1);
+    const render::LatticeRule rms = render::choose_lattice(kernels::Kernel(p), 1.0, 0.005, false);
+    CHECK(rms.spacing == 1);
+    CHECK(rms.next_error > 0.005);
+}
+
+TEST_CASE("the renderer's rule keeps the spectrum: every frequency within 1e-3 of its power or "
+          "under the 8-bit noise",
+          "[render][lattice]") {
+    // docs/multirate.md §5. With the rms rule alone at 0.005, the periodogram test of a periodic
+    // cosine r16 frame (tests/render/test_stats.cpp) had 28 of 162 annuli out of their 5-sd band
+    // (worst z = 14, near the lattice's Nyquist frequency, h = 3); with the spectral bound the
+    // rule takes h = 2 and that test passes at the default tolerance.
+    struct Expect {
+        const char* name;
+        kernels::KernelParams params;
+        int spacing, rms_spacing;  // with the spectrum kept, and with the rms rule alone
+    };
+    const std::vector<Expect> cases = {
+        {"cosine r16", cosine(16.0), 2, 3},       {"cosine r32", cosine(32.0), 3, 6},
+        {"gaussian sigma 8", gaussian(8.0), 4, 6}, {"gaussian sigma 16", gaussian(16.0), 8, 12},
+        {"gaussian sigma 40", gaussian(40.0), 12, 24},
+    };
+    for (const Expect& c : cases) {
+        const kernels::Kernel k(c.params);
+        const render::LatticeRule rule = render::choose_lattice(k, 1.0, 0.005);
+        const render::LatticeRule rms = render::choose_lattice(k, 1.0, 0.005, false);
+        INFO(c.name << ": h " << rule.spacing << " (spectral " << rule.spectral_error << ", next "
+                    << rule.next_spectral << ", next rms " << rule.next_error << "), rms alone h "
+                    << rms.spacing);
+        CHECK(rule.spacing == c.spacing);
+        CHECK(rms.spacing == c.rms_spacing);
+        CHECK(rule.spectral_error <= render::kSpectralFidelity);
+        CHECK(rule.predicted_error <= 0.005);
+        // The next spacing misses one of the two: the rule takes the coarsest that keeps both.
+        CHECK((rule.next_spectral > render::kSpectralFidelity || rule.next_error > 0.005));
+        // The spectral bound is what the rms rule's spacing breaks.
+        CHECK(render::lattice_error(k, 1.0, rms.spacing, rms.margin).spectral > render::kSpectralFidelity);
+    }
 }
 
 TEST_CASE("tolerance 0 is direct evaluation, bit for bit", "[render][lattice][determinism]") {

@@ -384,9 +384,12 @@ TEST_CASE("composition: a warped layer is the layer looked up at x + amount z(x)
     scenes::Renderer r(scene);
     Frame out;
     r.render(0, out);
-    // The sources' own fields, same impulses: each shown alone, the warped layer hidden.
-    const Frame zx = render_text(warp_scene("", 1, true, false, false));
-    const Frame zy = render_text(warp_scene("", 1, false, true, false));
+    // The sources' own fields, same impulses: each shown alone, the warped layer hidden, and
+    // evaluated directly as the warp reads them (docs/multirate.md §5: a layer a warp reads is
+    // never on a lattice; shown alone it would be, 0.5 % of its sd off, x amount 9).
+    const std::string direct = "[render]\ntolerance = 0.0\n";
+    const Frame zx = render_text(direct + warp_scene("", 1, true, false, false));
+    const Frame zy = render_text(direct + warp_scene("", 1, false, true, false));
     const scenes::Theory tx = scenes::layer_theory(scene.layers[0]), ty = scenes::layer_theory(scene.layers[1]);
     const auto& T = scene.layers[2];
     const kernels::Kernel k(T.kernel);
