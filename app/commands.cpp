@@ -688,8 +688,11 @@ int run_info(const InfoOptions& opt) {
                             "(render.tolerance %g), spectral error %.2g (<= %g)\n",
                             rule->spacing, rule->predicted_error, scene.render.tolerance,
                             rule->spectral_error, render::kSpectralFidelity);
+            else if (scene.render.tolerance > 0 && rule->over_memory)
+                std::printf("           lattice h=1 px (direct): the rule's quadrature needs more "
+                            "than a quarter of limits.max_memory_mib\n");
             else if (scene.render.tolerance > 0 && rule->next_error == 0.0)
-                std::printf("           lattice h=1 px (direct): the kernel is under 2 px wide\n");
+                std::printf("           lattice h=1 px (direct): the kernel's radius is under 6 px (a lattice is at most a third of it)\n");
             else if (scene.render.tolerance > 0 && rule->next_error > scene.render.tolerance)
                 std::printf("           lattice h=1 px (direct): h=2 would give %.2g of the sd, over "
                             "render.tolerance %g\n",

@@ -257,21 +257,30 @@ int lattice_margin(double tolerance) {
 }
 
 LatticeRule choose_lattice(const kernels::Kernel& kernel, double units_per_pixel,
-                           double tolerance, bool keep_spectrum) {
+                           double tolerance, bool keep_spectrum, double max_bytes) {
     check_tolerance(tolerance);
     LatticeRule rule;
     // A grid kernel's spectrum is a sum over its samples at every frequency (n^2 x the
     // quadrature's points, minutes for a 257^2 design): such kernels are drawn directly until
     // their spectrum is tabulated by FFT (docs/multirate.md §4).
     if (tolerance == 0.0 || kernel.is_grid()) return rule;
-    // Spacings up to the kernel's radius (beyond, a node sees less than one kernel).
+    // Spacings up to a third of the kernel's radius: the spectrum asks for about a seventh
+    // (Gaussians h ~ sigma / 2 = R / 7.4, docs/multirate.md §5), and the quadrature's points
+    // grow with the largest spacing tried (dk = 1 / (2R + 24 h_max s)): trying spacings up to
+    // the radius made the rule 4-8x dearer at every scene load for nothing.
     const int h_max = std::min(kMaxLatticeSpacing,
-                               static_cast<int>(std::floor(kernel.radius() / units_per_pixel)));
+                               static_cast<int>(std::floor(kernel.radius() / (3.0 * units_per_pixel))));
     std::vector<int> spacings;
     for (int h : {2, 3, 4, 5, 6, 8, 10, 12, 16, 20, 24, 32, 40, 48, 64})
         if (h <= h_max) spacings.push_back(h);
     if (spacings.empty()) return rule;
     const int margin = lattice_margin(tolerance);
+    const Quadrature q = quadrature(kernel, units_per_pixel, spacings.back());
+    const double turns = turns_matter(kernel) ? 8.0 : 1.0;
+    if (turns * double(q.n) * q.n * sizeof(double) > max_bytes) {
+        rule.over_memory = true;
+        return rule;
+    }
     const ErrorModel model(kernel, units_per_pixel, spacings.back(), margin);
     for (int h : spacings) {  // the error grows with h: stop at the first over the tolerance
         const LatticeError e = model.at(h);

@@ -45,6 +45,8 @@ struct LatticeRule {
     /// The chosen spacing's and the next one's worst per-frequency error (LatticeError::spectral;
     /// 0 when the spectrum was not asked to be kept or none was tried).
     double spectral_error = 0.0, next_spectral = 0.0;
+    /// The rule's quadrature would have needed more working memory than it was given: direct.
+    bool over_memory = false;
 };
 
 /// The parts of the predicted rms error (each / the field's sd) of sampling a layer of
@@ -75,13 +77,17 @@ LatticeError lattice_error(const kernels::Kernel& kernel, double units_per_pixel
 /// z = sqrt(3) - 2, and 2 more for the interpolation's stencil).
 int lattice_margin(double tolerance);
 
-/// The coarsest spacing (1, 2, 3, ... up to kMaxLatticeSpacing) whose predicted error is within
+/// The coarsest spacing (1, 2, 3, ... up to kMaxLatticeSpacing and a third of the kernel's radius)
+/// whose predicted error is within
 /// `tolerance` (rms / sd, in [0, kMaxLatticeTolerance]) and, with `keep_spectrum`, whose
 /// spectral error is within kSpectralFidelity; spacing 1 for tolerance 0 or when even spacing 2
 /// misses them. Throws ValueError for a tolerance outside that range. The renderer always keeps
 /// the spectrum: the rms criterion alone is for measuring it (tests, benches).
+/// `max_bytes` bounds the quadrature's working grids (|H|^2 on n^2 points per turn of the
+/// kernel, 8 bytes a point): a kernel whose rule would need more is drawn directly
+/// (over_memory), so a scene's memory limit bounds the rule's time too.
 LatticeRule choose_lattice(const kernels::Kernel& kernel, double units_per_pixel, double tolerance,
-                           bool keep_spectrum = true);
+                           bool keep_spectrum = true, double max_bytes = 1e300);
 
 /// The lattice of `rule` over `view`: node n (n = -margin ..) sits on the centre of pixel n h,
 /// its view's pixels are the nodes. Spacing 1 with margin 0: the view itself.

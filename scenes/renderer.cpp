@@ -775,8 +775,12 @@ const render::LatticeRule& Renderer::State::lattice_rule(size_t i, int64_t frame
     // the level the view draws.
     const kernels::Kernel& drawn = through_pyramid ? camera->filtered_kernel(i, v) : finest;
     if (cache.size() >= 8) cache.erase(cache.begin());  // keyed kernels: a few recent ones
+    // The rule's working grids count in the memory limit (a quarter of it): the limit bounds
+    // its time too (fuzzing runs scenes at 2 MiB).
+    const double rule_bytes = 0.25 * scene.limits.max_memory_mib * 1024.0 * 1024.0;
     cache.push_back({k, units_per_pixel, through_pyramid,
-                     render::choose_lattice(drawn, units_per_pixel, scene.render.tolerance)});
+                     render::choose_lattice(drawn, units_per_pixel, scene.render.tolerance, true,
+                                            rule_bytes)});
     return cache.back().rule;
 }
 
