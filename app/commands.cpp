@@ -447,6 +447,9 @@ int run_render(const RenderOptions& opt) {
     }
     const auto [video, sequence] = output_kind(output, first, last, opt.resume);
     ensure_directory(sequence ? expand_pattern(output, first) : output);
+    // Every path below writes images or a video: their module loads while the renderer is
+    // made and the first frame renders (on an error below, this waits for the load: ~0.3 s).
+    const output::IoPreload io_preload;
     const ChannelPlan plan =
         plan_channels(scene, opt.channels, sequence ? expand_pattern(output, first) : output, video);
 

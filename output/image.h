@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
@@ -18,6 +19,22 @@ using numeric::Frame;
 /// [0, 1] and quantised with rounding for 8/16-bit formats. EXR stores the raw values.
 struct ValueMapping {
     double lo = -1.0, hi = 1.0;
+};
+
+/// Loads the image and video module (OpenImageIO, libav, OpenVDB: ~260 libraries, ~0.3 s;
+/// io_module.h) on a thread of its own while the caller goes on, so a process that will write
+/// a still overlaps that load with its scene set-up and render instead of paying them in turn
+/// (docs/design.md §2). The destructor waits for the load; a load that failed is tried again,
+/// and its error thrown, where the module is first used.
+class IoPreload {
+public:
+    IoPreload();
+    ~IoPreload();
+    IoPreload(const IoPreload&) = delete;
+    IoPreload& operator=(const IoPreload&) = delete;
+
+private:
+    std::thread m_thread;
 };
 
 /// Metadata written into images and videos.

@@ -74,4 +74,14 @@ const IoModule& io_module() {
     return *module;
 }
 
+IoPreload::IoPreload()
+    : m_thread([] {
+          try {
+              io_module();
+          } catch (...) {  // io_module() tries again where the module is needed, and says why
+          }
+      }) {}
+
+IoPreload::~IoPreload() { m_thread.join(); }
+
 }  // namespace impulse::output

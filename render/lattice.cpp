@@ -326,10 +326,13 @@ void add_reconstruction(Frame& nodes, const LatticeRule& rule, const View& view,
     tbb::parallel_for(0, rows, [&](int r) {
         const float* c = nodes.data.data() + size_t(r0 + r) * wn + (m - 1);
         float* t = across.data() + size_t(r) * W;
-        for (int i = 0; i < W; ++i) {
-            const auto& w = weights[size_t(i % h)];
-            const float* q = c + i / h;
-            t[i] = ((w[0] * q[0] + w[1] * q[1]) + w[2] * q[2]) + w[3] * q[3];
+        // Pixel i = n h + p: node n's stencil with phase p's weights (no division per pixel).
+        for (int n = 0, i = 0; i < W; ++n) {
+            const float* q = c + n;
+            for (int p = 0; p < h && i < W; ++p, ++i) {
+                const auto& w = weights[size_t(p)];
+                t[i] = ((w[0] * q[0] + w[1] * q[1]) + w[2] * q[2]) + w[3] * q[3];
+            }
         }
     });
     tbb::parallel_for(0, H, [&](int j) {

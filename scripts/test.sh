@@ -3,8 +3,8 @@
 # Python module built beside the tool), then runs the whole test suite (Catch2 tests and
 # scripts through CTest), the fast subset again under AddressSanitizer and UBSan
 # (scripts/sanitize.sh --fast; the whole suite under them is scripts/sanitize.sh, too long for
-# CI), then fuzzes the scene target and the image readers for 45 s each after their corpora (libFuzzer,
-# ASan, UBSan) in the same sanitized build.
+# CI), then fuzzes the scene target and the image readers side by side, 45 s each from their start
+# or their whole corpus if that is longer (libFuzzer, ASan, UBSan) in the same sanitized build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh --tests
