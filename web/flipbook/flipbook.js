@@ -96,6 +96,8 @@ function readSidecar(name, text) {
         fail(`${name}: fps = ${JSON.stringify(book.fps)}: expected a number > 0`);
     if (typeof book.image !== "string" || book.image === "")
         fail(`${name}: image = ${JSON.stringify(book.image)}: expected the atlas's file name`);
+    if (/\.exr$/i.test(book.image))
+        fail(`${name}: image = "${book.image}": expected a PNG atlas (browsers show no EXR: export with -o atlas.png)`);
     return book;
 }
 
