@@ -6,7 +6,8 @@
 # controls show the same measure finds a seam where there is one: an atlas exported without a
 # period, and the page's sampling without the cell inset (`sampling=naive`), which bleeds the
 # neighbouring cells across the border. Run by CTest (flipbook_page) with IMPULSE_CLI set; exits
-# 77 (skipped, with the reason) without chromium or the page's npm package.
+# 77 (skipped, with the reason) without chromium or the page's npm package. ~17 s on the 2-core
+# machine with another build running (most of it chromium's start and its first WebGL page).
 import base64
 import fcntl
 import http.server
@@ -125,7 +126,7 @@ def sd(values):
 
 def column_line_means(image, period):
     """Mean |step| between columns j and j + 1, averaged over the rows and over the lines of the
-    same class j mod period: {class: mean}."""
+    same class j mod period: one mean per class, indexed by the class."""
     sums, counts = [0.0] * period, [0] * period
     for row in image:
         for j in range(len(row) - 1):
@@ -293,10 +294,12 @@ class Browser:
         waits until the page has drawn or said what is wrong: its <body data-*>."""
         self.page("Emulation.setDeviceMetricsOverride", width=size[0], height=size[1], deviceScaleFactor=1,
                   mobile=False)
+        # A mark on the page being left, so its state is never taken for the new page's.
+        self.evaluate("window.leftBehind = true")
         self.page("Page.navigate", url=url)
         end = time.monotonic() + 20
         while time.monotonic() < end:
-            state = self.evaluate("document.readyState === 'complete' && document.body ? "
+            state = self.evaluate("!window.leftBehind && document.readyState === 'complete' && document.body ? "
                                   "Object.assign({}, document.body.dataset) : null")
             if state and (state.get("ready") == "1" or state.get("error")):
                 # Two animation frames: the drawn canvas has reached the compositor.
