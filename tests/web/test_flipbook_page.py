@@ -57,7 +57,7 @@ def prerequisites():
     if not (shutil.which("chromium") or shutil.which("chromium-browser")):
         return "chromium is not installed (scripts/setup.sh --tests installs it)"
     if not THREE.is_file():
-        return f"three.js is not installed in {PAGE_DIR.name}/node_modules (scripts/setup.sh --tests runs npm ci there)"
+        return "three.js is not installed in web/flipbook/node_modules (scripts/setup.sh --tests runs npm ci there)"
     return None
 
 
