@@ -5,7 +5,8 @@
 #                                 (what it links and loads: libimpulse_io.so, impulse-mesh).
 #                                 Used by run.sh.
 #   scripts/setup.sh --tests      also the packages only the tests, benches and Python module
-#                                 need; build/ configured with all of them and everything built.
+#                                 need (and the flipbook page's three.js: npm ci in web/flipbook);
+#                                 build/ configured with all of them and everything built.
 #                                 Used by test.sh.
 #   --deps-only                   install, do not build (with --tests: the tests' packages too;
 #                                 sanitized_build.sh uses `--tests --deps-only`)
@@ -63,6 +64,9 @@ test_only_packages=(
 
 packages=("${run_packages[@]}")
 [ "$tests" -eq 1 ] && packages+=("${test_only_packages[@]}")
+# The flipbook page's three.js comes from the npm registry (web/flipbook/package-lock.json): npm,
+# from Debian's packages when the machine has no Node.js of its own.
+[ "$tests" -eq 1 ] && ! command -v npm > /dev/null && packages+=(nodejs npm)
 missing=()
 for p in "${packages[@]}"; do
     dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -73,6 +77,11 @@ if [ ${#missing[@]} -gt 0 ]; then
     [ "$(id -u)" -eq 0 ] || sudo="sudo"
     $sudo apt-get update -qq
     DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fi
+
+# The flipbook page's test (tests/web/) serves web/flipbook/ with its pinned three.js.
+if [ "$tests" -eq 1 ]; then
+    (cd web/flipbook && npm ci --no-audit --no-fund --loglevel=error)
 fi
 
 [ "$deps_only" -eq 1 ] && exit 0
