@@ -193,30 +193,14 @@ void check_tolerance(double tolerance) {
     }
 }
 
-/// In-place cubic B-spline prefilter of n samples spaced `stride` apart (Unser et al. 1991:
+/// In-place cubic B-spline prefilter of the w columns of an n-row array (row k at c + k w), all
+/// columns at once so the compiler vectorises the recursion across the row (Unser et al. 1991:
 /// causal then anticausal first-order recursions with pole z, gain 6; the causal start sums
 /// the first samples, the anticausal one is the mirror-symmetric closed form). The margin
 /// nodes absorb the start's error (|z|^margin at the view).
-void prefilter_line(float* c, int n, ptrdiff_t stride) {
+void prefilter_across(float* c, int w, int n) {
     if (n < 2) return;
     const float z = static_cast<float>(kPole);
-    float start = 0.0f, zk = 1.0f;
-    for (int k = 0; k < std::min(n, 16); ++k) start += zk * c[k * stride], zk *= z;
-    c[0] = start;
-    for (int k = 1; k < n; ++k) c[k * stride] += z * c[(k - 1) * stride];
-    const ptrdiff_t last = (n - 1) * stride;
-    c[last] = (z / (z * z - 1.0f)) * (c[last] + z * c[last - stride]);
-    for (int k = n - 2; k >= 0; --k) c[k * stride] = z * (c[(k + 1) * stride] - c[k * stride]);
-    for (int k = 0; k < n; ++k) c[k * stride] *= 6.0f;
-}
-
-/// Columns are filtered a row at a time (the same recursion for every column at once, so the
-/// compiler vectorises it across the row).
-void prefilter_columns(Frame& f) {
-    const int w = f.width, n = f.height;
-    if (n < 2) return;
-    const float z = static_cast<float>(kPole);
-    float* c = f.data.data();
     auto row = [&](int k) { return c + size_t(k) * w; };
     std::vector<float> start(size_t(w), 0.0f);
     float zk = 1.0f;
@@ -235,7 +219,51 @@ void prefilter_columns(Frame& f) {
         const float* p = row(k + 1);
         for (int i = 0; i < w; ++i) r[i] = z * (p[i] - r[i]);
     }
-    for (float& v : f.data) v *= 6.0f;
+    for (size_t i = 0; i < size_t(w) * n; ++i) c[i] *= 6.0f;
+}
+
+/// The rows' prefilter, 16 rows at a time: each block transposed so that its rows are the
+/// columns of a 16-wide array, filtered across (vectorised), and put back. Every sample goes
+/// through the same operations in the same order as a row filtered alone.
+void prefilter_rows(Frame& f) {
+    constexpr int kBlock = 16;
+    const int w = f.width, n = f.height;
+    if (w < 2) return;
+    tbb::parallel_for(0, (n + kBlock - 1) / kBlock, [&](int b) {
+        const int r0 = b * kBlock, rows = std::min(kBlock, n - r0);
+        std::vector<float> t(size_t(w) * kBlock, 0.0f);
+        for (int j = 0; j < rows; ++j) {
+            const float* src = f.data.data() + size_t(r0 + j) * w;
+            for (int k = 0; k < w; ++k) t[size_t(k) * kBlock + j] = src[k];
+        }
+        prefilter_across(t.data(), kBlock, w);
+        for (int j = 0; j < rows; ++j) {
+            float* dst = f.data.data() + size_t(r0 + j) * w;
+            for (int k = 0; k < w; ++k) dst[k] = t[size_t(k) * kBlock + j];
+        }
+    });
+}
+
+/// One row of the pass along x: pixel i = n h + p takes node n's four-node stencil (from `c`,
+/// the node before the pixel's first) with phase p's weights. H is h at compile time for the
+/// common spacings (the loop over p unrolled, so the compiler vectorises across n), 0 for any.
+template <int H>
+void reconstruct_row(const float* c, const std::vector<std::array<float, 4>>& weights, int h,
+                     int W, float* t) {
+    const int hh = H > 0 ? H : h;
+    const int whole = W / hh;  // nodes whose h pixels all lie in the row
+    for (int n = 0; n < whole; ++n) {
+        const float* q = c + n;
+        for (int p = 0; p < hh; ++p) {
+            const auto& w = weights[size_t(p)];
+            t[n * hh + p] = ((w[0] * q[0] + w[1] * q[1]) + w[2] * q[2]) + w[3] * q[3];
+        }
+    }
+    for (int i = whole * hh; i < W; ++i) {
+        const auto& w = weights[size_t(i - whole * hh)];
+        const float* q = c + whole;
+        t[i] = ((w[0] * q[0] + w[1] * q[1]) + w[2] * q[2]) + w[3] * q[3];
+    }
 }
 
 }  // namespace
@@ -311,10 +339,8 @@ View lattice_view(const View& view, const LatticeRule& rule) {
 void add_reconstruction(Frame& nodes, const LatticeRule& rule, const View& view, Frame& out) {
     const int h = rule.spacing, m = rule.margin, W = view.width, H = view.height;
     const int wn = nodes.width;
-    tbb::parallel_for(0, nodes.height, [&](int r) {
-        prefilter_line(nodes.data.data() + size_t(r) * wn, wn, 1);
-    });
-    prefilter_columns(nodes);
+    prefilter_rows(nodes);
+    prefilter_across(nodes.data.data(), nodes.width, nodes.height);
     std::vector<std::array<float, 4>> weights(static_cast<size_t>(h));
     for (int p = 0; p < h; ++p) {
         const auto w = bspline_weights(double(p) / h);
@@ -326,13 +352,11 @@ void add_reconstruction(Frame& nodes, const LatticeRule& rule, const View& view,
     tbb::parallel_for(0, rows, [&](int r) {
         const float* c = nodes.data.data() + size_t(r0 + r) * wn + (m - 1);
         float* t = across.data() + size_t(r) * W;
-        // Pixel i = n h + p: node n's stencil with phase p's weights (no division per pixel).
-        for (int n = 0, i = 0; i < W; ++n) {
-            const float* q = c + n;
-            for (int p = 0; p < h && i < W; ++p, ++i) {
-                const auto& w = weights[size_t(p)];
-                t[i] = ((w[0] * q[0] + w[1] * q[1]) + w[2] * q[2]) + w[3] * q[3];
-            }
+        switch (h) {
+            case 2: return reconstruct_row<2>(c, weights, h, W, t);
+            case 3: return reconstruct_row<3>(c, weights, h, W, t);
+            case 4: return reconstruct_row<4>(c, weights, h, W, t);
+            default: return reconstruct_row<0>(c, weights, h, W, t);
         }
     });
     tbb::parallel_for(0, H, [&](int j) {
