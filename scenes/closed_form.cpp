@@ -119,6 +119,17 @@ struct LayerSpectrum {
         const double f = 2.0 * std::numbers::pi * filter_px;
         return filter_px > 0.0 ? std::exp(-f * f * (fx * fx + fy * fy)) : 1.0;
     }
+    /// An isotropic kernel's S without the blur, at |k| cycles per pixel, tabulated as `table`
+    /// is (empty unless the layer is blurred): a blurred layer's bins take it times the blur's
+    /// exact anisotropic factor instead of a Hankel quadrature each (40x fewer quadratures
+    /// for a 64^2 frame's bins and their images).
+    RadialTable unblurred;
+    /// S at (fx, fy) cycles per pixel for a blurred layer's bin: `unblurred` times the blur's
+    /// factor where the kernel is isotropic, else exact().
+    double blurred_at(double fx, double fy) const {
+        if (source || unblurred.value.empty()) return exact(fx, fy);
+        return unblurred(std::hypot(fx, fy)) * blur.spectrum_factor(fx * zoom, fy * zoom);
+    }
     /// S at (fx, fy) cycles per pixel, exact (orientation and aspect included), no aliasing.
     double exact(double fx, double fy) const {
         if (source) return zoom * zoom * scale * source->power_spectrum_2d(fx * zoom, fy * zoom).value_or(0.0);
@@ -175,6 +186,15 @@ LayerSpectrum layer_spectrum(const LayerConfig& layer, double zoom, int n_max,
     L.table.value.assign(n, 0.0);
     tbb::parallel_for(size_t(0), n,
                       [&](size_t i) { L.table.value[i] = S(double(i) * L.table.step); });
+    if (iso && !L.blur.paths.empty()) {
+        L.unblurred.step = L.table.step;
+        L.unblurred.value.assign(n, 0.0);
+        tbb::parallel_for(size_t(0), n, [&](size_t i) {
+            const double rho = double(i) * L.table.step;
+            L.unblurred.value[i] = zoom * zoom * L.scale * k.radial_power_spectrum(rho * zoom) *
+                                   L.filtered(rho, 0.0);
+        });
+    }
     // The reach: past the last table point above 1e-10 of the peak, what a lattice image
     // carries is under the frames' float rounding (the table is 0 beyond its end anyway).
     L.reach = 0.0;
@@ -300,7 +320,8 @@ std::vector<double> layer_grid(const LayerSpectrum& L, int w, int h) {
                 for (int ay = ay0; ay <= ay1; ++ay)
                     for (int ax = ax0; ax <= ax1; ++ax) {
                         const double gx = fx + double(ax) / H, gy = fy + double(ay) / H;
-                        s += all_exact || blurred || (exact && ax == 0 && ay == 0)
+                        s += blurred && !all_exact ? L.blurred_at(gx, gy)
+                             : all_exact || (exact && ax == 0 && ay == 0)
                                  ? L.exact(gx, gy)
                                  : L.table(std::hypot(gx, gy));
                     }
@@ -309,7 +330,8 @@ std::vector<double> layer_grid(const LayerSpectrum& L, int w, int h) {
             }
             for (int my = -m; my <= m; ++my)
                 for (int mx = -m; mx <= m; ++mx)
-                    s += all_exact || blurred || (exact && mx == 0 && my == 0)
+                    s += blurred && !all_exact ? L.blurred_at(fx + mx, fy + my)
+                         : all_exact || (exact && mx == 0 && my == 0)
                              ? L.exact(fx + mx, fy + my)
                              : L.table(std::hypot(fx + mx, fy + my));
             g[size_t(ky) * w + kx] = s + L.far_alias;

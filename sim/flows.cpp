@@ -157,6 +157,22 @@ public:
             for (const auto& ky : m_cy.keys) d = std::max(d, max_corner_distance(r, kx.second, ky.second));
         return k * d;
     }
+    /// Without a radius the field is linear, v = rate (x - c): each component is a product of
+    /// two intervals (the rate's keys and the offset from the centre's keys over the region),
+    /// bounded by its corners. A source pushes outward, so the birth region reaches upstream
+    /// only where a wind beside it blows toward the view (docs/design.md §3).
+    std::array<double, 4> velocity_bounds(const Box& r) const override {
+        if (m_radius.max() > 0) return Flow::velocity_bounds(r);
+        const auto span = [&](double lo, double hi, const Keyframed& c) {
+            const double d0 = lo - c.max(), d1 = hi - c.min();
+            const double p[4] = {m_rate.min() * d0, m_rate.min() * d1, m_rate.max() * d0,
+                                 m_rate.max() * d1};
+            return std::pair{*std::min_element(p, p + 4), *std::max_element(p, p + 4)};
+        };
+        const auto [x0, x1] = span(r.x0, r.x1, m_cx);
+        const auto [y0, y1] = span(r.y0, r.y1, m_cy);
+        return {x0, x1, y0, y1};
+    }
 
 private:
     Keyframed m_cx, m_cy, m_rate, m_radius;

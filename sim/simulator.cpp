@@ -147,38 +147,78 @@ struct LayerSimulator::State {
         return {static_cast<int64_t>(fl) + b.loop_index * loop_steps, g - fl};
     }
 
+    /// How far from the view's support a particle can start and still reach it within one
+    /// lifetime T. A flow whose speed bound does not depend on the region gives v T. Where the
+    /// bound S(rho) over the view grown by rho increases with rho (a source or a shear, linear
+    /// in the distance), a particle rho away moves at most S(rho), so it reaches the view only
+    /// if int_0^rho drho' / S(rho') <= T (Gronwall): the reach is the rho where that integral
+    /// meets T, summed in steps with S at each step's far end (each step's time is then under
+    /// the truth, and the reach over it). docs/design.md §3.
     double travel(const Box& view) const {
         if (!flow || config.lifetime_s <= 0) return 0.0;
-        double t = 0.0;
-        for (int it = 0; it < 4; ++it) {
-            const double v = flow->max_speed(view.expanded(support_radius + 2.0 * t + 1.0));
-            t = v * config.lifetime_s;
-            if (t > config.max_travel) {
-                std::ostringstream s;
-                s << "flow speed bound " << v << " units/s over lifetime " << config.lifetime_s
-                  << " s carries particles " << t << " units, beyond max_travel = "
-                  << config.max_travel << " (raise max_travel or slow the flow)";
-                throw ValueError(s.str());
+        const double T = config.lifetime_s, R = support_radius;
+        const double v = flow->max_speed(view.expanded(R + 1.0));
+        double reach = v * T;
+        if (flow->max_speed(view.expanded(R + 2.0 * reach + 1.0)) != v) {
+            double time = 0.0, rho = 0.0;
+            for (reach = -1.0; reach < 0.0 && rho <= config.max_travel;) {
+                const double step = std::max(1.0, rho / 32.0);
+                const double s = flow->max_speed(view.expanded(R + rho + step + 1.0));
+                if (time + step / s >= T) reach = rho + (T - time) * s;
+                time += step / s, rho += step;
             }
+            if (reach < 0.0) reach = rho;
         }
-        return t;
+        if (reach > config.max_travel) {
+            std::ostringstream s;
+            s << "flow speed bound " << v << " units/s over lifetime " << T
+              << " s carries particles " << reach << " units, beyond max_travel = "
+              << config.max_travel << " (raise max_travel or slow the flow)";
+            throw ValueError(s.str());
+        }
+        return reach;
     }
 
-    /// The birth region for `view`: the view plus the kernel support, extended upstream by
-    /// how far the flow can carry a particle into the view within one lifetime (a particle born
-    /// left of the view can only enter moving right, so the left margin is max(vx) T, etc.).
+    /// The birth region for `view`: the view plus the kernel support, each side extended
+    /// upstream by how far the flow can carry a particle into the view within one lifetime. A
+    /// particle born left of the support can only enter it moving right, and until it does it
+    /// is in the strip left of the support: the left margin is T times the largest vx over that
+    /// strip (and likewise for each side). The strips' bounds grow with the box where the flow
+    /// grows with the distance (a source, a shear), so the box is their least fixed point,
+    /// iterated from the support: a particle cannot leave it backwards in time through a side,
+    /// since crossing the side's strip takes at least T (docs/design.md §3).
     Box birth_region(const Box& view) const {
         const double R = support_radius;
-        Box r = view.expanded(R);
-        if (!flow || config.lifetime_s <= 0) return r;
+        const Box inner = view.expanded(R);
+        if (!flow || config.lifetime_s <= 0) return inner;
         travel(view);  // refuses flows beyond max_travel
         const double T = config.lifetime_s;
-        for (int it = 0; it < 4; ++it) {
-            const auto b = flow->velocity_bounds(r.expanded(1.0));
-            r = {view.x0 - R - std::max(0.0, b[1]) * T, view.y0 - R - std::max(0.0, b[3]) * T,
-                 view.x1 + R + std::max(0.0, -b[0]) * T, view.y1 + R + std::max(0.0, -b[2]) * T};
+        Box r = inner;
+        for (int it = 0;; ++it) {
+            const Box g = r.expanded(1.0);
+            const double left = std::max(0.0, flow->velocity_bounds({g.x0, g.y0, inner.x0, g.y1})[1]);
+            const double right = std::max(0.0, -flow->velocity_bounds({inner.x1, g.y0, g.x1, g.y1})[0]);
+            const double below = std::max(0.0, flow->velocity_bounds({g.x0, g.y0, g.x1, inner.y0})[3]);
+            const double above = std::max(0.0, -flow->velocity_bounds({g.x0, inner.y1, g.x1, g.y1})[2]);
+            const Box next{view.x0 - R - left * T, view.y0 - R - below * T,
+                           view.x1 + R + right * T, view.y1 + R + above * T};
+            const double grown = std::max({r.x0 - next.x0, r.y0 - next.y0, next.x1 - r.x1,
+                                           next.y1 - r.y1});
+            if (it > 0 && grown <= 1e-3) {
+                // A bound that settled at once (constant in the region) is exact; one that grew
+                // with the box stops within its last steps' geometric tail: one unit covers it.
+                return it == 1 ? next : next.expanded(1.0);
+            }
+            if (std::max({inner.x0 - next.x0, inner.y0 - next.y0, next.x1 - inner.x1,
+                          next.y1 - inner.y1}) > config.max_travel || it >= 4096) {
+                std::ostringstream s;
+                s << "the flow's speed bounds grow with the region faster than a lifetime of "
+                  << T << " s settles: the birth region reaches beyond max_travel = "
+                  << config.max_travel << " (raise max_travel, slow the flow or shorten the lifetime)";
+                throw ValueError(s.str());
+            }
+            r = next;
         }
-        return r;
     }
 
     /// Marks a block of the next frame that is generated rather than carried over.

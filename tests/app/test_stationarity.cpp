@@ -154,7 +154,8 @@ TEST_CASE("stationarity verdict under motion blur: a blurred drifting source is 
     // family rate is 0.01, so two false alarms in 3 have probability 3e-4 and at most one is
     // allowed (seed 1 of this scene alarms blurred and unblurred alike, block z 3.5 and 3.9 at
     // 64^2: its realisation, not the blur). Without sqrt(J) the pulse swings the variance by a
-    // third: both seeds must be seen. About 60 CPU-s: every impulse is 8 copies along its path.
+    // third: both seeds must be seen. About 7 s: 5 renders of 100 frames (each impulse 8 copies
+    // along its path) and their analyses.
     impulse::test::TempDir dir;
     int alarms = 0, seen = 0;
     std::vector<Image> seed1;

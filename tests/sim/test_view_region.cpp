@@ -5,6 +5,7 @@
 
 #include <tbb/global_control.h>
 
+#include <algorithm>
 #include <atomic>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -125,6 +126,87 @@ TEST_CASE("a flow is prepared for every point its impulses are moved through (fu
     CHECK(out.size() > 0);
     CHECK(flow->evaluated > 100000);
     CHECK(flow->beyond_prepared == 0);
+}
+
+/// How many of the particles started every 2 units along the four sides of `start` (0.5 units
+/// outside it) come within `support` of `view` within `lifetime` s of `flow` (a steady flow;
+/// RK4 steps of 1 ms, much finer than the flows' scales).
+int entering(const sim::Flow& flow, const numeric::Box& start, const numeric::Box& view,
+             double support, double lifetime) {
+    std::vector<double> x, y;
+    const numeric::Box s = start.expanded(0.5);
+    for (double u = s.x0; u <= s.x1; u += 2.0) x.push_back(u), y.push_back(s.y0), x.push_back(u), y.push_back(s.y1);
+    for (double v = s.y0; v <= s.y1; v += 2.0) x.push_back(s.x0), y.push_back(v), x.push_back(s.x1), y.push_back(v);
+    const numeric::Box target = view.expanded(support);
+    const size_t n = x.size();
+    std::vector<char> in(n, 0);
+    std::vector<double> kx[4], ky[4], px(n), py(n);
+    for (auto* k : {kx, ky})
+        for (int j = 0; j < 4; ++j) k[j].resize(n);
+    const double dt = 1e-3;
+    for (double t = 0.0; t < lifetime; t += dt) {
+        for (int j = 0; j < 4; ++j) {
+            const double h = j == 0 ? 0.0 : j == 3 ? dt : 0.5 * dt;
+            for (size_t i = 0; i < n; ++i)
+                px[i] = x[i] + (j ? h * kx[j - 1][i] : 0.0), py[i] = y[i] + (j ? h * ky[j - 1][i] : 0.0);
+            std::fill(kx[j].begin(), kx[j].end(), 0.0), std::fill(ky[j].begin(), ky[j].end(), 0.0);
+            flow.add(t, n, px.data(), py.data(), kx[j].data(), ky[j].data(), nullptr, nullptr);
+        }
+        for (size_t i = 0; i < n; ++i) {
+            x[i] += dt / 6.0 * (kx[0][i] + 2.0 * kx[1][i] + 2.0 * kx[2][i] + kx[3][i]);
+            y[i] += dt / 6.0 * (ky[0][i] + 2.0 * ky[1][i] + 2.0 * ky[2][i] + ky[3][i]);
+            in[i] |= x[i] >= target.x0 && x[i] <= target.x1 && y[i] >= target.y0 && y[i] <= target.y1;
+        }
+    }
+    return static_cast<int>(std::count(in.begin(), in.end(), 1));
+}
+
+TEST_CASE("the birth region holds every particle that can reach the view, and only reaches "
+          "upstream: a source beside a wind, a sink",
+          "[sim][flow]") {
+    // docs/design.md §3: each side grows by T times the largest speed toward the view over the
+    // strip beyond it, iterated to the least fixed point where the speed grows with the region.
+    // A source without a radius is linear, v = rate (x - c): beside a wind (60, 15) it pushes
+    // every particle right of the view and above it further away, so nothing is born there.
+    // Its old bound (the whole region's speed, four rounds) took a box ~5 times wider on each
+    // side and refused a wind of (80, 20) for a speed bound of 2064 units/s.
+    const numeric::Box view{0.0, 0.0, 64.0, 64.0};
+    const double support = 4.0, T = 2.0;
+    sim::ProcessConfig c = config(true);
+    c.lifetime_s = T;
+    for (double wind : {60.0, 80.0}) {
+        auto flow = std::make_shared<sim::FlowSum>();
+        flow->push(sim::make_uniform_flow(wind, wind / 4.0));
+        flow->push(sim::make_source_flow(32.0, 32.0, 0.4, 0.0));
+        const sim::LayerSimulator s(c, flow, {}, support);
+        const numeric::Box birth = s.birth_region(view);
+        INFO("wind " << wind << ": birth region [" << birth.x0 << ", " << birth.x1 << "] x ["
+                     << birth.y0 << ", " << birth.y1 << "]");
+        // Downstream: no margin; upstream: T times the strip's largest inflow, plus one unit.
+        CHECK(birth.x1 <= view.x1 + support + 1.0);
+        CHECK(birth.y1 <= view.y1 + support + 1.0);
+        // The strip left of the support flows right at most at its right end, x = -4.
+        CHECK(birth.x0 == Approx(view.x0 - support - T * (wind + 0.4 * (view.x0 - support - 32.0))));
+        CHECK(entering(*flow, birth, view, support, T) == 0);
+        // Teeth: with the upstream sides halfway to the support, particles from there do reach
+        // the view (the bound takes the strip's fastest inflow, so the true reach on the left is
+        // 62.8 units from the support at a wind of 60 against the bound's 91.2).
+        numeric::Box near = birth;
+        near.x0 += 0.5 * (view.x0 - support - birth.x0), near.y0 += 0.5 * (view.y0 - support - birth.y0);
+        CHECK(entering(*flow, near, view, support, T) > 0);
+    }
+    // A sink pulls from every side, faster the farther: the fixed point of the strips' bounds
+    // (56.5 units a side, m = 0.6 (37 + m) plus one) covers the true reach (36 e^0.6 - 36 = 29.6
+    // from the support at the sides' middles); half of it does not.
+    auto sink = std::make_shared<sim::FlowSum>();
+    sink->push(sim::make_source_flow(32.0, 32.0, -0.3, 0.0));
+    const sim::LayerSimulator s(c, sink, {}, support);
+    const numeric::Box birth = s.birth_region(view);
+    INFO("sink: birth region [" << birth.x0 << ", " << birth.x1 << "]");
+    CHECK(birth.x0 < view.x0 - support - 29.6);
+    CHECK(entering(*sink, birth, view, support, T) == 0);
+    numeric::Box half = birth.expanded(-0.5 * (view.x0 - support - birth.x0));
+    CHECK(entering(*sink, half, view, support, T) > 0);
 }
 
 TEST_CASE("a still layer's rows of cells give the same bits on one thread and on many",
