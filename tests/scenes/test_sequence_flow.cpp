@@ -17,6 +17,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -536,5 +537,33 @@ TEST_CASE("sequence: a volume's sampled divergent flow is the analytic one, and 
             CHECK(std::abs(t) < kT39);
         else
             CHECK(t < -kT39);
+    }
+}
+
+TEST_CASE("sequence: a Mantaflow cache keeps the frame variance only with sqrt(J)", "[.mantaflow]") {
+    // Run by blender/test_mantaflow.sh (ctest -L blender) after Blender baked a smoke plume:
+    // IMPULSE_MANTAFLOW_SCENES names the folder where blender/test_mantaflow.py wrote
+    // variance.toml (a texture on the slice y = 0 of the cache, docs/scenes.md "A Blender
+    // cache") and still.toml (the same layer without its flow). The slice of the 3-D plume
+    // diverges (its |div| reaches several per second at the smoke's edge, where the cached
+    // velocity falls to 0), so without sqrt(J) the impulses thin where it stretches and crowd
+    // where it converges (design.md §1). 240 frames at 24 fps: the sequence's 24 frames, then
+    // its last frame held, 20 lifetimes of 0.5 s in 10 blocks of 2 lifetimes; t as in the
+    // sampled source's case above, P(|t| > 5) ~ 1e-4 with ~18 degrees of freedom.
+    const char* dir = std::getenv("IMPULSE_MANTAFLOW_SCENES");
+    REQUIRE(dir != nullptr);
+    constexpr int kFrames = 240, kBlocks = 10;
+    const Blocks still = blocks_of(frame_variances(scenes::load_scene((fs::path(dir) / "still.toml").string()), kFrames), kBlocks);
+    for (bool jacobian : {true, false}) {
+        scenes::Scene s = scenes::load_scene((fs::path(dir) / "variance.toml").string());
+        s.layers[0].process.jacobian = jacobian;  // the loader would refuse false: switched off here
+        const Blocks b = blocks_of(frame_variances(std::move(s), kFrames), kBlocks);
+        const double t = (b.mean - still.mean) / std::hypot(b.se, still.se);
+        std::printf("mantaflow variance, sqrt(J) %s: mean %.5g (se %.2g) vs still %.5g (se %.2g), t = %.2f\n",
+                    jacobian ? "on" : "off", b.mean, b.se, still.mean, still.se, t);
+        if (jacobian)
+            CHECK(std::abs(t) < 5.0);
+        else
+            CHECK(std::abs(t) > 5.0);
     }
 }
