@@ -681,12 +681,26 @@ void read_sequence_flow(Reader& f, const sim::ProcessConfig& process, Reader& la
 
     // every frame read once now: its checks fail here, before anything renders, and the speed
     // bound covers the whole sequence
+    double edge_max = 0.0;  // the largest speed on the plane grid's outer samples
     const double vmax = scan_frames(frames, [&](int64_t n) {
         const sim::PlaneFrame fr = s->load(n);
         double m = 0.0;
-        for (size_t k = 0; k < fr.vx.size(); ++k) m = std::max(m, std::hypot(double(fr.vx[k]), double(fr.vy[k])));
+        for (size_t k = 0; k < fr.vx.size(); ++k) {
+            const double speed = std::hypot(double(fr.vx[k]), double(fr.vy[k]));
+            m = std::max(m, speed);
+            const size_t i = k % size_t(fr.width), j = k / size_t(fr.width);
+            if (i == 0 || j == 0 || i + 1 == size_t(fr.width) || j + 1 == size_t(fr.height))
+                edge_max = std::max(edge_max, speed);
+        }
         return m;
     });
+    if (cfg.outside == sim::Outside::Zero && edge_max > 1e-3 * vmax)
+        // docs/scenes.md "A Blender cache": the jump at the edge is a line of divergence the
+        // interpolant does not hold, so sqrt(J) misses it and impulses pile up along it
+        f.warn("outside", "\"zero\" (the default) makes the field jump from up to " + num(edge_max) +
+                              " texture units/s at the grid's edge to 0 beyond it, a divergence sqrt(J) "
+                              "does not see (the variance grows along the edge): \"clamp\" or "
+                              "\"nearest\" keeps the field continuous there");
     if (s->vdb && mode == PlaneMode::Slice) s->slab = slice_slab(*s);
     cfg.source = std::make_shared<FileFrames>(s);
     cfg.first = frames.front(), cfg.last = frames.back();

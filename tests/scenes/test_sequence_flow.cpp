@@ -584,7 +584,7 @@ TEST_CASE("sequence: sparse frames are read over the union of their boxes", "[sc
     // docs/scenes.md "A Blender cache": Mantaflow's velocity is active only where there is
     // smoke, so frame 1 (smoke in the left half, x < 64) and frame 2 (everywhere) cover
     // different boxes. Both load; frame 1 is the wind (3, 1) where it has smoke and 0 beyond
-    // (the background), frame 2 the wind everywhere. Before the union was read the loader
+    // (the background), frame 2 the wind everywhere (outside = "zero", the default). Before the union was read the loader
     // refused frame 2 ("expected the same grid and transform in every frame").
     TempDir dir("sparse");
     auto wind = [](double, double) { return Vec2{3.0, 1.0}; };
@@ -601,6 +601,15 @@ TEST_CASE("sequence: sparse frames are read over the union of their boxes", "[sc
         CHECK(second[i][0] == Approx(3.0).margin(1e-6));
         CHECK(second[i][1] == Approx(1.0).margin(1e-6));
     }
+    // The wind is 3.16 at the grid's edge: outside = "zero" (the default) jumps to 0 there, a
+    // divergence sqrt(J) does not see, and says so once; "clamp" is continuous and quiet.
+    auto warned = [](const scenes::Scene& scene) {
+        return std::count_if(scene.warnings.begin(), scene.warnings.end(), [](const std::string& w) {
+            return w.find("flow[0].outside: \"zero\" (the default) makes the field jump from up to 3.16") != std::string::npos;
+        });
+    };
+    CHECK(warned(s) == 1);
+    CHECK(warned(load_in(dir.path, scene_text(sequence_table(true, "outside = \"clamp\"\n")))) == 0);
 }
 
 TEST_CASE("sequence: a staggered grid is averaged to the voxel centres", "[scenes][sequence]") {
