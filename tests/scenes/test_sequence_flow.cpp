@@ -711,3 +711,97 @@ TEST_CASE("sequence: a Mantaflow cache keeps the frame variance only with sqrt(J
             CHECK(worst > 5.0);
     }
 }
+
+namespace {
+
+/// A VDB frame of `v(i, j, k)` (3-D velocities at the voxels) of W x H x D voxels of size
+/// `voxel`, every voxel active.
+void write_vdb3(const fs::path& file, int W, int H, int D, double voxel,
+                const std::function<std::array<double, 3>(int, int, int)>& v) {
+    openvdb::initialize();
+    auto vel = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    vel->setName("velocity");
+    vel->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
+    auto acc = vel->getAccessor();
+    for (int k = 0; k < D; ++k)
+        for (int j = 0; j < H; ++j)
+            for (int i = 0; i < W; ++i) {
+                const auto u = v(i, j, k);
+                acc.setValue({i, j, k}, openvdb::Vec3s(float(u[0]), float(u[1]), float(u[2])));
+            }
+    openvdb::io::File out(file.string());
+    out.write({vel});
+    out.close();
+}
+
+}  // namespace
+
+TEST_CASE("sequence: plane modes and cubic time and the nearest sample outside in closed form",
+          "[scenes][sequence]") {
+    TempDir dir("modes");
+    const std::vector<Vec2> points{{10.0, 20.0}, {33.3, 90.1}, {101.7, 47.5}};
+    SECTION("average: the mean through the depth") {
+        // v = (1 + 0.5 k, 2 - 0.25 k, 0) over k = 0..4: the depth's mean is (2, 1.5) at every
+        // point; a slice at the default height (the middle layer, k = 2) is the same, and one
+        // at z = 0 (k = 0) is (1, 2): the mode is seen.
+        for (int n : {1, 2})
+            write_vdb3(dir.path / frame_file("fluid_data_", n, ".vdb"), 33, 33, 5, 4.0,
+                       [](int, int, int k) { return std::array<double, 3>{1.0 + 0.5 * k, 2.0 - 0.25 * k, 0.0}; });
+        for (const auto& [keys, want] : std::vector<std::pair<std::string, Vec2>>{
+                 {"plane = \"average\"\n", {2.0, 1.5}}, {"height = 0.0\n", {1.0, 2.0}}}) {
+            const auto v = flow_at(load_in(dir.path, scene_text(sequence_table(true, keys))), 0.1, points);
+            for (const auto& u : v) {
+                INFO(keys);
+                CHECK(u[0] == Approx(want[0]).margin(1e-5));
+                CHECK(u[1] == Approx(want[1]).margin(1e-5));
+            }
+        }
+    }
+    SECTION("project: the wind's part in the plane") {
+        // a uniform wind (1, 2, 3) on the plane of normal (1, 1, 1): its in-plane part has
+        // |v|^2 - (v.n)^2 = 14 - 12 = 2 (speed sqrt 2), whatever axes the plane takes
+        for (int n : {1, 2})
+            write_vdb3(dir.path / frame_file("fluid_data_", n, ".vdb"), 17, 17, 17, 4.0,
+                       [](int, int, int) { return std::array<double, 3>{1.0, 2.0, 3.0}; });
+        const auto s = load_in(dir.path, scene_text(sequence_table(true, "plane = \"project\"\nnormal = [1.0, 1.0, 1.0]\n")));
+        // the projected plane's texture coordinates start at its first sample: points inside it
+        const auto v = flow_at(s, 0.1, {{20.0, 20.0}, {30.0, 25.0}});
+        for (const auto& u : v) CHECK(std::hypot(u[0], u[1]) == Approx(std::sqrt(2.0)).margin(1e-5));
+    }
+    SECTION("cubic time: Catmull-Rom is exact for a quadratic in time, linear is not") {
+        // a wind (t_f^2, 0) at frame times t_f = 0, 0.25, ... (fps 4): halfway between frames 3
+        // and 4 (t = 0.625) Catmull-Rom gives 0.625^2 = 0.390625 exactly (quadratic precision);
+        // linear gives the chord's (0.25 + 0.5625) / 2 = 0.40625
+        for (int n = 1; n <= 6; ++n) {
+            const double t = (n - 1) / 4.0;
+            write_vdb(dir.path / frame_file("fluid_data_", n, ".vdb"), 9, 9, 3, 16.0,
+                      [&](double, double) { return Vec2{t * t, 0.0}; });
+        }
+        const std::vector<Vec2> p{{64.0, 64.0}};
+        CHECK(flow_at(load_in(dir.path, scene_text(sequence_table(true, "interpolation = \"cubic\"\n"))), 0.625, p)[0][0] ==
+              Approx(0.390625).margin(1e-6));
+        CHECK(flow_at(load_in(dir.path, scene_text(sequence_table(true))), 0.625, p)[0][0] ==
+              Approx(0.40625).margin(1e-6));
+    }
+    SECTION("nearest: the nearest sample's value beyond the grid") {
+        // v = 0.125 (x - 64, y - 64) on samples 4 apart over [0, 128]^2: beyond the corner at
+        // (140, -10) the nearest sample is (128, 0), v = (8, -8); clamp takes the nearest point
+        // of the grid, the same corner here, and zero gives 0; beside the right edge at
+        // (135, 49) nearest is the sample (128, 48), v = (8, -2), and clamp interpolates along
+        // the edge to (128, 49): (8, -1.875)
+        for (int n : {1, 2})
+            write_vdb(dir.path / frame_file("fluid_data_", n, ".vdb"), 33, 33, 3, 4.0,
+                      [](double x, double y) { return Vec2{0.125 * (x - 64.0), 0.125 * (y - 64.0)}; });
+        const std::vector<Vec2> p{{140.0, -10.0}, {135.0, 49.0}};
+        const auto nearest = flow_at(load_in(dir.path, scene_text(sequence_table(true, "outside = \"nearest\"\n"))), 0.1, p);
+        const auto clamp = flow_at(load_in(dir.path, scene_text(sequence_table(true, "outside = \"clamp\"\n"))), 0.1, p);
+        const auto zero = flow_at(load_in(dir.path, scene_text(sequence_table(true))), 0.1, p);
+        CHECK(nearest[0][0] == Approx(8.0).margin(1e-6));
+        CHECK(nearest[0][1] == Approx(-8.0).margin(1e-6));
+        CHECK(nearest[1][0] == Approx(8.0).margin(1e-6));
+        CHECK(nearest[1][1] == Approx(-2.0).margin(1e-6));
+        CHECK(clamp[1][1] == Approx(-1.875).margin(1e-6));
+        CHECK(zero[0][0] == 0.0);
+        CHECK(zero[1][1] == 0.0);
+    }
+}
