@@ -105,6 +105,9 @@ VdbVectorGrid read_vdb_vectors(const std::string& path, const std::string& name,
                                const VdbIndexBox* box) {
     return io_module().read_vdb_vectors(path, name, box);
 }
+VdbIndexBox read_vdb_active_box(const std::string& path, const std::string& name) {
+    return io_module().read_vdb_active_box(path, name);
+}
 std::string encode_png(int width, int height, const std::vector<float>& rgb) {
     return io_module().encode_png(width, height, rgb);
 }

@@ -34,6 +34,7 @@ VolumeGrid read_vdb(const std::string& path, const std::string& name);
 std::vector<VdbGridHeader> list_vdb_grids(const std::string& path);
 VdbVectorGrid read_vdb_vectors(const std::string& path, const std::string& name,
                                const VdbIndexBox* box);
+VdbIndexBox read_vdb_active_box(const std::string& path, const std::string& name);
 std::string encode_png(int width, int height, const std::vector<float>& rgb);
 std::unique_ptr<VideoSink> make_video_sink();
 void quiet_video_logs();

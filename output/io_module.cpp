@@ -14,6 +14,7 @@ extern "C" const impulse::output::IoModule* impulse_io_module() {
         io::encode_png,                io::make_video_sink,   io::quiet_video_logs,
         io::probe_video,               io::decode_video_luma,
         io::write_named_pixels,        io::read_channel,      io::channel_names,
+        io::read_vdb_active_box,
     };
     return &table;
 }

@@ -93,10 +93,11 @@ struct IoModule {
                                const std::string& compression);
     Frame (*read_channel)(const std::string& path, const std::string& name);
     std::vector<std::string> (*channel_names)(const std::string& path);
+    VdbIndexBox (*read_vdb_active_box)(const std::string& path, const std::string& name);
 };
 
 /// Bumped whenever IoModule or a type it passes changes.
-constexpr int kIoModuleAbi = 4;
+constexpr int kIoModuleAbi = 5;
 
 /// The module: the linked-in table when the program carries impulse::output_io, else
 /// libimpulse_io.so loaded on first use from beside the executable, from ../lib/impulse/ next

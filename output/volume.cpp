@@ -163,6 +163,25 @@ void copy_vectors(const GridT& grid, openvdb::CoordBBox box, VdbVectorGrid& out)
 
 }  // namespace
 
+VdbIndexBox read_vdb_active_box(const std::string& path, const std::string& name) {
+    initialize_vdb();
+    openvdb::CoordBBox b;
+    try {
+        openvdb::io::File file(path);
+        file.open(false);
+        const auto head = file.readGridMetadata(name);
+        const auto lo = head->getMetadata<openvdb::Vec3IMetadata>(openvdb::GridBase::META_FILE_BBOX_MIN);
+        const auto hi = head->getMetadata<openvdb::Vec3IMetadata>(openvdb::GridBase::META_FILE_BBOX_MAX);
+        if (lo && hi) b = {openvdb::Coord(lo->value()), openvdb::Coord(hi->value())};
+        else b = file.readGrid(name)->evalActiveVoxelBoundingBox();
+        file.close();
+    } catch (const std::exception& e) {
+        throw IoError(path + ": cannot read grid \"" + name + "\": " + e.what());
+    }
+    if (b.empty()) return {{0, 0, 0}, {-1, -1, -1}};
+    return {{b.min().x(), b.min().y(), b.min().z()}, {b.max().x(), b.max().y(), b.max().z()}};
+}
+
 VdbVectorGrid read_vdb_vectors(const std::string& path, const std::string& name,
                                const VdbIndexBox* box) {
     initialize_vdb();

@@ -67,6 +67,10 @@ struct VdbVectorGrid {
 struct VdbIndexBox {
     std::array<int, 3> min{}, max{};
 };
+/// The index box of the active voxels of grid `name` (empty: none; min > max), from the
+/// file's statistics metadata (file_bbox_min, file_bbox_max: OpenVDB writes them) when
+/// present, else by reading the grid. Throws IoError naming the file and the grid.
+VdbIndexBox read_vdb_active_box(const std::string& path, const std::string& name);
 /// Reads the vector grid `name` (vec3s or vec3d), dense over its active voxels' bounding box,
 /// or over `box` when given (only the file's nodes that meet it are read: a slab of a large
 /// grid). Throws IoError naming the file and the grid, also when the grid is not a vector grid.

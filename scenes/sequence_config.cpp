@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <climits>
 #include <filesystem>
 #include <map>
 #include <numbers>
@@ -147,6 +148,11 @@ struct SequenceFiles {
     /// Slice planes while rendering: the voxel layers the plane reads (and the next, for a
     /// staggered grid's averages), read alone; every frame was read whole and checked at load.
     std::optional<output::VdbIndexBox> slab;
+    /// The box every frame is read over: the union of the frames' active voxels. A cache is
+    /// sparse where its simulation is empty (Mantaflow's velocity is active where there is
+    /// smoke), so its frames' boxes differ; the samples outside a frame's own are the
+    /// background (docs/scenes.md "A Blender cache").
+    output::VdbIndexBox whole;
     std::array<double, 3> velocity3{1, 1, 1};     ///< 3-D: per axis, to volume voxels per second
     std::array<double, 3> index_scale3{1, 1, 1};  ///< 3-D: d index / d voxel, per axis
     /// Refuses a frame whose interpolant's largest |div v|, `d`, is over max_divergence.
@@ -205,7 +211,7 @@ void stagger_to_centres(output::VdbVectorGrid& g) {
 output::VdbVectorGrid SequenceFiles::read_checked(const std::string& file) const {
     output::VdbVectorGrid g;
     try {
-        g = output::read_vdb_vectors((dir / file).string(), grid, slab ? &*slab : nullptr);
+        g = output::read_vdb_vectors((dir / file).string(), grid, slab ? &*slab : &whole);
     } catch (const IoError& e) {
         fail(file, reason(e, dir / file));
     }
@@ -549,15 +555,31 @@ SequenceTime read_time(Reader& f, int64_t first) {
 
 /// The first frame's vector grid, checked: a grid found, voxels, an axis-aligned non-singular
 /// transform; sets the header every frame must share.
-output::VdbVectorGrid read_first_vdb(Reader& f, SequenceFiles& s) {
+output::VdbVectorGrid read_first_vdb(Reader& f, SequenceFiles& s, const std::vector<int64_t>& frames) {
     s.grid = choose_vdb_grid(f, s, s.first_name);
+    // the union of the frames' active boxes (from each file's statistics: no voxel read)
+    auto& box = s.whole;
+    box = {{INT_MAX, INT_MAX, INT_MAX}, {INT_MIN, INT_MIN, INT_MIN}};
+    for (int64_t n : frames) {
+        const std::string file = frame_name(s.pattern, n);
+        output::VdbIndexBox b;
+        try {
+            b = output::read_vdb_active_box((s.dir / file).string(), s.grid);
+        } catch (const IoError& e) {
+            s.fail(file, reason(e, s.dir / file));
+        }
+        if (b.min[0] > b.max[0]) continue;  // an empty frame: all background
+        for (size_t c = 0; c < 3; ++c)
+            box.min[c] = std::min(box.min[c], b.min[c]), box.max[c] = std::max(box.max[c], b.max[c]);
+    }
+    if (box.min[0] > box.max[0])
+        s.fail(s.first_name, "grid \"" + s.grid + "\" has no active voxel in any frame");
     output::VdbVectorGrid g;
     try {
-        g = output::read_vdb_vectors((s.dir / s.first_name).string(), s.grid);
+        g = output::read_vdb_vectors((s.dir / s.first_name).string(), s.grid, &box);
     } catch (const IoError& e) {
         s.fail(s.first_name, reason(e, s.dir / s.first_name));
     }
-    if (g.values.empty()) s.fail(s.first_name, "grid \"" + s.grid + "\" has no active voxel");
     const auto& M = g.linear;
     if (!g.affine || M[1] != 0 || M[2] != 0 || M[3] != 0 || M[5] != 0 || M[6] != 0 || M[7] != 0)
         s.fail(s.first_name, "grid \"" + s.grid + "\"'s transform is not a scale and a "
@@ -618,7 +640,7 @@ void read_sequence_flow(Reader& f, const sim::ProcessConfig& process, Reader& la
     const toml::node* plane_node = f.node("plane");
     PlaneMode mode = PlaneMode::Slice;
     if (s->vdb) {
-        const output::VdbVectorGrid g = read_first_vdb(f, *s);
+        const output::VdbVectorGrid g = read_first_vdb(f, *s, frames);
         if (plane_node) mode = static_cast<PlaneMode>(f.choice("plane", kPlaneModeNames, 0));
         s->mode = mode;
         s->plane = read_plane(f, *s, g, mode);
@@ -659,12 +681,26 @@ void read_sequence_flow(Reader& f, const sim::ProcessConfig& process, Reader& la
 
     // every frame read once now: its checks fail here, before anything renders, and the speed
     // bound covers the whole sequence
+    double edge_max = 0.0;  // the largest speed on the plane grid's outer samples
     const double vmax = scan_frames(frames, [&](int64_t n) {
         const sim::PlaneFrame fr = s->load(n);
         double m = 0.0;
-        for (size_t k = 0; k < fr.vx.size(); ++k) m = std::max(m, std::hypot(double(fr.vx[k]), double(fr.vy[k])));
+        for (size_t k = 0; k < fr.vx.size(); ++k) {
+            const double speed = std::hypot(double(fr.vx[k]), double(fr.vy[k]));
+            m = std::max(m, speed);
+            const size_t i = k % size_t(fr.width), j = k / size_t(fr.width);
+            if (i == 0 || j == 0 || i + 1 == size_t(fr.width) || j + 1 == size_t(fr.height))
+                edge_max = std::max(edge_max, speed);
+        }
         return m;
     });
+    if (cfg.outside == sim::Outside::Zero && edge_max > 1e-3 * vmax)
+        // docs/scenes.md "A Blender cache": the jump at the edge is a line of divergence the
+        // interpolant does not hold, so sqrt(J) misses it and impulses pile up along it
+        f.warn("outside", "\"zero\" (the default) makes the field jump from up to " + num(edge_max) +
+                              " texture units/s at the grid's edge to 0 beyond it, a divergence sqrt(J) "
+                              "does not see (the variance grows along the edge): \"clamp\" or "
+                              "\"nearest\" keeps the field continuous there");
     if (s->vdb && mode == PlaneMode::Slice) s->slab = slice_slab(*s);
     cfg.source = std::make_shared<FileFrames>(s);
     cfg.first = frames.front(), cfg.last = frames.back();
@@ -703,7 +739,7 @@ void read_volume_sequence_flow(Reader& f, double lifetime_s, bool jacobian, Read
     if (!(scale[0] != 0 && scale[1] != 0 && scale[2] != 0))
         f.fail(f.node("scale"), "scale", "expected non-zero scales: the transform to the volume is singular");
     three("offset", offset, "expected [x, y, z] in voxels");
-    const output::VdbVectorGrid g = read_first_vdb(f, *s);
+    const output::VdbVectorGrid g = read_first_vdb(f, *s, frames);
     volume::Sequence3Config cfg;
     for (size_t c = 0; c < 3; ++c) {
         // index = (world - t) / s - origin, world = (X - offset) / scale

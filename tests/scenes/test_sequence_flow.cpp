@@ -17,6 +17,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -536,5 +537,271 @@ TEST_CASE("sequence: a volume's sampled divergent flow is the analytic one, and 
             CHECK(std::abs(t) < kT39);
         else
             CHECK(t < -kT39);
+    }
+}
+
+namespace {
+
+/// A VDB frame as Mantaflow writes one: `velocity` active only where `keep(i, j)` (its smoke),
+/// the other voxels left inactive (the background, 0). `faces`: component c holds v at the face
+/// below the voxel along c ((i - 1/2) along x), else at its centre; `staggered`: the grid's
+/// class says so.
+void write_sparse_vdb(const fs::path& file, int W, int H, int D, double voxel, bool faces, bool staggered,
+                      const std::function<bool(int, int)>& keep,
+                      const std::function<Vec2(double, double)>& v) {
+    openvdb::initialize();
+    auto vel = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    vel->setName("velocity");
+    vel->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
+    if (staggered) vel->setGridClass(openvdb::GRID_STAGGERED);
+    auto acc = vel->getAccessor();
+    const double half = faces ? 0.5 : 0.0;
+    for (int k = 0; k < D; ++k)
+        for (int j = 0; j < H; ++j)
+            for (int i = 0; i < W; ++i)
+                if (keep(i, j))
+                    acc.setValue({i, j, k}, openvdb::Vec3s(float(v(voxel * (i - half), voxel * j)[0]),
+                                                           float(v(voxel * i, voxel * (j - half))[1]), 0.0f));
+    openvdb::io::File out(file.string());
+    out.write({vel});
+    out.close();
+}
+
+/// The layer's flow at t at points (x, y).
+std::vector<Vec2> flow_at(const scenes::Scene& s, double t, const std::vector<Vec2>& p) {
+    std::vector<double> x, y;
+    for (const auto& q : p) x.push_back(q[0]), y.push_back(q[1]);
+    std::vector<double> vx(p.size()), vy(p.size()), div(p.size()), curl(p.size());
+    s.layers[0].flow->add(t, p.size(), x.data(), y.data(), vx.data(), vy.data(), div.data(), curl.data());
+    std::vector<Vec2> out;
+    for (size_t i = 0; i < p.size(); ++i) out.push_back({vx[i], vy[i]});
+    return out;
+}
+
+}  // namespace
+
+TEST_CASE("sequence: sparse frames are read over the union of their boxes", "[scenes][sequence]") {
+    // docs/scenes.md "A Blender cache": Mantaflow's velocity is active only where there is
+    // smoke, so frame 1 (smoke in the left half, x < 64) and frame 2 (everywhere) cover
+    // different boxes. Both load; frame 1 is the wind (3, 1) where it has smoke and 0 beyond
+    // (the background), frame 2 the wind everywhere (outside = "zero", the default). Before the union was read the loader
+    // refused frame 2 ("expected the same grid and transform in every frame").
+    TempDir dir("sparse");
+    auto wind = [](double, double) { return Vec2{3.0, 1.0}; };
+    write_sparse_vdb(dir.path / "fluid_data_0001.vdb", 33, 33, 3, 4.0, false, false, [](int i, int) { return i <= 16; }, wind);
+    write_sparse_vdb(dir.path / "fluid_data_0002.vdb", 33, 33, 3, 4.0, false, false, [](int, int) { return true; }, wind);
+    const scenes::Scene s = load_in(dir.path, scene_text(sequence_table(true)));
+    const std::vector<Vec2> p{{20.0, 50.0}, {60.0, 100.0}, {72.0, 50.0}, {120.0, 100.0}};
+    const auto first = flow_at(s, 0.0, p), second = flow_at(s, 0.25, p);
+    for (size_t i = 0; i < p.size(); ++i) {
+        INFO("point (" << p[i][0] << ", " << p[i][1] << ")");
+        const bool smoke = p[i][0] <= 64.0;
+        CHECK(first[i][0] == Approx(smoke ? 3.0 : 0.0).margin(1e-6));
+        CHECK(first[i][1] == Approx(smoke ? 1.0 : 0.0).margin(1e-6));
+        CHECK(second[i][0] == Approx(3.0).margin(1e-6));
+        CHECK(second[i][1] == Approx(1.0).margin(1e-6));
+    }
+    // The wind is 3.16 at the grid's edge: outside = "zero" (the default) jumps to 0 there, a
+    // divergence sqrt(J) does not see, and says so once; "clamp" is continuous and quiet.
+    auto warned = [](const scenes::Scene& scene) {
+        return std::count_if(scene.warnings.begin(), scene.warnings.end(), [](const std::string& w) {
+            return w.find("flow[0].outside: \"zero\" (the default) makes the field jump from up to 3.16") != std::string::npos;
+        });
+    };
+    CHECK(warned(s) == 1);
+    CHECK(warned(load_in(dir.path, scene_text(sequence_table(true, "outside = \"clamp\"\n")))) == 0);
+}
+
+TEST_CASE("sequence: a staggered grid is averaged to the voxel centres", "[scenes][sequence]") {
+    // A MAC grid (Mantaflow's velocity) of the linear field v = 0.125 (x - 64, y - 64): the
+    // faces' values averaged to the centres are v at the centres exactly (linear), so the flow
+    // is the analytic field between them (bilinear reproduces a linear field). Read as a
+    // centred grid (the class not set) the same values are v half a voxel (2 units) back along
+    // each component: off by 0.125 * 2 = 0.25.
+    TempDir dir("staggered");
+    auto linear = [](double x, double y) { return Vec2{0.125 * (x - 64.0), 0.125 * (y - 64.0)}; };
+    for (bool staggered : {true, false}) {
+        for (int n : {1, 2})
+            write_sparse_vdb(dir.path / frame_file("fluid_data_", n, ".vdb"), 33, 33, 3, 4.0, true,
+                             staggered, [](int, int) { return true; }, linear);
+        const scenes::Scene s = load_in(dir.path, scene_text(sequence_table(true)));
+        // away from the last voxel along each axis (which keeps its face value)
+        const std::vector<Vec2> p{{10.0, 20.0}, {33.3, 90.1}, {64.0, 64.0}, {101.7, 47.5}};
+        const auto v = flow_at(s, 0.1, p);
+        for (size_t i = 0; i < p.size(); ++i) {
+            const Vec2 exact = linear(p[i][0], p[i][1]);
+            INFO("staggered " << staggered << ", point (" << p[i][0] << ", " << p[i][1] << ")");
+            const double off = staggered ? 0.0 : -0.25;
+            CHECK(v[i][0] == Approx(exact[0] + off).margin(1e-5));
+            CHECK(v[i][1] == Approx(exact[1] + off).margin(1e-5));
+        }
+    }
+}
+
+namespace {
+
+/// Per frame of `count` frames of `scene` rendered in order, the variance over each mask's
+/// pixels (the layer's mean is 0: normal amplitudes).
+std::vector<std::vector<double>> masked_variances(scenes::Scene scene, int count,
+                                                  const std::vector<std::vector<bool>>& masks) {
+    scenes::Renderer renderer(std::move(scene));
+    render::Frame frame;
+    std::vector<std::vector<double>> v(masks.size());
+    for (int i = 0; i < count; ++i) {
+        renderer.render(i, frame);
+        for (size_t m = 0; m < masks.size(); ++m) {
+            double ss = 0.0;
+            size_t n = 0;
+            for (size_t k = 0; k < masks[m].size(); ++k)
+                if (masks[m][k]) ss += double(frame.data[k]) * frame.data[k], ++n;
+            v[m].push_back(ss / double(n));
+        }
+    }
+    return v;
+}
+
+}  // namespace
+
+TEST_CASE("sequence: a Mantaflow cache keeps the frame variance only with sqrt(J)", "[.mantaflow]") {
+    // Run by blender/test_mantaflow.sh (ctest -L blender) after Blender baked a smoke plume:
+    // IMPULSE_MANTAFLOW_SCENES names the folder where blender/test_mantaflow.py wrote
+    // variance.toml (a 128 x 128 texture on the slice y = 0 of the cache, docs/scenes.md "A
+    // Blender cache") and still.toml (the same layer without its flow). 240 frames at 24 fps:
+    // the sequence's 24 frames, then its last frame held; 20 lifetimes of 0.5 s in 10 blocks of
+    // 2 lifetimes. The flow carries as many impulses into the picture as out of it (the
+    // velocity is 0 at its edges outside the smoke), so the whole picture's variance hardly
+    // moves without sqrt(J); where the held slice stretches (div v > 2/s at the pixel) the
+    // impulses thin out and where it converges (div v < -2/s) they crowd (design.md §1), so the
+    // variance is taken over those pixels. Each region's run mean against the still run's:
+    // t = d / sqrt(se1^2 + se2^2), ~ t with ~18 degrees of freedom, P(|t| > 5) ~ 1e-4.
+    const char* dir = std::getenv("IMPULSE_MANTAFLOW_SCENES");
+    REQUIRE(dir != nullptr);
+    constexpr int kFrames = 240, kBlocks = 10;
+    const fs::path flow_scene = fs::path(dir) / "variance.toml";
+    std::vector<std::vector<bool>> masks(2);
+    {
+        const scenes::Scene s = scenes::load_scene(flow_scene.string());
+        const int W = s.output.width, H = s.output.height;
+        std::vector<double> x, y;
+        for (int j = 0; j < H; ++j)
+            for (int i = 0; i < W; ++i) x.push_back(i + 0.5), y.push_back(j + 0.5);
+        std::vector<double> vx(x.size()), vy(x.size()), div(x.size()), curl(x.size());
+        s.layers[0].flow->add(5.0, x.size(), x.data(), y.data(), vx.data(), vy.data(), div.data(), curl.data());
+        for (double d : div) masks[0].push_back(d > 2.0), masks[1].push_back(d < -2.0);
+    }
+    const char* names[] = {"stretching", "converging"};
+    const auto still = masked_variances(scenes::load_scene((fs::path(dir) / "still.toml").string()), kFrames, masks);
+    for (bool jacobian : {true, false}) {
+        scenes::Scene s = scenes::load_scene(flow_scene.string());
+        s.layers[0].process.jacobian = jacobian;  // the loader would refuse false: switched off here
+        const auto moving = masked_variances(std::move(s), kFrames, masks);
+        double worst = 0.0;
+        for (size_t m = 0; m < masks.size(); ++m) {
+            const Blocks a = blocks_of(moving[m], kBlocks), b = blocks_of(still[m], kBlocks);
+            const double t = (a.mean - b.mean) / std::hypot(a.se, b.se);
+            WARN("sqrt(J) " << (jacobian ? "on" : "off") << ", " << names[m] << " pixels ("
+                            << std::count(masks[m].begin(), masks[m].end(), true) << "): mean variance "
+                            << a.mean << " (se " << a.se << ") vs still " << b.mean << " (se " << b.se
+                            << "), t = " << t);
+            worst = std::max(worst, std::abs(t));
+        }
+        if (jacobian)
+            CHECK(worst < 5.0);
+        else
+            CHECK(worst > 5.0);
+    }
+}
+
+namespace {
+
+/// A VDB frame of `v(i, j, k)` (3-D velocities at the voxels) of W x H x D voxels of size
+/// `voxel`, every voxel active.
+void write_vdb3(const fs::path& file, int W, int H, int D, double voxel,
+                const std::function<std::array<double, 3>(int, int, int)>& v) {
+    openvdb::initialize();
+    auto vel = openvdb::Vec3SGrid::create(openvdb::Vec3s(0.0f));
+    vel->setName("velocity");
+    vel->setTransform(openvdb::math::Transform::createLinearTransform(voxel));
+    auto acc = vel->getAccessor();
+    for (int k = 0; k < D; ++k)
+        for (int j = 0; j < H; ++j)
+            for (int i = 0; i < W; ++i) {
+                const auto u = v(i, j, k);
+                acc.setValue({i, j, k}, openvdb::Vec3s(float(u[0]), float(u[1]), float(u[2])));
+            }
+    openvdb::io::File out(file.string());
+    out.write({vel});
+    out.close();
+}
+
+}  // namespace
+
+TEST_CASE("sequence: plane modes and cubic time and the nearest sample outside in closed form",
+          "[scenes][sequence]") {
+    TempDir dir("modes");
+    const std::vector<Vec2> points{{10.0, 20.0}, {33.3, 90.1}, {101.7, 47.5}};
+    SECTION("average: the mean through the depth") {
+        // v = (1 + 0.5 k, 2 - 0.25 k, 0) over k = 0..4: the depth's mean is (2, 1.5) at every
+        // point; a slice at the default height (the middle layer, k = 2) is the same, and one
+        // at z = 0 (k = 0) is (1, 2): the mode is seen.
+        for (int n : {1, 2})
+            write_vdb3(dir.path / frame_file("fluid_data_", n, ".vdb"), 33, 33, 5, 4.0,
+                       [](int, int, int k) { return std::array<double, 3>{1.0 + 0.5 * k, 2.0 - 0.25 * k, 0.0}; });
+        for (const auto& [keys, want] : std::vector<std::pair<std::string, Vec2>>{
+                 {"plane = \"average\"\n", {2.0, 1.5}}, {"height = 0.0\n", {1.0, 2.0}}}) {
+            const auto v = flow_at(load_in(dir.path, scene_text(sequence_table(true, keys))), 0.1, points);
+            for (const auto& u : v) {
+                INFO(keys);
+                CHECK(u[0] == Approx(want[0]).margin(1e-5));
+                CHECK(u[1] == Approx(want[1]).margin(1e-5));
+            }
+        }
+    }
+    SECTION("project: the wind's part in the plane") {
+        // a uniform wind (1, 2, 3) on the plane of normal (1, 1, 1): its in-plane part has
+        // |v|^2 - (v.n)^2 = 14 - 12 = 2 (speed sqrt 2), whatever axes the plane takes
+        for (int n : {1, 2})
+            write_vdb3(dir.path / frame_file("fluid_data_", n, ".vdb"), 17, 17, 17, 4.0,
+                       [](int, int, int) { return std::array<double, 3>{1.0, 2.0, 3.0}; });
+        const auto s = load_in(dir.path, scene_text(sequence_table(true, "plane = \"project\"\nnormal = [1.0, 1.0, 1.0]\n")));
+        // the projected plane's texture coordinates start at its first sample: points inside it
+        const auto v = flow_at(s, 0.1, {{20.0, 20.0}, {30.0, 25.0}});
+        for (const auto& u : v) CHECK(std::hypot(u[0], u[1]) == Approx(std::sqrt(2.0)).margin(1e-5));
+    }
+    SECTION("cubic time: Catmull-Rom is exact for a quadratic in time, linear is not") {
+        // a wind (t_f^2, 0) at frame times t_f = 0, 0.25, ... (fps 4): halfway between frames 3
+        // and 4 (t = 0.625) Catmull-Rom gives 0.625^2 = 0.390625 exactly (quadratic precision);
+        // linear gives the chord's (0.25 + 0.5625) / 2 = 0.40625
+        for (int n = 1; n <= 6; ++n) {
+            const double t = (n - 1) / 4.0;
+            write_vdb(dir.path / frame_file("fluid_data_", n, ".vdb"), 9, 9, 3, 16.0,
+                      [&](double, double) { return Vec2{t * t, 0.0}; });
+        }
+        const std::vector<Vec2> p{{64.0, 64.0}};
+        CHECK(flow_at(load_in(dir.path, scene_text(sequence_table(true, "interpolation = \"cubic\"\n"))), 0.625, p)[0][0] ==
+              Approx(0.390625).margin(1e-6));
+        CHECK(flow_at(load_in(dir.path, scene_text(sequence_table(true))), 0.625, p)[0][0] ==
+              Approx(0.40625).margin(1e-6));
+    }
+    SECTION("nearest: the nearest sample's value beyond the grid") {
+        // v = 0.125 (x - 64, y - 64) on samples 4 apart over [0, 128]^2: beyond the corner at
+        // (140, -10) the nearest sample is (128, 0), v = (8, -8); clamp takes the nearest point
+        // of the grid, the same corner here, and zero gives 0; beside the right edge at
+        // (135, 49) nearest is the sample (128, 48), v = (8, -2), and clamp interpolates along
+        // the edge to (128, 49): (8, -1.875)
+        for (int n : {1, 2})
+            write_vdb(dir.path / frame_file("fluid_data_", n, ".vdb"), 33, 33, 3, 4.0,
+                      [](double x, double y) { return Vec2{0.125 * (x - 64.0), 0.125 * (y - 64.0)}; });
+        const std::vector<Vec2> p{{140.0, -10.0}, {135.0, 49.0}};
+        const auto nearest = flow_at(load_in(dir.path, scene_text(sequence_table(true, "outside = \"nearest\"\n"))), 0.1, p);
+        const auto clamp = flow_at(load_in(dir.path, scene_text(sequence_table(true, "outside = \"clamp\"\n"))), 0.1, p);
+        const auto zero = flow_at(load_in(dir.path, scene_text(sequence_table(true))), 0.1, p);
+        CHECK(nearest[0][0] == Approx(8.0).margin(1e-6));
+        CHECK(nearest[0][1] == Approx(-8.0).margin(1e-6));
+        CHECK(nearest[1][0] == Approx(8.0).margin(1e-6));
+        CHECK(nearest[1][1] == Approx(-2.0).margin(1e-6));
+        CHECK(clamp[1][1] == Approx(-1.875).margin(1e-6));
+        CHECK(zero[0][0] == 0.0);
+        CHECK(zero[1][1] == 0.0);
     }
 }
