@@ -6,7 +6,7 @@
 # reused), runs it under qemu-aarch64 for every built-in scene's frames 0 and 7, runs the same
 # dumper built for this x86-64 machine on each SIMD path (IMPULSE_SIMD = avx512, avx2,
 # baseline), and compares the float fields and display RGB byte for byte. Prints a table and
-# exits 1 on any difference. Not in CTest: it takes tens of minutes (two builds and emulation).
+# exits 1 on any difference. Not in CTest: 12 minutes once built (mostly emulation).
 #   scripts/arm64_check.sh                 the check
 #   scripts/arm64_check.sh --break-fma     the arm64 side compiled with -ffp-contract=fast
 #                                          (FMA contraction, GCC's default outside ISO mode):
