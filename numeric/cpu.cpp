@@ -10,11 +10,15 @@ namespace impulse::numeric {
 namespace {
 
 SimdPath cpu_path() {
+#if defined(__x86_64__) || defined(__i386__)
     if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
         __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw") &&
         __builtin_cpu_supports("fma"))
         return SimdPath::Avx512;
     if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma")) return SimdPath::Avx2;
+#endif
+    // Other CPUs (arm64) run the baseline loops, which their compiler vectorises itself
+    // (docs/contributing.md "Other CPUs").
     return SimdPath::Baseline;
 }
 

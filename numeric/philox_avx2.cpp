@@ -3,9 +3,10 @@
 // are Random123's (philox.h: _philox4x32round, _philox4x32bumpkey), lane by lane; two chains of
 // eight lanes per step, and steps independent of each other, hide the multiplies' latency.
 
-#include <immintrin.h>
-
 #include "numeric/rng.h"
+
+#if defined(__AVX2__)
+#include <immintrin.h>
 
 namespace impulse::numeric {
 
@@ -63,3 +64,11 @@ void philox4x32_avx2(const uint32_t key[2], size_t n, const uint32_t* const in[4
 }
 
 }  // namespace impulse::numeric
+#else  // not x86-64 (arm64): cpu_has_avx2() is false, so this is never called (numeric/cpu.h)
+#include <cstdlib>
+
+void impulse::numeric::philox4x32_avx2(const uint32_t*, size_t, const uint32_t* const*,
+                                       uint32_t* const*) {
+    std::abort();
+}
+#endif

@@ -12,7 +12,6 @@
 #include <optional>
 #include <sstream>
 
-#include "output/image_input.h"
 #include "scenes/camera_detail.h"
 #include "scenes/compose_detail.h"
 #include "scenes/loader_detail.h"

@@ -164,9 +164,13 @@ void sea_row(const Frame3& g, const render::PerspectiveCamera& cam, const SeaCon
 
 /// The sky gradient of `s` at elevation e (radians) when the horizon is at row fraction s_h:
 /// top at the top of the frame (elevation e_top), bottom at the horizon, linear in elevation.
-void sky_at(const output::Shading& s, double e, double e_top, float out[3]) {
+/// Doubles, rounded once where the caller stores a float: GCC 12's x86-64 vectoriser dropped
+/// the rounding of two of three float channels that were widened again at once (the sea's
+/// reflected sky, below), so x86-64 and arm64 differed by an ulp (docs/contributing.md
+/// "Other CPUs").
+void sky_at(const output::Shading& s, double e, double e_top, double out[3]) {
     const double u = std::clamp(1.0 - e / std::max(e_top, 1e-9), 0.0, 1.0);
-    for (int k = 0; k < 3; ++k) out[k] = static_cast<float>(s.top[k] + u * (s.bottom[k] - s.top[k]));
+    for (int k = 0; k < 3; ++k) out[k] = s.top[k] + u * (s.bottom[k] - s.top[k]);
 }
 
 }  // namespace
@@ -255,12 +259,14 @@ std::vector<float> sea_background(const CameraConfig& camera, const output::Shad
         const double e = p + std::atan((1.0 - 2.0 * s) * tan_half);
         float* o = bg.data() + 3 * i;
         if (e >= 0.0) {
-            sky_at(shading, e, e_top, o);
+            double sky[3];
+            sky_at(shading, e, e_top, sky);
+            for (int k = 0; k < 3; ++k) o[k] = static_cast<float>(sky[k]);
             continue;
         }
         // Below the horizon: the sky at the mirrored elevation -e, reflected with Fresnel
         // reflectance F(incidence cos theta = sin(-e)) over the water's own colour.
-        float sky[3];
+        double sky[3];
         sky_at(shading, -e, e_top, sky);
         const double F = schlick(std::sin(-e));
         for (int k = 0; k < 3; ++k) o[k] = static_cast<float>(F * sky[k] + (1.0 - F) * sea.color[k]);

@@ -4,9 +4,10 @@
 // Four registers per step are independent, which hides the divide's and the square root's
 // latency.
 
-#include <immintrin.h>
-
 #include "sim/normal.h"
+
+#if defined(__AVX2__)
+#include <immintrin.h>
 
 namespace impulse::sim::detail {
 
@@ -95,3 +96,14 @@ void normals_from_uniforms_avx2(size_t n, const double* u, const double* v, doub
 }
 
 }  // namespace impulse::sim::detail
+#else  // not x86-64 (arm64): cpu_has_avx2() is false, so this is never called (numeric/cpu.h)
+#include <cstdlib>
+
+void impulse::sim::detail::normals_from_uniforms_avx2(size_t, const double*, const double*, float*) {
+    std::abort();
+}
+void impulse::sim::detail::normals_from_uniforms_avx2(size_t, const double*, const double*,
+                                                      double*) {
+    std::abort();
+}
+#endif
