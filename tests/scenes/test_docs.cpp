@@ -1,6 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // Every ```toml block of docs/scenes.md is a complete scene that loads (relative paths from the
-// repository root), so the documentation cannot drift from the loader.
+// repository root), so the documentation cannot drift from the loader. A block fenced
+// ```toml fragment is part of a scene (a table that needs files the repository does not hold,
+// such as a simulation's cache) and is not loaded.
 #include <catch2/catch.hpp>
 
 #include <filesystem>
