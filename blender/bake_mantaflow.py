@@ -37,8 +37,9 @@ d.cache_data_format = "OPENVDB"
 d.cache_directory = cache
 d.cache_frame_start, d.cache_frame_end = 1, frames
 d.use_adaptive_domain = False
-# 0: no voxel is dropped from the cache as empty (the velocity grid keeps every voxel of the
-# domain, so each frame covers the same box)
+# 0: no voxel is dropped from the cache as empty. Mantaflow still stores the velocity only where
+# there is smoke, so each frame's grid covers its own box (impulse reads the frames over the union
+# of their boxes: docs/scenes.md "A Blender cache")
 d.clipping = 0.0
 
 bpy.ops.mesh.primitive_uv_sphere_add(radius=0.25, location=(-0.35, 0.0, -0.6))
