@@ -4,6 +4,7 @@
 // stated by scenes/closed_form.cpp, passed in as an analysis::ClosedForm) with tolerances
 // derived from each estimator's sampling error (design.md §5).
 
+#include "analysis/analysis.h"
 #include "analysis/analyze.h"
 
 #include <tbb/parallel_for.h>

@@ -10,7 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "analysis/analysis.h"
+#include "analysis/estimators.h"
+#include "analysis/structure.h"
 
 namespace impulse::analysis {
 

@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Sampling-error helpers of the theory comparison (analysis/theory.h).
 
+#include "analysis/analysis.h"
 #include "analysis/theory.h"
 
 #include <algorithm>

@@ -18,7 +18,7 @@
 #include <tuple>
 
 #include "app/commands.h"
-#include "app/export_detail.h"
+#include "app/detail/export.h"
 #include "app/parse.h"
 #include "numeric/errors.h"
 #include "output/atlas.h"

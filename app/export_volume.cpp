@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // `impulse export volume`: periodic solid noise (synth::SolidNoise with period_cells, Lewis 1989
 // with Lewis 1986 §3.2's wrap-around) as a slice atlas and a raw float32 volume, with a JSON
-// sidecar (docs/export.md "Volume"); and the sidecar helpers of app/export_detail.h.
+// sidecar (docs/export.md "Volume"); and the sidecar helpers of app/detail/export.h.
 
 #include <CLI/CLI.hpp>
 
@@ -14,7 +14,7 @@
 
 #include "app/commands.h"
 #include "app/export.h"
-#include "app/export_detail.h"
+#include "app/detail/export.h"
 #include "app/parse.h"
 #include "numeric/errors.h"
 #include "output/atlas.h"

@@ -18,7 +18,7 @@
 #include <iostream>
 #include <regex>
 
-#include "app/preview_detail.h"
+#include "app/detail/preview.h"
 #include "numeric/errors.h"
 
 namespace impulse::app {

@@ -9,7 +9,7 @@
 #include <filesystem>
 #include <set>
 
-#include "app/preview_detail.h"
+#include "app/detail/preview.h"
 #include "numeric/errors.h"
 
 namespace impulse::app::preview {

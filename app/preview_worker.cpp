@@ -7,7 +7,7 @@
 #include <cmath>
 #include <sstream>
 
-#include "app/preview_detail.h"
+#include "app/detail/preview.h"
 #include "numeric/errors.h"
 #include "output/io_module.h"
 

@@ -1,25 +1,37 @@
 # SPDX-License-Identifier: Apache-2.0
-# `cmake --install`: the impulse tool, the libraries (static), their headers under
-# include/impulse/, the built-in scenes, a CMake package (find_package(impulse) gives
+# `cmake --install`: the impulse tool, the libraries (static), their facades and the headers the
+# facades list under include/impulse/ (docs/design.md §2 "Facades"; app/ installs none), the built-in scenes, a CMake package (find_package(impulse) gives
 # impulse::numeric ... impulse::scenes) and a pkg-config file (impulse.pc).
 include(GNUInstallDirs)
 include(CMakePackageConfigHelpers)
 
-set(IMPULSE_LIBRARIES numeric kernels sim synth analysis render output volume mesh scenes app)
+set(IMPULSE_LIBRARIES ${IMPULSE_LIBRARY_FOLDERS})
 set(IMPULSE_INSTALL_INCLUDEDIR ${CMAKE_INSTALL_INCLUDEDIR}/impulse)
 
-# In the build tree a library's headers are found from the source root ("scenes/scenes.h");
-# installed, from include/impulse/. The warning flags stay with this project's own build; the
+# In the build tree a library's headers are found from the source root ("scenes/scenes.h") and
+# as a consumer names them (<impulse/scenes/scenes.h>, the root CMakeLists.txt); installed, only
+# as <impulse/...> from include/. The warning flags stay with this project's own build; the
 # floating-point contract (bit-identical frames) travels with the targets.
+set(headers)
 foreach(lib ${IMPULSE_LIBRARIES})
     get_target_property(dirs impulse_${lib} INTERFACE_INCLUDE_DIRECTORIES)
     list(TRANSFORM dirs REPLACE "^${PROJECT_SOURCE_DIR}$"
-         "$<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}>;$<INSTALL_INTERFACE:${IMPULSE_INSTALL_INCLUDEDIR}>")
+         "$<BUILD_INTERFACE:${PROJECT_SOURCE_DIR}>;$<INSTALL_INTERFACE:${CMAKE_INSTALL_INCLUDEDIR}>")
     set_target_properties(impulse_${lib} PROPERTIES INTERFACE_INCLUDE_DIRECTORIES "${dirs}"
                           EXPORT_NAME ${lib})
-    file(GLOB headers ${PROJECT_SOURCE_DIR}/${lib}/*.h)
-    install(FILES ${headers} DESTINATION ${IMPULSE_INSTALL_INCLUDEDIR}/${lib})
+    # The facade and what it lists: every header at the folder's top level
+    # (tests/docs/check_layering.py holds the two equal); detail/ stays home.
+    file(GLOB lib_headers ${PROJECT_SOURCE_DIR}/${lib}/*.h)
+    list(APPEND headers ${lib_headers})
 endforeach()
+# Installed headers include each other by the installed names: cmake/InstallHeaders.cmake
+# rewrites `#include "scenes/scene.h"` to `#include <impulse/scenes/scene.h>` as it copies.
+string(REPLACE ";" "|" library_regex "${IMPULSE_LIBRARIES}")
+install(CODE "set(IMPULSE_HEADERS \"${headers}\")
+set(IMPULSE_LIBRARY_REGEX \"${library_regex}\")
+set(IMPULSE_HEADER_STAGE \"${PROJECT_BINARY_DIR}/installed_headers\")
+set(IMPULSE_HEADER_DESTINATION \"\${CMAKE_INSTALL_PREFIX}/${IMPULSE_INSTALL_INCLUDEDIR}\")")
+install(SCRIPT ${CMAKE_CURRENT_LIST_DIR}/InstallHeaders.cmake)
 get_target_property(options impulse_options INTERFACE_COMPILE_OPTIONS)
 list(TRANSFORM options REPLACE "^(-W.*)$" "$<BUILD_INTERFACE:\\1>")
 set_target_properties(impulse_options PROPERTIES INTERFACE_COMPILE_OPTIONS "${options}"

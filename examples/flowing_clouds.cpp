@@ -11,9 +11,9 @@
 #include <exception>
 #include <string>
 
-#include "output/output.h"
-#include "render/render.h"
-#include "scenes/scenes.h"
+#include <impulse/output/output.h>
+#include <impulse/render/render.h>
+#include <impulse/scenes/scenes.h>
 
 using namespace impulse;
 

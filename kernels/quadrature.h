@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// Gauss–Legendre quadrature used for kernel statistics (internal to impulse::kernels).
+// Gauss–Legendre quadrature used for kernel statistics (part of impulse::kernels; synth/ uses it).
 
 #include <functional>
 

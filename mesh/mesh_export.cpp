@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// Mesh -> OBJ text (mesh/obj_format.h) or aiScene -> assimp's PLY exporter into memory ->
+// Mesh -> OBJ text (mesh/detail/obj_format.h) or aiScene -> assimp's PLY exporter into memory ->
 // atomic file (output/files.h); vertices in the Mesh's order either way.
 
 #include <assimp/Exporter.hpp>
@@ -12,7 +12,7 @@
 #include <memory>
 
 #include "mesh/mesh.h"
-#include "mesh/obj_format.h"
+#include "mesh/detail/obj_format.h"
 #include "numeric/errors.h"
 #include "output/files.h"
 

@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// Meshes in: OBJ vertex for vertex (mesh/obj_format.h), any other format through assimp
+// Meshes in: OBJ vertex for vertex (mesh/detail/obj_format.h), any other format through assimp
 // with its validation; vertex i is the file's vertex i (docs/mesh.md "Formats").
 
 #include <assimp/Importer.hpp>
@@ -16,7 +16,7 @@
 #include <sstream>
 
 #include "mesh/mesh.h"
-#include "mesh/obj_format.h"
+#include "mesh/detail/obj_format.h"
 #include "numeric/errors.h"
 #include "output/files.h"
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Meshes in and out (part of impulse::mesh; docs/mesh.md "Formats"), vertex i of the file being
-// vertex i of the Mesh: OBJ by our own reader and writer (mesh/obj_format.h; `v x y z r g b`
+// vertex i of the Mesh: OBJ by our own reader and writer (mesh/detail/obj_format.h; `v x y z r g b`
 // vertex colours, `l` records for line segments), any other format assimp reads (PLY tested) in
 // through assimp, ASCII PLY (uchar red green blue alpha per vertex, 2-vertex faces for line
 // segments) out through assimp; written atomically.

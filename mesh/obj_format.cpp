@@ -2,7 +2,7 @@
 // OBJ vertex for vertex (docs/mesh.md "Formats"): the reader keeps the `v` lines' order and
 // number, the writer writes the Mesh's vertices in order.
 
-#include "mesh/obj_format.h"
+#include "mesh/detail/obj_format.h"
 
 #include <charconv>
 #include <cstdio>

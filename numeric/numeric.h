@@ -7,6 +7,7 @@
 #include "numeric/cpu.h"       // run-time choice of the AVX2 loops
 #include "numeric/errors.h"    // impulse::Error and its kinds
 #include "numeric/fft.h"       // real 2-D FFTs on FFTW, one planner lock
+#include "numeric/frame.h"     // the orthographic view and the float frame sources render into
 #include "numeric/gaussian.h"  // normal pdf, CDF, quantile
 #include "numeric/keyframed.h" // time-varying scalars
 #include "numeric/quantile_bins.h" // equal-count bins by selection, not a full sort

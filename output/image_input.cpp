@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "output/image_input.h"
+#include "output/detail/image_input.h"
 
 #include <algorithm>
 #include <array>

@@ -16,9 +16,9 @@
 #include <sstream>
 #include <system_error>
 
-#include "output/image_input.h"
+#include "output/detail/image_input.h"
 #include "output/files.h"
-#include "output/io_impl.h"
+#include "output/detail/io_impl.h"
 #include "output/output.h"
 #include "numeric/errors.h"
 

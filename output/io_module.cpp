@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The table libimpulse_io.so exports (output/io_module.h).
 
-#include "output/io_impl.h"
+#include "output/detail/io_impl.h"
 
 extern "C" const impulse::output::IoModule* impulse_io_module() {
     namespace io = impulse::output::io;

@@ -11,3 +11,5 @@
 #include "output/display.h"    // the display mapping as text in a frame's metadata
 #include "output/files.h"      // whole files written atomically
 #include "output/volume.h"     // EXR stacks and OpenVDB grids
+#include "output/atlas.h"      // flipbook atlases of frames, with their sidecar
+#include "output/io_module.h"  // the image and video module, loaded at run time

@@ -40,7 +40,7 @@ extern "C" {
 #include <libswscale/swscale.h>
 }
 
-#include "output/io_impl.h"
+#include "output/detail/io_impl.h"
 #include "output/files.h"
 #include "output/video.h"
 #include "numeric/errors.h"

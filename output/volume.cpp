@@ -2,7 +2,7 @@
 // Volumes out: multi-layer EXR stacks (OpenImageIO) and OpenVDB float grids, written atomically
 // (part of libimpulse_io.so, output/io_module.h; volume.h documents the calls).
 
-#include "output/io_impl.h"
+#include "output/detail/io_impl.h"
 
 #include <OpenImageIO/imageio.h>
 #include <openvdb/openvdb.h>

@@ -9,11 +9,10 @@
 
 #include <cmath>
 
-#include "app/analyze.h"
+#include "analysis/analysis.h"
 #include "numeric/errors.h"
 #include "python/scene_object.h"
-#include "scenes/closed_form.h"
-#include "scenes/scene_dir.h"
+#include "scenes/scenes.h"
 
 namespace py = pybind11;
 
@@ -254,7 +253,7 @@ std::vector<analysis::Image> frames_of(const py::handle& frames) {
 
 py::object analyze(const py::handle& frames, const py::object& scene, const py::object& overrides,
                    bool structure) {
-    app::AnalyzeOptions o;
+    analysis::AnalyzeOptions o;
     o.input = "array";
     o.structure = structure;
     o.sets = override_strings(overrides);
@@ -274,8 +273,8 @@ py::object analyze(const py::handle& frames, const py::object& scene, const py::
     std::string json;
     {
         py::gil_scoped_release release;
-        json = app::to_json(
-            app::analyze_frames(std::move(images), o, "array", true, 32, 0, theory.get()));
+        json = analysis::to_json(
+            analysis::analyze_frames(std::move(images), o, "array", true, 32, 0, theory.get()));
     }
     return py::module_::import("json").attr("loads")(json);
 }

@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "numeric/cpu.h"
-#include "render/eval_detail.h"
+#include "render/detail/eval.h"
 #include "render/render.h"
 
 namespace impulse::render {

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 // The far field of a perspective view: impulses deposited on sub-rows along the circles around
 // the camera's foot, convolved across with the line-form profiles, filtered along per pixel
-// (render/persp_far.h, render/perspective.h). The derivation: docs/perspective.md §5.
+// (render/detail/persp_far.h, render/perspective.h). The derivation: docs/perspective.md §5.
 
-#include "render/persp_far.h"
+#include "render/detail/persp_far.h"
 
 #include <tbb/parallel_for.h>
 

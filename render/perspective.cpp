@@ -17,8 +17,8 @@
 #include <sstream>
 
 #include "numeric/cpu.h"
-#include "render/persp_detail.h"
-#include "render/persp_far.h"
+#include "render/detail/persp.h"
+#include "render/detail/persp_far.h"
 #include "numeric/errors.h"
 
 namespace impulse::render {

@@ -30,7 +30,7 @@
 //   * far field: where the kernel's image is a sliver no taller than the pixel filter (the
 //     chords' spread along the axis small against it), impulses are deposited on sub-rows that
 //     follow the circles round the camera's foot, convolved across with the line form's profile
-//     and filtered along per pixel (render/persp_far.h): a few additions per impulse and a
+//     and filtered along per pixel (render/detail/persp_far.h): a few additions per impulse and a
 //     bounded amount of work per pixel, for radial and (through chords tabulated per direction)
 //     other non-negative kernels.
 // Far away the filtered noise tends to its mean: the remaining standard deviation of the

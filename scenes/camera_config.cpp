@@ -10,8 +10,8 @@
 #include <sstream>
 
 #include "output/io_module.h"
-#include "scenes/camera_detail.h"
-#include "scenes/loader_detail.h"
+#include "scenes/detail/camera.h"
+#include "scenes/detail/loader.h"
 #include "numeric/errors.h"
 
 namespace impulse::scenes {

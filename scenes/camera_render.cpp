@@ -10,7 +10,7 @@
 
 #include <tbb/parallel_for.h>
 
-#include "scenes/camera_detail.h"
+#include "scenes/detail/camera.h"
 
 namespace impulse::scenes::detail {
 

@@ -9,8 +9,8 @@
 #include <sstream>
 
 #include "numeric/errors.h"
-#include "scenes/channels_detail.h"
-#include "scenes/reader.h"
+#include "scenes/detail/channels.h"
+#include "scenes/detail/reader.h"
 #include "scenes/scenes.h"
 
 namespace impulse::scenes {

@@ -10,8 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "analysis/theory.h"
-#include "scenes/scenes.h"
+#include "analysis/analysis.h"
+#include "scenes/scene.h"
+#include "scenes/theory.h"
 
 namespace impulse::scenes {
 

@@ -10,7 +10,7 @@
 #include <numbers>
 #include <sstream>
 
-#include "scenes/compose_detail.h"
+#include "scenes/detail/compose.h"
 #include "numeric/errors.h"
 
 namespace impulse::scenes::detail {

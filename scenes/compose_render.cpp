@@ -9,7 +9,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "scenes/compose_detail.h"
+#include "scenes/detail/compose.h"
 #include "numeric/gaussian.h"
 #include "numeric/spline.h"
 

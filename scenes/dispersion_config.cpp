@@ -19,7 +19,7 @@
 #include <functional>
 #include <numbers>
 
-#include "scenes/reader.h"
+#include "scenes/detail/reader.h"
 #include "scenes/scenes.h"
 
 namespace impulse::scenes {

@@ -10,7 +10,7 @@
 #include <sstream>
 
 #include "output/io_module.h"
-#include "scenes/loader_detail.h"
+#include "scenes/detail/loader.h"
 #include "numeric/errors.h"
 
 namespace impulse::scenes::detail {

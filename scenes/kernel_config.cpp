@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "output/output.h"
-#include "scenes/loader_detail.h"
+#include "scenes/detail/loader.h"
 #include "numeric/errors.h"
 
 namespace impulse::scenes::detail {

@@ -12,12 +12,12 @@
 #include <optional>
 #include <sstream>
 
-#include "scenes/camera_detail.h"
-#include "scenes/compose_detail.h"
-#include "scenes/loader_detail.h"
-#include "scenes/marginal.h"
-#include "scenes/reader.h"
-#include "scenes/source_detail.h"
+#include "scenes/detail/camera.h"
+#include "scenes/detail/compose.h"
+#include "scenes/detail/loader.h"
+#include "scenes/detail/marginal.h"
+#include "scenes/detail/reader.h"
+#include "scenes/detail/source.h"
 #include "scenes/scenes.h"
 #include "numeric/errors.h"
 

@@ -2,7 +2,7 @@
 // The `marginal` key of a [[layer]] (docs/scenes.md): distribution shaping (Lewis 1986 §4) and
 // the spectrum pre-correction by ITAM (kernels/shaping.h).
 
-#include "scenes/marginal.h"
+#include "scenes/detail/marginal.h"
 
 #include <algorithm>
 #include <cmath>

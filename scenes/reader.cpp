@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "scenes/reader.h"
+#include "scenes/detail/reader.h"
 
 #include <algorithm>
 #include <cstdint>

@@ -7,7 +7,7 @@
 
 #include "output/output.h"
 #include "render/render.h"
-#include "scenes/reader.h"
+#include "scenes/detail/reader.h"
 #include "numeric/errors.h"
 
 namespace impulse::scenes::detail {

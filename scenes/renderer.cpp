@@ -8,11 +8,11 @@
 #include <set>
 #include <sstream>
 
-#include "scenes/camera_detail.h"
-#include "scenes/channels_detail.h"
-#include "scenes/compose_detail.h"
-#include "scenes/marginal.h"
-#include "scenes/reader.h"
+#include "scenes/detail/camera.h"
+#include "scenes/detail/channels.h"
+#include "scenes/detail/compose.h"
+#include "scenes/detail/marginal.h"
+#include "scenes/detail/reader.h"
 #include "scenes/scene_dir.h"
 #include "scenes/scenes.h"
 #include "numeric/errors.h"
@@ -474,7 +474,7 @@ double Renderer::estimated_memory_mib() const {
     const State& S = *m_state;
     const auto& o = S.scene.output;
     const double pixels = double(o.width) * o.height;
-    // Bytes per pixel of the larger of the CLI's two output paths (app/commands.cpp):
+    // Bytes per pixel of the larger of the CLI's two output paths (app/render.cpp):
     //  - images: two float frames (frame f + 1 renders while f is saved), the float RGB of the
     //    shading (12) and the image writer's 8- or 16-bit copy (up to 6): 26;
     //  - video: one float frame and the encoder's input picture (up to 6, 4:4:4 at 16 bits;

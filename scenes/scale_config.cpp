@@ -14,7 +14,7 @@
 #include <sstream>
 
 #include "output/io_module.h"
-#include "scenes/loader_detail.h"
+#include "scenes/detail/loader.h"
 
 namespace impulse::scenes::detail {
 namespace {

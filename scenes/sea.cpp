@@ -16,8 +16,8 @@
 #include <numbers>
 #include <sstream>
 
-#include "scenes/camera_detail.h"
-#include "scenes/loader_detail.h"
+#include "scenes/detail/camera.h"
+#include "scenes/detail/loader.h"
 
 namespace impulse::scenes::detail {
 namespace {

@@ -16,7 +16,7 @@
 #include "numeric/errors.h"
 #include "output/files.h"
 #include "output/io_module.h"
-#include "scenes/loader_detail.h"
+#include "scenes/detail/loader.h"
 #include "volume/flow.h"
 
 namespace impulse::scenes::detail {

@@ -10,8 +10,8 @@
 #include "output/io_module.h"
 #include "numeric/gaussian.h"
 #include "numeric/quantile_bins.h"
-#include "scenes/loader_detail.h"
-#include "scenes/reader.h"
+#include "scenes/detail/loader.h"
+#include "scenes/detail/reader.h"
 #include "scenes/scenes.h"
 
 namespace impulse::scenes::detail {

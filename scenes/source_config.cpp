@@ -10,9 +10,9 @@
 #include <optional>
 #include <sstream>
 
-#include "scenes/loader_detail.h"
-#include "scenes/marginal.h"
-#include "scenes/source_detail.h"
+#include "scenes/detail/loader.h"
+#include "scenes/detail/marginal.h"
+#include "scenes/detail/source.h"
 #include "numeric/errors.h"
 
 namespace impulse::scenes::detail {

@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "numeric/errors.h"
-#include "scenes/source_detail.h"
-#include "scenes/source_grid.h"
+#include "scenes/detail/source.h"
+#include "scenes/detail/source_grid.h"
 #include "synth/synth.h"
 
 namespace impulse::scenes::detail {

@@ -1,10 +1,10 @@
 // SPDX-License-Identifier: Apache-2.0
-// A sample grid seen through a perspective camera (scenes/source_grid.h): a mip pyramid of the
+// A sample grid seen through a perspective camera (scenes/detail/source_grid.h): a mip pyramid of the
 // grid and each pixel's footprint filtered from it (docs/scenes.md "Source layers under a
 // perspective camera"; the probes form of docs/perspective.md §3.3 on a pyramid of the field
 // instead of the kernel, and the same fade to the mean, §6).
 
-#include "scenes/source_grid.h"
+#include "scenes/detail/source_grid.h"
 
 #include <tbb/parallel_for.h>
 

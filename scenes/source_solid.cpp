@@ -21,8 +21,8 @@
 #include <vector>
 
 #include "numeric/errors.h"
-#include "scenes/loader_detail.h"
-#include "scenes/source_detail.h"
+#include "scenes/detail/loader.h"
+#include "scenes/detail/source.h"
 #include "synth/synth.h"
 
 namespace impulse::scenes::detail {

@@ -3,7 +3,7 @@
 
 #include <array>
 
-#include "scenes/reader.h"
+#include "scenes/detail/reader.h"
 #include "scenes/scenes.h"
 
 namespace impulse::scenes::detail {

@@ -5,7 +5,7 @@
 #include <array>
 #include <string>
 
-#include "scenes/loader_detail.h"
+#include "scenes/detail/loader.h"
 #include "scenes/volume_scene.h"
 
 namespace impulse::scenes::detail {

@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // A volume scene's content (part of impulse::scenes; docs/volume.md): what Scene::volume points
-// to. Kept out of scenes.h so the 2-D pipeline does not include the volume library.
+// to.
 
-#include "scenes/scenes.h"
+#include "scenes/scene.h"
 #include "volume/volume.h"
 
 namespace impulse::scenes {

@@ -7,6 +7,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "sim/sim.h"
 #include "sim/layout.h"
 #include "sim/normal.h"
 #include "numeric/errors.h"

@@ -10,8 +10,8 @@
 #include <numbers>
 #include <sstream>
 
-#include "sim/curl_detail.h"
-#include "sim/lattice.h"
+#include "sim/detail/curl.h"
+#include "sim/detail/lattice.h"
 #include "sim/layout.h"
 #include "numeric/rng.h"
 #include "sim/sim.h"

@@ -15,7 +15,7 @@
 #include <mutex>
 #include <utility>
 
-#include "sim/sim.h"
+#include "sim/velocity_sequence.h"
 
 namespace impulse::sim {
 

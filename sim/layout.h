@@ -10,7 +10,8 @@
 #include <vector>
 
 #include "numeric/rng.h"
-#include "sim/sim.h"
+#include "numeric/box.h"
+#include "sim/simulator.h"
 
 namespace impulse::sim::detail {
 

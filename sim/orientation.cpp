@@ -9,7 +9,7 @@
 #include <numbers>
 #include <sstream>
 
-#include "sim/angle.h"
+#include "sim/detail/angle.h"
 #include "sim/sim.h"
 #include "numeric/errors.h"
 

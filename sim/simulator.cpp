@@ -12,7 +12,8 @@
 #include <sstream>
 #include <tuple>
 
-#include "sim/angle.h"
+#include "sim/sim.h"
+#include "sim/detail/angle.h"
 #include "sim/layout.h"
 #include "sim/normal.h"
 #include "numeric/rng.h"

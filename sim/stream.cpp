@@ -1,12 +1,13 @@
 // SPDX-License-Identifier: Apache-2.0
 // A still layer's field as a stream function: the flow along its level lines. The same lattice
-// and Catmull-Rom interpolation as curl noise (sim/lattice.h), with the layer's own kernel in
+// and Catmull-Rom interpolation as curl noise (sim/detail/lattice.h), with the layer's own kernel in
 // place of the (1 - q)^3 bump and the normalisation computed from its semivariogram.
 
 #include <cmath>
 #include <sstream>
 
-#include "sim/lattice.h"
+#include "sim/sim.h"
+#include "sim/detail/lattice.h"
 #include "numeric/errors.h"
 
 namespace impulse::sim {

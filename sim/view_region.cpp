@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "sim/sim.h"
 #include "sim/layout.h"
 
 namespace impulse::sim {

@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <limits>
 
-#include "synth/fbm_detail.h"
+#include "synth/detail/fbm.h"
 #include "numeric/errors.h"
 
 namespace impulse::synth {

@@ -11,8 +11,8 @@
 #include <cmath>
 #include <string>
 
-#include "synth/fbm_detail.h"
-#include "synth/periodic.h"
+#include "synth/detail/fbm.h"
+#include "synth/detail/periodic.h"
 #include "numeric/errors.h"
 
 namespace impulse::synth {

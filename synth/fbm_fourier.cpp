@@ -8,8 +8,8 @@
 
 #include <cmath>
 
-#include "synth/fbm_detail.h"
-#include "synth/periodic.h"
+#include "synth/detail/fbm.h"
+#include "synth/detail/periodic.h"
 
 namespace impulse::synth {
 namespace detail {

@@ -9,8 +9,8 @@
 #include <cmath>
 #include <complex>
 
-#include "synth/fbm_detail.h"
-#include "synth/periodic.h"
+#include "synth/detail/fbm.h"
+#include "synth/detail/periodic.h"
 
 namespace impulse::synth {
 namespace detail {

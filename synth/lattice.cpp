@@ -14,7 +14,7 @@
 
 #include "numeric/errors.h"
 #include "numeric/rng.h"
-#include "synth/cells.h"
+#include "synth/detail/cells.h"
 
 namespace impulse::synth {
 namespace {

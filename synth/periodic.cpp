@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-#include "synth/periodic.h"
+#include "synth/detail/periodic.h"
 
 #include <tbb/parallel_for.h>
 

@@ -15,9 +15,9 @@
 
 #include "numeric/errors.h"
 #include "numeric/rng.h"
-#include "synth/cells.h"
-#include "synth/solid_cells.h"
-#include "synth/solid_loops.h"
+#include "synth/detail/cells.h"
+#include "synth/detail/solid_cells.h"
+#include "synth/detail/solid_loops.h"
 
 namespace impulse::synth {
 namespace {

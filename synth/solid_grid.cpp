@@ -12,8 +12,8 @@
 #include <numbers>
 
 #include "synth/solid.h"
-#include "synth/solid_cells.h"
-#include "synth/solid_loops.h"
+#include "synth/detail/solid_cells.h"
+#include "synth/detail/solid_loops.h"
 
 namespace impulse::synth::detail {
 

@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
-// The inner loops of sparse-convolution solid noise (synth/solid_loops.h).
+// The inner loops of sparse-convolution solid noise (synth/detail/solid_loops.h).
 
-#include "synth/solid_loops.h"
+#include "synth/detail/solid_loops.h"
 
 #include <cmath>
 #include <numbers>

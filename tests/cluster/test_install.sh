@@ -3,7 +3,10 @@
 # `cmake --install` into a temporary prefix, then a tiny consumer project built against the
 # installed tree twice: with find_package(impulse) (imported target impulse::scenes) and with
 # pkg-config (impulse.pc). Each renders a 16x16 frame of a scene given as a string and prints
-# its mean: the two must agree. The installed tool renders and lists its built-in scenes.
+# its mean: the two must agree. The installed tool renders and lists its built-in scenes. The
+# installed headers are the facades and their lists, named as a consumer writes them
+# (<impulse/scenes/scenes.h>; docs/design.md §2 "Facades"): the short in-tree name does not
+# compile against them, and no detail/ or app/ header is installed.
 # Usage: test_install.sh BUILD_DIR
 set -euo pipefail
 # A sanitized build installs instrumented libraries that only a consumer compiled with the same
@@ -19,12 +22,19 @@ for f in bin/impulse lib/impulse/libimpulse_io.so include/impulse/scenes/scenes.
     [ -e "$prefix/$f" ] || { echo "FAILED: $f not installed"; exit 1; }
 done
 
+for f in include/impulse/app include/impulse/scenes/detail include/impulse/render/detail lib/libimpulse_app.a; do
+    [ ! -e "$prefix/$f" ] || { echo "FAILED: $f installed (internal, not the API)"; exit 1; }
+done
+if grep -rn '#include "' "$prefix/include/impulse" | grep -v '#include "[^/"]*"$' | head -3 | grep .; then
+    echo "FAILED: installed headers include the project's headers by their in-tree names"; exit 1
+fi
+
 mkdir -p "$work/consumer"
 cat >"$work/consumer/main.cpp" <<'CPP'
 // A consumer of the installed impulse: one small frame of a scene given as text.
 #include <cstdio>
 
-#include "scenes/scenes.h"
+#include <impulse/scenes/scenes.h>
 
 int main() {
     auto scene = impulse::scenes::load_scene_string(
@@ -59,6 +69,11 @@ PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --cflags --libs impulse >"$wo
 c++ -O2 "$work/consumer/main.cpp" -o "$work/consumer/with_pc" $(cat "$work/flags") 2>"$work/pc.log" ||
     { echo "FAILED: c++ \$(pkg-config --cflags --libs impulse):"; cat "$work/pc.log"; exit 1; }
 with_pc=$("$work/consumer/with_pc")
+# The in-tree name is not a name of the installed tree.
+printf '#include "scenes/scenes.h"\nint main() { return 0; }\n' >"$work/short.cpp"
+if c++ -fsyntax-only "$work/short.cpp" $(PKG_CONFIG_PATH="$prefix/lib/pkgconfig" pkg-config --cflags impulse) 2>/dev/null; then
+    echo "FAILED: #include \"scenes/scenes.h\" compiles against the installed tree"; exit 1
+fi
 
 # The installed tool on the same scene.
 printf '[output]\nsize = [16, 16]\nframes = 1\n[[layer]]\nseed = 3\n[layer.kernel]\ntype = "cosine"\nradius = 4.0\n' \

@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <memory>
 
-#include "scenes/reader.h"
+#include "scenes/detail/reader.h"
 #include "scenes/scenes.h"
 
 namespace impulse::scenes::detail {

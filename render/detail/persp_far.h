@@ -17,7 +17,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "render/persp_detail.h"
+#include "render/detail/persp.h"
 
 namespace impulse::render::detail {
 

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "numeric/rng.h"
-#include "synth/solid_loops.h"
+#include "synth/detail/solid_loops.h"
 
 namespace impulse::synth {
 class SolidNoise;

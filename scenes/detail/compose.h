@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "scenes/reader.h"
+#include "scenes/detail/reader.h"
 #include "scenes/scenes.h"
 
 namespace impulse::scenes::detail {

@@ -13,10 +13,10 @@
 #include <string>
 #include <vector>
 
-#include "scenes/compose_detail.h"
-#include "scenes/reader.h"
+#include "scenes/detail/compose.h"
+#include "scenes/detail/reader.h"
 #include "scenes/scenes.h"
-#include "scenes/source_detail.h"
+#include "scenes/detail/source.h"
 
 namespace impulse::volume {
 class FlowSum3;

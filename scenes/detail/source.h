@@ -10,7 +10,7 @@
 #include <optional>
 #include <string_view>
 
-#include "scenes/reader.h"
+#include "scenes/detail/reader.h"
 #include "scenes/source.h"
 
 namespace impulse::scenes::detail {

@@ -11,7 +11,7 @@
 #include <optional>
 #include <vector>
 
-#include "scenes/reader.h"
+#include "scenes/detail/reader.h"
 #include "scenes/scenes.h"
 
 namespace impulse::scenes::detail {
