@@ -20,7 +20,7 @@
 #include <sstream>
 
 #include "mesh/mesh.h"
-#include "mesh/obj_format.h"
+#include "mesh/detail/obj_format.h"
 #include "tests/support.h"
 
 namespace {

@@ -4,7 +4,7 @@
 
 #include <catch2/catch.hpp>
 
-#include "app/preview_detail.h"
+#include "app/detail/preview.h"
 #include "numeric/errors.h"
 #include "tests/support.h"
 

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "output/image_input.h"
+#include "output/detail/image_input.h"
 #include "output/output.h"
 #include "render/render.h"
 #include "tests/support.h"

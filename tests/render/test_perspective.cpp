@@ -939,7 +939,7 @@ TEST_CASE("perspective frames stay bounded however close the horizon", "[render]
 }
 
 // ---------------------------------------------------------------------------------------------
-// The far field (render/persp_far.h)
+// The far field (render/detail/persp_far.h)
 
 TEST_CASE(
     "the far field draws most impulses of a grazing view for a fraction of the work and "

@@ -16,7 +16,7 @@
 
 #include "kernels/kernels.h"
 #include "render/render.h"
-#include "scenes/compose_detail.h"
+#include "scenes/detail/compose.h"
 #include "scenes/scenes.h"
 #include "tests/scene_render.h"
 #include "numeric/spline.h"

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "numeric/errors.h"
-#include "scenes/camera_detail.h"
+#include "scenes/detail/camera.h"
 #include "scenes/scenes.h"
 
 namespace S = impulse::scenes;

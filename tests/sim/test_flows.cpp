@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "sim/curl_detail.h"
+#include "sim/detail/curl.h"
 #include "sim/sim.h"
 #include "numeric/errors.h"
 
