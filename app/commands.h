@@ -1,6 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// The commands of the `impulse` tool (internal to app/).
+// The commands of the `impulse` tool (internal to app/): render (app/render.cpp), scenes and info
+// (app/info.cpp), and what they share.
 
 #include <string>
 #include <vector>
@@ -40,6 +41,10 @@ long long whole_number(const std::string& option, const std::string& text, const
 /// --size or --crop `text` "WxH" in [1, 32768]^2 ({0, 0} when empty); ValueError naming
 /// `option` otherwise.
 scenes::OutputSize parse_size(const std::string& option, const std::string& text);
+/// The scene overrides of --set, --crop (output.size: a window at the scene's own scale) and
+/// --seed, for render and info alike.
+std::vector<std::string> overrides_for(const std::vector<std::string>& sets, const std::string& crop,
+                                       const std::string& seed);
 int run_scenes();
 int run_info(const InfoOptions& options);
 

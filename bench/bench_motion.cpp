@@ -320,7 +320,7 @@ struct Variant {
 };
 
 /// One run: frames 0 .. n-1 of the default scene on a fresh Renderer, as `impulse render`
-/// does for a video (app/commands.cpp): render frame f, stage it (VideoWriter::stage_shaded:
+/// does for a video (app/render.cpp): render frame f, stage it (VideoWriter::stage_shaded:
 /// output::Shader straight into the encoder's YUV 4:2:0 planes), then encode it on another
 /// thread (VideoWriter::encode_staged) while frame f + 1 renders. Returns frames per second
 /// over the whole run (open and close included).
