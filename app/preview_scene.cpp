@@ -1,5 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
-// `impulse preview`: the files a scene is made of, and the numeric keys the page exposes.
+// `impulse preview`: the files a scene is made of, and the numeric keys the page exposes (the
+// Blender add-on's sliders too, through the Python module: app/expose.h).
 
 #include <toml++/toml.h>
 
