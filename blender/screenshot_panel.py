@@ -21,7 +21,8 @@ def setup():
     settings.expose = "layer.0.gain, layer.0.kernel.sigma=60:200"
     settings.follow = True
     bpy.context.scene.frame_set(12)
-    bpy.ops.impulse.set_key(key="layer.0.kernel.sigma", value=150.5)
+    bpy.ops.impulse.set_key(key="layer.0.kernel.sigma", value=150)
+    bpy.ops.impulse.set_key(key="layer.0.gain", value=1.3)
     window = bpy.context.window_manager.windows[0]
     # One big area: the 3-D viewport becomes the Image Editor (the other areas stay as they are).
     area = max(window.screen.areas, key=lambda a: a.width * a.height)
@@ -57,26 +58,44 @@ def tick():
         return 1.0
     window, area = state["window"], state["area"]
     if state["step"] == 1:
-        with bpy.context.temp_override(window=window, area=area):
-            bpy.ops.image.view_all(fit_view=False)
+        image_region = next(r for r in area.regions if r.type == "WINDOW")
+        with bpy.context.temp_override(window=window, area=area, region=image_region):
+            bpy.ops.image.view_all(fit_view=True)
         state["step"] = 2
         return 0.5
     if state["step"] == 2:
         if not panel_drawn() and state["tries"] < 12:
-            # Ctrl+wheel over the sidebar steps through its tabs until the impulse panel draws.
+            # The wheel over the sidebar's tabs steps through them until the impulse panel draws.
             sidebar = next(r for r in area.regions if r.type == "UI")
-            x, y = sidebar.x + sidebar.width // 2, sidebar.y + sidebar.height // 2
+            y = sidebar.y + sidebar.height // 2
+            x = sidebar.x + sidebar.width - 8  # over the tabs' column: the wheel steps them
             window.event_simulate(type="MOUSEMOVE", value="NOTHING", x=x, y=y)
-            window.event_simulate(type="WHEELDOWNMOUSE", value="PRESS", x=x, y=y, ctrl=True)
+            window.event_simulate(type="WHEELDOWNMOUSE", value="PRESS", x=x, y=y)
             state["tries"] += 1
             return 0.5
         state["step"] = 3
         return 1.0
-    with bpy.context.temp_override(window=window, area=area):
-        bpy.ops.screen.screenshot_area(filepath=out)
-    print(f"screenshot: {out} (panel drawn: {panel_drawn()}, {state['tries']} tab steps)")
+    if not panel_drawn():
+        print("screenshot: the impulse tab did not come up; nothing written")
+    else:
+        with bpy.context.temp_override(window=window, area=area):
+            bpy.ops.screen.screenshot_area(filepath=out)
+        print(f"screenshot: {out} ({state['tries']} tab steps)")
     bpy.ops.wm.quit_blender()
     return None
 
 
-bpy.app.timers.register(tick, first_interval=2.0)
+def guarded():
+    """tick, quitting Blender on an error (a window would otherwise stay open)."""
+    try:
+        return tick()
+    except Exception:
+        import traceback
+
+        traceback.print_exc()
+        bpy.ops.wm.quit_blender()
+        return None
+
+
+bpy.context.preferences.view.show_splash = False  # read before the splash would open
+bpy.app.timers.register(guarded, first_interval=2.0)

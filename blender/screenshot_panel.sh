@@ -16,7 +16,7 @@ trap 'rm -rf "$tmp"' EXIT
 export BLENDER_USER_CONFIG=$tmp/config BLENDER_USER_SCRIPTS=$tmp/scripts BLENDER_USER_DATAFILES=$tmp/data
 bash "$src/scripts/blender_addon.sh" -o "$tmp/impulse_addon.zip" > /dev/null
 # Software OpenGL (Mesa's llvmpipe) draws the window; event simulation lets the script pick the
-# sidebar's tab as a Ctrl+wheel over it would.
+# sidebar's tab as the mouse wheel over its tabs would.
 xvfb-run -a -s "-screen 0 1200x760x24" blender --factory-startup --enable-event-simulate \
     --python "$src/blender/screenshot_panel.py" -- "$tmp/impulse_addon.zip" "$module" "$cli" "$tmp/shot.png" \
     > "$tmp/blender.log" 2>&1 || true

@@ -612,11 +612,12 @@ class IMPULSE_PT_panel(bpy.types.Panel):
         layout.prop(settings, "expose")
         if settings.keys_error:
             layout.label(text=settings.keys_error, icon="ERROR")
+        column = layout.column(align=True)
         for item in settings.keys:
-            # One number slider a key: Blender's float properties have one range for every
-            # instance, so the key's own range is checked by impulse.set_key and shown here.
-            row = layout.row(align=True)
-            row.prop(item, "value", text=f"{item.key} [{item.lo:g}, {item.hi:g}]")
+            # A number field a key, its range above it: a float property has one range for all
+            # its instances, so each key's own range is shown here and checked by impulse.set_key.
+            column.label(text=f"{item.key}  [{item.lo:g}, {item.hi:g}]")
+            column.prop(item, "value", text="")
         if len(settings.keys):
             layout.operator(IMPULSE_OT_refresh_keys.bl_idname)
         row = layout.row()
