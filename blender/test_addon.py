@@ -193,7 +193,38 @@ for f in (3, 4, 5):
     user = material.evaluated_get(bpy.context.evaluated_depsgraph_get()).node_tree.nodes[node.name].image_user
     read = baked.filepath_from_user(image_user=user)
     assert os.path.basename(read) == f"drift_{f:04d}.exr", (f, read, user.frame_current)
-print("impulse add-on: bake 3-5 writes the CLI's EXR pixels bit for bit; at Blender frame f the node reads file f")
+
+# The final render reads the files: Cycles renders the plane, lit only by the texture through an
+# Emission shader (nearest texel, a box filter narrower than a pixel, an orthographic camera
+# with a pixel a texel), and frame f of the render is file f's pixels bit for bit.
+tree = material.node_tree
+emission, output = tree.nodes.new("ShaderNodeEmission"), tree.nodes["Material Output"]
+tree.links.new(node.outputs["Color"], emission.inputs["Color"])
+tree.links.new(emission.outputs["Emission"], output.inputs["Surface"])
+node.interpolation = "Closest"
+plane = bpy.context.active_object
+plane.scale = (192 / 108, 1, 1)
+camera = bpy.data.objects.new("camera", bpy.data.cameras.new("camera"))
+camera.data.type, camera.data.ortho_scale, camera.location = "ORTHO", 2 * 192 / 108, (0, 0, 5)
+scene.collection.objects.link(camera)
+scene.camera = camera
+for other in scene.objects:
+    other.hide_render = other not in (plane, camera)  # the start-up cube, the sphere, the volume
+scene.render.engine, scene.cycles.samples, scene.cycles.use_denoising = "CYCLES", 1, False
+scene.cycles.pixel_filter_type, scene.cycles.filter_width = "BOX", 0.01
+scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 192, 108, 100
+scene.render.image_settings.file_format, scene.render.image_settings.color_depth = "OPEN_EXR", "32"
+for f in (3, 4, 5):
+    scene.frame_set(f)
+    scene.render.filepath = os.path.join(bake_dir, "..", f"render_{os.getpid()}_{f}.exr")
+    bpy.ops.render.render(write_still=True)
+    rendered = bpy.data.images.load(scene.render.filepath, check_existing=False)
+    file = bpy.data.images.load(os.path.join(bake_dir, f"drift_{f:04d}.exr"), check_existing=False)
+    assert bits_equal(image_red(rendered), image_red(file)), (f, np.abs(image_red(rendered) - image_red(file)).max())
+    bpy.data.images.remove(rendered), bpy.data.images.remove(file)
+    os.remove(scene.render.filepath)
+print("impulse add-on: bake 3-5 writes the CLI's EXR pixels bit for bit; at Blender frame f the node "
+      "reads file f, and Cycles renders file f's pixels")
 
 images = len(bpy.data.images)
 settings.overrides = "layer.0.kernel.radius=-4"
