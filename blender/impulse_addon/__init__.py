@@ -125,8 +125,9 @@ def _run_tool(arguments):
 
 def _render_frames(settings, first, last, folder, extension, sized=True):
     """`impulse render SOURCE --frames first-last -o folder/STEM_####.extension` with the settings'
-    overrides (and size, when `sized`: an image scene's; the CLI's bits); returns the files written, in frame order. A failure
-    removes the folder (nothing half-written is left) and raises RuntimeError."""
+    overrides (and size, when `sized`: an image scene's), so the files are the CLI's; returns
+    their names in frame order. A failure removes the folder (nothing half-written is left) and
+    raises RuntimeError."""
     stem = os.path.splitext(os.path.basename(settings.source))[0]
     command = ["render", settings.source, "-o", os.path.join(folder, f"{stem}_####.{extension}"),
                "--frames", f"{first}-{last}", "-q"]
@@ -338,7 +339,8 @@ def refresh_keys(settings):
     for k in _impulse().exposed_keys(settings.source, specs):
         item = settings.keys.add()
         with _Quietly():
-            item.key, item.lo, item.hi, item.step, item.integer = k["key"], k["lo"], k["hi"], k["step"], k["integer"]
+            item.key, item.lo, item.hi = k["key"], k["lo"], k["hi"]
+            item.step, item.integer = k["step"], k["integer"]
             item.value = item.applied = k["value"]
 
 
@@ -404,7 +406,8 @@ def set_key(settings, key, value, frame):
     if expected:
         with _Quietly():
             item.value = item.applied  # a typed-in value goes back
-        raise ValueError(f"{key} = {value:g}: expected {expected} [{item.lo:g}, {item.hi:g}], the slider's range")
+        raise ValueError(f"{key} = {value:g}: expected {expected} [{item.lo:g}, {item.hi:g}], "
+                         "the slider's range")
     with _Quietly():
         item.value = item.applied = value
         item.moved = True
@@ -540,7 +543,7 @@ class IMPULSE_OT_refresh_keys(bpy.types.Operator):
 
 
 class IMPULSE_OT_bake_sequence(bpy.types.Operator):
-    """Render frames to an EXR sequence with the impulse tool and show it where the Image was (for the final render)"""
+    """Render frames to an EXR sequence with the impulse tool, shown where the Image was (final render)"""
 
     bl_idname = "impulse.bake_sequence"
     bl_label = "Bake EXR Sequence"
@@ -567,11 +570,13 @@ class IMPULSE_OT_porous_object(bpy.types.Operator):
     bl_idname = "impulse.porous_object"
     bl_label = "Porous Object"
     bl_options = {"REGISTER", "UNDO"}
-    iso: FloatProperty(name="Iso", default=0.5, description="The iso value in standard deviations of the noise, nonzero")
+    iso: FloatProperty(name="Iso", default=0.5,
+                       description="The iso value in standard deviations of the noise, nonzero")
     envelope: EnumProperty(name="Envelope", items=[("sphere", "Sphere", ""), ("box", "Box", "")])
     falloff: FloatProperty(name="Falloff", default=0.3, min=0.001, max=1.0)
     size: IntProperty(name="Grid", default=64, min=8, max=1024, description="Grid samples across the object")
-    scale: FloatProperty(name="Scale", default=0.25, description="Kernel radius of the noise, object units ([-1, 1]^3)")
+    scale: FloatProperty(name="Scale", default=0.25,
+                         description="Kernel radius of the noise, object units ([-1, 1]^3)")
     seed: IntProperty(name="Seed", default=0, min=0)
 
     def execute(self, context):
@@ -587,7 +592,8 @@ class IMPULSE_OT_deform_mesh(bpy.types.Operator):
     bl_idname = "impulse.deform_mesh"
     bl_label = "Deform Mesh"
     bl_options = {"REGISTER", "UNDO"}
-    amount: FloatProperty(name="Amount", default=0.1, description="Displacement per standard deviation, mesh units")
+    amount: FloatProperty(name="Amount", default=0.1,
+                          description="Displacement per standard deviation, mesh units")
     scale: FloatProperty(name="Scale", default=0.5, description="Kernel radius of the noise, mesh units")
     seed: IntProperty(name="Seed", default=0, min=0)
 
