@@ -187,9 +187,9 @@ def bake_sequence(settings, first, last, directory):
     directory = bpy.path.abspath(directory) if directory else tempfile.mkdtemp(prefix="impulse_bake_")
     try:
         os.makedirs(directory, exist_ok=True)
+        staging = tempfile.mkdtemp(prefix=".impulse_bake_", dir=directory)
     except OSError as e:
         raise RuntimeError(f"{directory}: {e.strerror}: expected a directory the bake can write")
-    staging = tempfile.mkdtemp(prefix=".impulse_bake_", dir=directory)
     files = _render_frames(settings, first, last, staging, "exr")
     if len(files) != last - first + 1:
         shutil.rmtree(staging, ignore_errors=True)
@@ -341,7 +341,7 @@ def refresh_keys(settings):
         with _Quietly():
             item.key, item.lo, item.hi = k["key"], k["lo"], k["hi"]
             item.step, item.integer = k["step"], k["integer"]
-            item.value = item.applied = k["value"]
+            _show(item, k["value"])
 
 
 def _read_keys(settings):
@@ -376,13 +376,22 @@ class _Quietly:
         _quiet.pop()
 
 
+def _show(item, value):
+    """Puts `value` on the slider (both of its fields) as the value taken, calling nothing."""
+    with _Quietly():
+        item.value = item.applied = value
+        item.whole = int(round(value)) if item.integer else 0
+
+
 def _slider_moved(item, context):
     """A slider changed in the panel: the value goes through impulse.set_key (its range checked,
-    its error the operator's report, the Image re-rendered when following the timeline)."""
+    its error the operator's report, the Image re-rendered when following the timeline). An
+    integer key's field is `whole`: dragging it gives whole numbers only."""
     if _quiet:
         return
+    value = float(item.whole) if item.integer else item.value
     try:
-        bpy.ops.impulse.set_key(key=item.key, value=item.value)
+        bpy.ops.impulse.set_key(key=item.key, value=value)
     except RuntimeError as e:  # the report, as Blender raises it where there is no window
         print(f"impulse: {e}")
 
@@ -404,13 +413,11 @@ def set_key(settings, key, value, frame):
     elif item.integer and value != round(value):
         expected = "a whole number (the scene writes an integer) in"
     if expected:
-        with _Quietly():
-            item.value = item.applied  # a typed-in value goes back
+        _show(item, item.applied)  # a typed-in value goes back
         raise ValueError(f"{key} = {value:g}: expected {expected} [{item.lo:g}, {item.hi:g}], "
                          "the slider's range")
-    with _Quietly():
-        item.value = item.applied = value
-        item.moved = True
+    _show(item, value)
+    item.moved = True
     if settings.follow:
         fill(settings, frame)
 
@@ -420,6 +427,7 @@ class ImpulseKey(bpy.types.PropertyGroup):
 
     key: StringProperty(name="Key")
     value: FloatProperty(name="Value", update=_slider_moved, precision=4)
+    whole: IntProperty(name="Value", update=_slider_moved)  # the field of an integer key
     applied: FloatProperty()  # the last value taken (a refused one goes back to it)
     lo: FloatProperty()
     hi: FloatProperty()
@@ -623,7 +631,7 @@ class IMPULSE_PT_panel(bpy.types.Panel):
             # A number field a key, its range above it: a float property has one range for all
             # its instances, so each key's own range is shown here and checked by impulse.set_key.
             column.label(text=f"{item.key}  [{item.lo:g}, {item.hi:g}]")
-            column.prop(item, "value", text="")
+            column.prop(item, "whole" if item.integer else "value", text="")
         if len(settings.keys):
             layout.operator(IMPULSE_OT_refresh_keys.bl_idname)
         row = layout.row()
