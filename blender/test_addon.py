@@ -244,15 +244,17 @@ got = np.array([tuple(v.co) for v in deformed.data.vertices])
 before = np.array([tuple(v.co) for v in ball.data.vertices])
 
 
-def cli_deform(points, faces, folder, name):
+def cli_deform(points, faces, folder, name, frames=0):
+    """The tool's deformed positions (N x 3; with frames, a list of them) of the vertex list."""
     path = os.path.join(folder, name + ".obj")
     with open(path, "w") as f:
         f.writelines("v %.9g %.9g %.9g\n" % tuple(p) for p in points)
         f.writelines("f " + " ".join(str(i + 1) for i in face) + "\n" for face in faces)
-    out = os.path.join(folder, name + ".ply")
+    out = os.path.join(folder, name + ("_####.ply" if frames else ".ply"))
     subprocess.run([cli, "mesh", "deform", path, "--amount", "0.2", "--scale", "0.6", "--seed", "4",
-                    "-o", out], check=True, capture_output=True)
-    return np.array(addon.ply_vertex_columns(out, ("x", "y", "z")))
+                    "-o", out] + (["--frames", str(frames)] if frames else []), check=True, capture_output=True)
+    read = lambda ply: np.array(addon.ply_vertex_columns(ply, ("x", "y", "z")))  # noqa: E731
+    return [read(out.replace("####", "%04d" % f)) for f in range(frames)] if frames else read(out)
 
 
 faces = [list(p.vertices) for p in ball.data.polygons]
@@ -270,6 +272,23 @@ moved = np.linalg.norm(got - before, axis=1)
 assert moved.min() > 0 and moved.max() > 0.05, (moved.min(), moved.max())  # it did move
 print(f"impulse add-on: a {n}-vertex sphere deformed keeps count and order (max |Blender - tool| "
       f"{np.abs(got - tool).max():.1e}, displacement up to {moved.max():.3f})")
+
+# Frames through 4-D noise as shape keys: at Blender frame f the evaluated mesh is the tool's
+# frame f, vertex for vertex.
+bpy.context.view_layer.objects.active = ball
+assert bpy.ops.impulse.deform_mesh(amount=0.2, scale=0.6, seed=4, frames=3) == {"FINISHED"}
+moving = bpy.context.active_object
+assert [k.name for k in moving.data.shape_keys.key_blocks] == ["frame 0", "frame 1", "frame 2"]
+with tempfile.TemporaryDirectory() as folder:
+    tool_frames = cli_deform(before, faces, folder, "moving", frames=3)
+for f in (2, 0, 1):
+    scene.frame_set(f)
+    evaluated = moving.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    shape = np.array([tuple(v.co) for v in evaluated.to_mesh().vertices])
+    evaluated.to_mesh_clear()
+    assert np.abs(shape - tool_frames[f]).max() < 1e-6, (f, np.abs(shape - tool_frames[f]).max())
+assert np.abs(tool_frames[2] - tool_frames[0]).max() > 0.01  # the frames differ
+print("impulse add-on: deform --frames 3 as shape keys: Blender frame f is the tool's frame f")
 
 # --- A porous object comes in with faces; a bad iso is one report and no object ---------------
 assert bpy.ops.impulse.porous_object(iso=0.5, size=32, seed=2) == {"FINISHED"}

@@ -42,15 +42,18 @@ def _impulse():
     return impulse
 
 
-def _key_text(item):
-    """A slider's value as TOML text for --set: a whole number for an integer key, else the
-    shortest decimal that reads back as the slider's single-precision value (Blender's float
-    properties are 32-bit; "0.7" rather than 0.699999988...)."""
+def _number(value):
+    """A Blender float property's value as the text a user typed: the shortest decimal that reads
+    back as its single-precision value (Blender's float properties are 32-bit; "0.7" rather than
+    0.699999988...), so the tool gets what `--amount 0.7` or `--set key=0.7` would give it."""
     import numpy as np
 
-    if item.integer:
-        return str(int(round(item.value)))
-    return str(np.float32(item.value))
+    return str(np.float32(value))
+
+
+def _key_text(item):
+    """A slider's value as TOML text for --set: a whole number for an integer key, else _number."""
+    return str(item.whole) if item.integer else _number(item.value)
 
 
 def _overrides(settings):
@@ -302,29 +305,50 @@ def porous_object(iso, envelope, falloff, size, scale, seed):
     RuntimeError with the tool's error line."""
     with tempfile.TemporaryDirectory(prefix="impulse_mesh_") as folder:
         out = os.path.join(folder, "porous.ply")
-        _run_tool(["mesh", "porous", "--iso", repr(iso), "--envelope", envelope, "--falloff",
-                   repr(falloff), "--size", str(size), "--scale", repr(scale), "--seed", str(seed),
+        _run_tool(["mesh", "porous", "--iso", _number(iso), "--envelope", envelope, "--falloff",
+                   _number(falloff), "--size", str(size), "--scale", _number(scale), "--seed", str(seed),
                    "-o", out])
         return _import_ply(out, f"impulse porous {envelope}")
 
 
-def deform_mesh(obj, amount, scale, seed):
+def deform_mesh(obj, amount, scale, seed, frames=0):
     """A copy of the mesh object displaced by vector solid noise (`impulse mesh deform`,
     docs/mesh.md "Stochastic deformation (L89 §5.3)") as a new object with the same transform:
-    vertex i of the new mesh is vertex i of the old one, moved. Raises RuntimeError with the
-    tool's error line, or when the vertex count changed (nothing is kept then)."""
+    vertex i of the new mesh is vertex i of the old one, moved. With `frames` N > 0, the tool's
+    N frames through 4-D noise (`--frames N`): the mesh is frame 0 and shape key "frame f" holds
+    frame f, weighted 1 at Blender frame f and 0 one frame either side, so the shape plays frame
+    f at Blender frame f (linear in between). Raises RuntimeError with the tool's error line, or
+    when the vertex count changed (nothing is kept then)."""
     with tempfile.TemporaryDirectory(prefix="impulse_mesh_") as folder:
-        source, out = os.path.join(folder, "in.obj"), os.path.join(folder, "out.ply")
+        source = os.path.join(folder, "in.obj")
+        out = os.path.join(folder, "out_####.ply" if frames > 0 else "out.ply")
         _write_obj(obj.data, source)
-        _run_tool(["mesh", "deform", source, "--amount", repr(amount), "--scale", repr(scale),
-                   "--seed", str(seed), "-o", out])
-        deformed = _import_ply(out, f"{obj.name} deformed")
-    if len(deformed.data.vertices) != len(obj.data.vertices):
-        count = len(deformed.data.vertices)
-        bpy.data.meshes.remove(deformed.data)  # removes the object with it
-        raise RuntimeError(f"impulse mesh deform: {count} vertices came back for {len(obj.data.vertices)}")
+        _run_tool(["mesh", "deform", source, "--amount", _number(amount), "--scale", _number(scale),
+                   "--seed", str(seed), "-o", out] + (["--frames", str(frames)] if frames > 0 else []))
+        first = out.replace("####", "0000")
+        deformed = _import_ply(first, f"{obj.name} deformed")
+        if len(deformed.data.vertices) != len(obj.data.vertices):
+            count = len(deformed.data.vertices)
+            bpy.data.meshes.remove(deformed.data)  # removes the object with it
+            raise RuntimeError(f"impulse mesh deform: {count} vertices came back for {len(obj.data.vertices)}")
+        if frames > 0:
+            _shape_keys(deformed, [out.replace("####", "%04d" % f) for f in range(frames)])
     deformed.matrix_world = obj.matrix_world
     return deformed
+
+
+def _shape_keys(obj, files):
+    """Shape keys "frame f" (f >= 1) from the positions of files[f] (vertex i of each file is
+    vertex i of the mesh), keyed to weight 1 at Blender frame f only."""
+    obj.shape_key_add(name="frame 0", from_mix=False)  # the basis: the mesh, frame 0
+    for f, path in enumerate(files[1:], start=1):
+        key = obj.shape_key_add(name=f"frame {f}", from_mix=False)
+        key.data.foreach_set("co", [c for p in ply_vertex_columns(path, ("x", "y", "z")) for c in p])
+        for frame, weight in ((f - 1, 0.0), (f, 1.0), (f + 1, 0.0)):
+            key.value = weight
+            key.keyframe_insert("value", frame=frame)
+        for point in obj.data.shape_keys.animation_data.action.fcurves[-1].keyframe_points:
+            point.interpolation = "LINEAR"
 
 
 def refresh_keys(settings):
@@ -604,10 +628,14 @@ class IMPULSE_OT_deform_mesh(bpy.types.Operator):
                           description="Displacement per standard deviation, mesh units")
     scale: FloatProperty(name="Scale", default=0.5, description="Kernel radius of the noise, mesh units")
     seed: IntProperty(name="Seed", default=0, min=0)
+    frames: IntProperty(name="Frames", default=0, min=0, max=100000,
+                        description="0: one shape; N: frames 0..N-1 through 4-D noise as shape keys "
+                                    "(frame f at Blender frame f)")
 
     def execute(self, context):
         def work():
-            deformed = deform_mesh(_active_mesh(context, "Deform Mesh"), self.amount, self.scale, self.seed)
+            obj = _active_mesh(context, "Deform Mesh")
+            deformed = deform_mesh(obj, self.amount, self.scale, self.seed, self.frames)
             return f"{deformed.name}: {len(deformed.data.vertices)} vertices moved"
         return _reported(self, work)
 
