@@ -135,9 +135,9 @@ def one_error(call, *needles):
 
 scene = bpy.context.scene
 settings.source, settings.overrides, settings.image, settings.width, settings.height = "drift", "", None, 192, 108
-settings.expose = "layer.0.gain, layer.0.kernel.sigma=60:200"
+settings.expose = "layer.0.gain, layer.0.kernel.sigma=60:200, layer.0.kernel.radius"
 keys = {k.key: k for k in settings.keys}
-assert list(keys) == ["layer.0.gain", "layer.0.kernel.sigma"], (list(keys), settings.keys_error)
+assert list(keys) == ["layer.0.gain", "layer.0.kernel.sigma", "layer.0.kernel.radius"], (list(keys), settings.keys_error)
 gain, sigma = keys["layer.0.gain"], keys["layer.0.kernel.sigma"]
 # The preview's ranges: 0 to twice the file's value (gain = 1.0), or the range given.
 # sigma is written as an integer: its slider moves in whole steps.
@@ -163,6 +163,11 @@ sigma.whole = 500  # an integer key's field
 assert abs(gain.value - 1.3) < 1e-6 and (sigma.value, sigma.whole) == (150, 150), (gain.value, sigma.value, sigma.whole)
 assert bits_equal(image_red(settings.image), field), "a refused value changed the Image"
 one_error(lambda: bpy.ops.impulse.set_key(key="layer.0.density", value=5), 'unknown key "layer.0.density"')
+# In range, but a value the scene refuses: the loader's line, and the slider goes back.
+one_error(lambda: bpy.ops.impulse.set_key(key="layer.0.kernel.radius", value=0), "kernel.radius = 0", "expected a radius > 0")
+radius = keys["layer.0.kernel.radius"]
+assert abs(radius.value - 446.031) < 1e-3 and not radius.moved, (radius.value, radius.moved)
+assert bits_equal(image_red(settings.image), field), "a refused value changed the Image"
 settings.follow = False
 print("impulse add-on: a value outside a slider's range is one error report; slider and Image unchanged")
 

@@ -423,8 +423,9 @@ def _slider_moved(item, context):
 def set_key(settings, key, value, frame):
     """Sets the slider of `key` to `value` and re-renders `frame` when following the timeline.
     Raises ValueError (one line naming the key, the value and the range) for an unknown key, a
-    value outside the slider's range or a fraction for an integer key; the slider and the Image
-    are left as they were then."""
+    value outside the slider's range or a fraction for an integer key, and impulse.Error with the
+    loader's line for a value the scene refuses; the slider and the Image are left as they were
+    then."""
     import math
 
     item = next((i for i in settings.keys if i.key == key), None)
@@ -440,10 +441,17 @@ def set_key(settings, key, value, frame):
         _show(item, item.applied)  # a typed-in value goes back
         raise ValueError(f"{key} = {value:g}: expected {expected} [{item.lo:g}, {item.hi:g}], "
                          "the slider's range")
+    before, was_moved = item.applied, item.moved
     _show(item, value)
     item.moved = True
-    if settings.follow:
-        fill(settings, frame)
+    try:  # a value the scene refuses (a radius of 0) is its loader's error; the slider goes back
+        _scene(settings)
+        if settings.follow:
+            fill(settings, frame)
+    except Exception:
+        _show(item, before)
+        item.moved = was_moved
+        raise
 
 
 class ImpulseKey(bpy.types.PropertyGroup):
