@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # The Blender add-on in headless Blender (docs/blender.md): installed from the zip
 # scripts/blender_addon.sh makes, with a temporary user configuration (nothing of the user's is
-# read or written), it fills an Image equal to `impulse render drift --frames 12-12` bit for bit.
+# read or written), it fills an Image equal to `impulse render drift --frames 12-12` bit for bit,
+# then checks the sliders, the EXR bake (rendered by Cycles), the volume, the mesh operators
+# (blender/test_addon.py; docs/blender.md "Tested").
 # Usage: test_blender_addon.sh SOURCE_DIR MODULE_DIR IMPULSE_CLI (CTest: -L blender).
 # Exit 77 (skipped) without Debian's blender.
 set -euo pipefail

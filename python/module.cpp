@@ -279,6 +279,23 @@ py::object analyze(const py::handle& frames, const py::object& scene, const py::
     return py::module_::import("json").attr("loads")(json);
 }
 
+/// The keys `impulse preview --expose` would give sliders (scenes/exposed.h: the same values and
+/// ranges), each as a dict {key, value, lo, hi, step, integer}.
+py::list exposed_keys(const std::string& source, const std::vector<std::string>& specs) {
+    if (is_toml_text(source))
+        throw ValueError("exposed_keys: TOML text: expected a scene file or a built-in name (the "
+                         "keys are read from the file and its includes)");
+    py::list out;
+    for (const scenes::Exposed& e :
+         scenes::exposed_keys(scenes::resolve_scene(source), specs)) {
+        py::dict d;
+        d["key"] = e.key, d["value"] = e.value, d["lo"] = e.lo, d["hi"] = e.hi;
+        d["step"] = e.step, d["integer"] = e.integer;
+        out.append(d);
+    }
+    return out;
+}
+
 /// Grid placement keywords shared by set_flow and set_orientation.
 template <class Grid>
 void place(Grid& g, const py::array& a, double spacing, std::pair<double, double> origin) {
@@ -409,5 +426,10 @@ PYBIND11_MODULE(impulse, m) {
           "float64): moments, spectrum, autocovariance, stationarity; with `scene` (a file, a "
           "built-in name or a Scene loaded from a file) compared with its theory. Returns the "
           "dict of `impulse analyze --json`.");
+    m.def("exposed_keys", &exposed_keys, py::arg("source"), py::arg("specs"),
+          "The numeric keys `impulse preview --expose` gives sliders: `specs` as --expose takes "
+          "them (\"layer.0.kernel.radius\" or \"layer.0.density=4:32\"), looked up in the scene "
+          "file (a file or a built-in name) and its includes; a list of dicts {key, value, lo, "
+          "hi, step, integer} with the preview's ranges (0 to twice the value unless given).");
     m.def("scenes_dir", &scenes::builtin_scene_dir, "Directory of the built-in scenes.");
 }

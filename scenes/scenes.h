@@ -6,6 +6,7 @@
 
 #include "scenes/channels.h"     // the channels a frame carries (value, dx, dy, motion)
 #include "scenes/closed_form.h"  // a scene's theory as analysis/ judges it (spectra, blur)
+#include "scenes/exposed.h"      // the numeric keys a scene gives sliders (preview, Blender)
 #include "scenes/loader.h"       // scene files and text to a Scene
 #include "scenes/renderer.h"     // Renderer: frame f of a scene
 #include "scenes/scene.h"        // the Scene and its configuration types

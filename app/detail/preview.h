@@ -18,6 +18,12 @@
 
 namespace impulse::app::preview {
 
+using scenes::Exposed;
+using scenes::exposed_keys;
+using scenes::reread_exposed;
+using scenes::toml_line;
+using scenes::toml_number;
+
 /// A watched file's identity at one moment (missing files included: they may come back).
 struct FileStamp {
     std::string path;
@@ -29,26 +35,6 @@ struct FileStamp {
 /// The scene file and the files it includes, recursively (as far as they parse: a file that
 /// does not is watched itself, and its includes once it parses again).
 std::vector<FileStamp> scene_files(const std::string& path);
-
-/// A numeric key of the scene with a slider on the page: `--expose key` or `key=lo:hi`.
-struct Exposed {
-    std::string key;     ///< dotted path as for --set: layer.0.kernel.radius
-    double value = 0.0;  ///< current value (the file's, then the page's)
-    double lo = 0.0, hi = 1.0, step = 0.01;
-    bool integer = false;  ///< the file holds an integer: the slider moves in whole steps
-    bool moved = false;    ///< the slider moved since the file was read: an override applies
-};
-/// The exposed keys looked up in the scene file (then its includes). Throws ValueError naming a
-/// key that is not a number there.
-std::vector<Exposed> exposed_keys(const std::string& path, const std::vector<std::string>& specs);
-/// Takes the exposed keys' values from the scene file again (after it changed: the file wins
-/// over the sliders, so a pasted line shows and its errors point into the file). Keys the file
-/// no longer holds as numbers keep their values.
-void reread_exposed(const std::string& path, std::vector<Exposed>& exposed);
-/// The value as TOML text (a float keeps a decimal point).
-std::string toml_number(double v, bool integer);
-/// The TOML line to paste back into the scene: "radius = 8.5  # in [layer.kernel] (layer 0)".
-std::string toml_line(const Exposed& e);
 
 /// A JSON string literal of `s`.
 std::string json_quote(const std::string& s);

@@ -241,3 +241,21 @@ def test_render_channels_match_the_field_and_its_differences():
     assert np.abs(n - 1).max() <= 1e-6
     with pytest.raises(ValueError, match='did you mean "normal"'):
         scene.render_channels(0, ["nromal"])
+
+
+def test_exposed_keys_are_the_previews(tmp_path):
+    # The keys and ranges `impulse preview --expose` gives sliders (scenes/exposed.h), read from the
+    # scene file then its includes: 0 to twice the value, or the range given.
+    (tmp_path / "base.toml").write_text(STILL)
+    (tmp_path / "scene.toml").write_text('include = "base.toml"\n[output]\nfps = 24\n')
+    keys = impulse.exposed_keys(str(tmp_path / "scene.toml"),
+                                ["layer.0.kernel.radius", "output.fps=12:48"])
+    assert keys == [
+        {"key": "layer.0.kernel.radius", "value": 6.0, "lo": 0.0, "hi": 12.0, "step": 0.06,
+         "integer": False},
+        {"key": "output.fps", "value": 24.0, "lo": 12.0, "hi": 48.0, "step": 1.0, "integer": True},
+    ]
+    with pytest.raises(impulse.ValueError, match="--expose layer.0.kernel.type: not a number"):
+        impulse.exposed_keys(str(tmp_path / "scene.toml"), ["layer.0.kernel.type"])
+    with pytest.raises(impulse.ValueError, match="TOML text"):
+        impulse.exposed_keys(STILL, ["seed"])
