@@ -1,12 +1,14 @@
 // SPDX-License-Identifier: Apache-2.0
 // `impulse analyze` output: the text report, JSON, and a self-contained HTML page whose plots
-// are SVG drawn here (no scripts, no network). JSON through nlohmann-json.
+// are Vega specs (data inline) drawn by the chart library the page inlines (chart_library.cpp;
+// design.md §6, "The report's plots drawn by Vega"); nothing is fetched. JSON through nlohmann-json.
 
 #include "analysis/report.h"
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -97,7 +99,9 @@ std::string stationarity_verdict(const Stationarity& st) {
 using Json = nlohmann::ordered_json;
 
 // ---------------------------------------------------------------------------------------------
-// SVG plots
+// ---------------------------------------------------------------------------------------------
+// Plots: data and Vega specs (docs/analysis.md "The report's plots"); the page's script draws
+// them with the Vega modules of Debian's libjs-vega (analysis/chart_library.cpp).
 
 std::string esc(const std::string& s) {
     std::string o;
@@ -141,51 +145,19 @@ struct Plot {
     std::vector<HLine> hlines;
 };
 
-constexpr double kW = 680, kH = 320, kL = 78, kR = 20, kT = 34, kB = 48;
+constexpr double kW = 560, kH = 240;  // the plotting area, CSS pixels
 
-std::vector<double> linear_ticks(double lo, double hi) {
-    const double span = hi - lo;
-    const double raw = span / 6.0;
-    const double mag = std::pow(10.0, std::floor(std::log10(raw)));
-    double step = mag;
-    for (double m : {1.0, 2.0, 5.0, 10.0})
-        if (m * mag >= raw) {
-            step = m * mag;
-            break;
-        }
-    std::vector<double> t;
-    for (double v = std::ceil(lo / step) * step; v <= hi + 1e-9 * span; v += step)
-        t.push_back(std::abs(v) < 1e-12 * span ? 0.0 : v);
-    return t;
+/// Whether (x, y) can be drawn: finite, and positive on a log axis.
+bool drawable(const Plot& p, double x, double y) {
+    return std::isfinite(x) && std::isfinite(y) && !(p.logx && x <= 0) && !(p.logy && y <= 0);
 }
 
-/// A plot's data range in axis units (log10 on a log axis), padded, and its map to SVG pixels.
-struct PlotArea {
-    static constexpr double pw = kW - kL - kR, ph = kH - kT - kB;  // the frame's size
-    bool logx = false, logy = false;
+/// The axes' first view, [x0, x1, y0, y1] in data units: the range of everything drawn,
+/// padded by 4 % in y, at most 12 decades on a log y axis (a spectrum's zeros far below).
+std::array<double, 4> initial_domain(const Plot& p) {
     double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
-
-    double X(double x) const { return kL + ((logx ? std::log10(x) : x) - x0) / (x1 - x0) * pw; }
-    double Y(double y) const {
-        double v = logy ? std::log10(y) : y;
-        v = std::clamp(v, y0, y1);
-        return kT + (y1 - v) / (y1 - y0) * ph;
-    }
-    /// Whether (x, y) can be drawn: finite, and positive on a log axis.
-    bool ok(double x, double y) const {
-        return std::isfinite(x) && std::isfinite(y) && !(logx && x <= 0) && !(logy && y <= 0);
-    }
-};
-
-/// The range of everything drawn (non-positive values are left out on log axes).
-PlotArea plot_area(const Plot& p) {
-    PlotArea a;
-    a.logx = p.logx, a.logy = p.logy;
-    double &x0 = a.x0, &x1 = a.x1, &y0 = a.y0, &y1 = a.y1;
     const auto take = [&](double x, double y) {
-        if (!std::isfinite(x) || !std::isfinite(y)) return;
-        if (p.logx && x <= 0) return;
-        if (p.logy && y <= 0) return;
+        if (!drawable(p, x, y)) return;
         x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
     };
     for (const auto& s : p.series)
@@ -194,248 +166,288 @@ PlotArea plot_area(const Plot& p) {
         for (size_t i = 0; i < b.x.size(); ++i) take(b.x[i], b.lo[i]), take(b.x[i], b.hi[i]);
     for (const auto& h : p.hlines)
         if (std::isfinite(x0)) take(x0, h.y);
-    if (!std::isfinite(x0)) x0 = 0, x1 = 1, y0 = 0, y1 = 1;
-    if (p.logx) x0 = std::log10(x0), x1 = std::log10(x1);
-    if (p.logy) {
-        y0 = std::log10(y0), y1 = std::log10(y1);
-        y0 = std::max(y0, y1 - 12.0);  // at most 12 decades
-    }
-    if (x1 <= x0) x0 -= 0.5, x1 += 0.5;
-    if (y1 <= y0) y0 -= 0.5 * std::max(1.0, std::abs(y0)), y1 += 0.5 * std::max(1.0, std::abs(y1));
-    const double pad = 0.04 * (y1 - y0);
-    y0 -= pad, y1 += pad;
-    return a;
+    if (!std::isfinite(x0)) x0 = 1, x1 = 10, y0 = 1, y1 = 10;
+    // Padding and the empty range in axis units (log10 on a log axis).
+    const auto lift = [](double v, bool log) { return log ? std::log10(v) : v; };
+    const auto ground = [](double v, bool log) { return log ? std::pow(10.0, v) : v; };
+    double a0 = lift(x0, p.logx), a1 = lift(x1, p.logx), b0 = lift(y0, p.logy), b1 = lift(y1, p.logy);
+    if (p.logy) b0 = std::max(b0, b1 - 12.0);
+    if (a1 <= a0) a0 -= 0.5, a1 += 0.5;
+    if (b1 <= b0) b0 -= 0.5 * std::max(1.0, std::abs(b0)), b1 += 0.5 * std::max(1.0, std::abs(b1));
+    const double pad = 0.04 * (b1 - b0);
+    return {ground(a0, p.logx), ground(a1, p.logx), ground(b0 - pad, p.logy),
+            ground(b1 + pad, p.logy)};
 }
 
-/// Tick values and labels over [lo, hi] in axis units: decades on a log axis (at most about
-/// `decades` of them labelled), else round linear steps.
-std::vector<std::pair<double, std::string>> axis_ticks(double lo, double hi, bool log,
-                                                       int decades) {
-    std::vector<std::pair<double, std::string>> t;
-    if (log) {
-        const int step = std::max(1, int(std::ceil((hi - lo) / decades)));
-        for (int d = int(std::ceil(lo)); d <= int(std::floor(hi)); d += step)
-            t.push_back({std::pow(10.0, d), "1e" + std::to_string(d)});
-        if (t.size() < 2)
-            for (double v : linear_ticks(std::pow(10.0, lo), std::pow(10.0, hi)))
-                if (v > 0) t.push_back({v, fmt(v, 3)});
+/// A string as a literal of Vega's expression language (a JSON string is one).
+std::string literal(const std::string& s) { return Json(s).dump(); }
+
+/// The signals that zoom and pan a plot: the wheel zooms about the pointer (in log10 on a log
+/// axis: zoomLog), a drag pans, a double click goes back to `domain`. `ydown`: y grows
+/// downwards (the periodogram's rows), which turns a drag's vertical sign.
+Json zoom_signals(const std::array<double, 4>& domain, bool logx, bool logy, bool ydown) {
+    const std::string dy = ydown ? "y() - down[1]" : "down[1] - y()";
+    Json signals = Json::array({
+        {{"name", "down"},
+         {"value", nullptr},
+         {"on", {{{"events", "mousedown"}, {"update", "xy()"}},
+                 {{"events", "window:mouseup"}, {"update", "null"}}}}},
+        {{"name", "drag"},
+         {"value", {0, 0}},
+         {"on",
+          {{{"events",
+             {{{"source", "window"},
+               {"type", "mousemove"},
+               {"consume", true},
+               {"between", {{{"type", "mousedown"}}, {{"source", "window"}, {"type", "mouseup"}}}}}}},
+            {"update", "down ? [x() - down[0], " + dy + "] : [0, 0]"}}}}},
+        {{"name", "anchor"},
+         {"value", {0, 0}},
+         {"on", {{{"events", "wheel"}, {"update", "[invert('x', x()), invert('y', y())]"}}}}},
+        {{"name", "zoom"},
+         {"value", 1},
+         {"on",
+          {{{"events", "wheel!"},
+            {"force", true},
+            {"update", "pow(1.001, event.deltaY * pow(16, event.deltaMode))"}}}}},
+    });
+    // Per axis: its first view (home), its domain when the drag began (start), its domain.
+    const auto axis = [&](const std::string& a, int i, bool log, const std::string& size) {
+        const std::string kind = log ? "Log" : "Linear", n = std::to_string(i);
+        signals.push_back({{"name", a + "home"}, {"value", {domain[2 * i], domain[2 * i + 1]}}});
+        signals.push_back({{"name", a + "start"},
+                           {"value", nullptr},
+                           {"on", {{{"events", "mousedown"}, {"update", "slice(" + a + "dom)"}}}}});
+        signals.push_back(
+            {{"name", a + "dom"},
+             {"value", {domain[2 * i], domain[2 * i + 1]}},
+             {"on",
+              {{{"events", {{"signal", "drag"}}},
+                {"update", "pan" + kind + "(" + a + "start, drag[" + n + "] / " + size + ")"}},
+               {{"events", {{"signal", "zoom"}}},
+                {"update", "zoom" + kind + "(" + a + "dom, anchor[" + n + "], zoom)"}},
+               {{"events", "dblclick"}, {"update", a + "home"}}}}});
+    };
+    axis("x", 0, logx, "width");
+    axis("y", 1, logy, "height");
+    return signals;
+}
+
+/// An x or y scale on the zoomed domain.
+Json axis_scale(const std::string& name, bool log, bool reverse = false) {
+    Json s{{"name", name},
+           {"type", log ? "log" : "linear"},
+           {"domain", {{"signal", name + "dom"}}},
+           {"range", name == "x" ? "width" : "height"},
+           {"zero", false},
+           {"nice", false}};
+    if (reverse) s["reverse"] = true;
+    return s;
+}
+
+/// The bottom and left axes with grid lines; a log axis labels its decades as 1e-3 ...
+Json axes(const std::string& xlabel, const std::string& ylabel, bool logx, bool logy) {
+    const auto axis = [](const char* orient, const char* scale, const std::string& title,
+                         bool log) {
+        Json a{{"orient", orient}, {"scale", scale}, {"title", title}, {"grid", true},
+               {"gridColor", "#eee"}, {"labelOverlap", true}};
+        if (log) a["format"] = "~e";
+        return a;
+    };
+    return Json::array({axis("bottom", "x", xlabel, logx), axis("left", "y", ylabel, logy)});
+}
+
+/// A tooltip: the series' name and each (label, expression) pair, numbers to 6 digits.
+Json tooltip(const std::string& series,
+             const std::vector<std::pair<std::string, std::string>>& fields) {
+    std::string t = "{" + literal("series") + ": " + literal(series);
+    for (const auto& [label, expr] : fields)
+        t += ", " + literal(label) + ": format(" + expr + ", '.6~g')";
+    return {{"signal", t + "}"}};
+}
+
+/// The marks of one series: bars, points or a line broken where a value cannot be drawn.
+Json series_mark(const Plot& p, const Series& s, const std::string& data) {
+    Json values = Json::array();
+    const size_t n = s.kind == Series::Bars ? s.x.size() - 1 : s.x.size();
+    for (size_t i = 0; i < n; ++i) {
+        const bool ok = drawable(p, s.x[i], s.y[i]);
+        if (s.kind == Series::Line)
+            values.push_back({{"x", std::isfinite(s.x[i]) ? Json(s.x[i]) : Json(nullptr)},
+                              {"y", ok ? Json(s.y[i]) : Json(nullptr)}});
+        else if (ok && s.kind == Series::Points)
+            values.push_back({{"x", s.x[i]}, {"y", s.y[i]}});
+        else if (ok)
+            values.push_back({{"x", s.x[i]}, {"x2", s.x[i + 1]}, {"y", s.y[i]}});
+    }
+    const std::string label = s.label.empty() ? p.ylabel : s.label;
+    Json enc{{"x", {{"scale", "x"}, {"field", "x"}}}, {"y", {{"scale", "y"}, {"field", "y"}}}};
+    Json mark{{"from", {{"data", data}}}, {"clip", true}};
+    if (s.kind == Series::Bars) {
+        mark["type"] = "rect";
+        enc["x2"] = {{"scale", "x"}, {"field", "x2"}};
+        enc["y2"] = p.logy ? Json{{"signal", "height"}} : Json{{"scale", "y"}, {"value", 0}};
+        enc["fill"] = {{"value", s.color}};
+        enc["fillOpacity"] = {{"value", 0.75}};
+        enc["tooltip"] = tooltip(label, {{p.xlabel + " from", "datum.x"},
+                                         {"to", "datum.x2"},
+                                         {p.ylabel, "datum.y"}});
+    } else if (s.kind == Series::Points) {
+        mark["type"] = "symbol";
+        enc["size"] = {{"value", 14}};
+        enc["fill"] = {{"value", s.color}};
+        enc["tooltip"] = tooltip(label, {{p.xlabel, "datum.x"}, {p.ylabel, "datum.y"}});
     } else {
-        for (double v : linear_ticks(lo, hi)) t.push_back({v, fmt(v, 4)});
+        mark["type"] = "line";
+        enc["defined"] = {{"signal", "datum.y !== null && datum.x !== null"}};
+        enc["stroke"] = {{"value", s.color}};
+        enc["strokeWidth"] = {{"value", 1.6}};
+        if (s.dashed) enc["strokeDash"] = {{"value", {6, 4}}};
+        enc["tooltip"] = tooltip(label, {{p.xlabel, "datum.x"}, {p.ylabel, "datum.y"}});
     }
-    return t;
+    mark["encode"] = {{"update", enc}};
+    return {{"data", {{"name", data}, {"values", values}}}, {"mark", mark}};
 }
 
-/// The SVG header, the title, the grid with its tick labels, the frame and the axis labels.
-void draw_axes(std::ostream& o, const Plot& p, const PlotArea& a) {
-    constexpr double pw = PlotArea::pw, ph = PlotArea::ph;
-    o << "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " << kW << ' ' << kH
-      << "\" width=\"" << kW << "\" height=\"" << kH << "\" role=\"img\">\n";
-    o << "<title>" << esc(p.title) << "</title>\n";
-    o << "<rect x=\"0\" y=\"0\" width=\"" << kW << "\" height=\"" << kH << "\" fill=\"#fff\"/>\n";
-    o << "<text x=\"" << kW / 2 << "\" y=\"20\" text-anchor=\"middle\" class=\"pt\">"
-      << esc(p.title) << "</text>\n";
-    o << "<g class=\"ax\">\n";
-    for (const auto& [v, label] : axis_ticks(a.x0, a.x1, p.logx, 8)) {
-        const double x = a.X(v);
-        if (x < kL - 0.5 || x > kW - kR + 0.5) continue;
-        o << "<line x1=\"" << x << "\" y1=\"" << kT << "\" x2=\"" << x << "\" y2=\"" << kT + ph
-          << "\" class=\"grid\"/><text x=\"" << x << "\" y=\"" << kT + ph + 16
-          << "\" text-anchor=\"middle\">" << esc(label) << "</text>\n";
-    }
-    for (const auto& [v, label] : axis_ticks(a.y0, a.y1, p.logy, 7)) {
-        const double y = a.Y(v);
-        if ((p.logy ? std::log10(v) : v) < a.y0 || (p.logy ? std::log10(v) : v) > a.y1) continue;
-        o << "<line x1=\"" << kL << "\" y1=\"" << y << "\" x2=\"" << kL + pw << "\" y2=\"" << y
-          << "\" class=\"grid\"/><text x=\"" << kL - 6 << "\" y=\"" << y + 4
-          << "\" text-anchor=\"end\">" << esc(label) << "</text>\n";
-    }
-    o << "<rect x=\"" << kL << "\" y=\"" << kT << "\" width=\"" << pw << "\" height=\"" << ph
-      << "\" fill=\"none\" stroke=\"#333\"/>\n";
-    o << "<text x=\"" << kL + pw / 2 << "\" y=\"" << kH - 8 << "\" text-anchor=\"middle\">"
-      << esc(p.xlabel) << "</text>\n";
-    o << "<text transform=\"translate(16," << kT + ph / 2
-      << ") rotate(-90)\" text-anchor=\"middle\">" << esc(p.ylabel) << "</text>\n</g>\n";
-}
-
-/// A shaded band between lo and hi (the hi edge left to right, the lo edge back).
-void draw_band(std::ostream& o, const Band& b, const PlotArea& a) {
-    std::ostringstream pts;
-    size_t used = 0;
+/// A shaded band between lo and hi.
+Json band_mark(const Plot& p, const Band& b, const std::string& data) {
+    Json values = Json::array();
     for (size_t i = 0; i < b.x.size(); ++i)
-        if (a.ok(b.x[i], b.hi[i])) pts << a.X(b.x[i]) << ',' << a.Y(b.hi[i]) << ' ', ++used;
-    for (size_t i = b.x.size(); i-- > 0;)
-        if (a.ok(b.x[i], b.lo[i])) pts << a.X(b.x[i]) << ',' << a.Y(b.lo[i]) << ' ', ++used;
-    if (used >= 3)
-        o << "<polygon points=\"" << pts.str() << "\" fill=\"" << b.color
-          << "\" fill-opacity=\"0.15\" stroke=\"none\"/>\n";
+        if (drawable(p, b.x[i], b.lo[i]) && drawable(p, b.x[i], b.hi[i]))
+            values.push_back({{"x", b.x[i]}, {"lo", b.lo[i]}, {"hi", b.hi[i]}});
+    Json enc{{"x", {{"scale", "x"}, {"field", "x"}}},
+             {"y", {{"scale", "y"}, {"field", "hi"}}},
+             {"y2", {{"scale", "y"}, {"field", "lo"}}},
+             {"fill", {{"value", b.color}}},
+             {"fillOpacity", {{"value", 0.15}}},
+             {"tooltip", tooltip(b.label, {{"from", "datum.lo"}, {"to", "datum.hi"}})}};
+    return {{"data", {{"name", data}, {"values", values}}},
+            {"mark", {{"type", "area"}, {"from", {{"data", data}}}, {"clip", true},
+                      {"encode", {{"update", enc}}}}}};
 }
 
-/// Bars from the axis (or the bottom of a log axis) to y[i], over [x[i], x[i + 1]].
-void draw_bars(std::ostream& o, const Series& s, const PlotArea& a) {
-    for (size_t i = 0; i + 1 < s.x.size(); ++i) {
-        if (!a.ok(s.x[i], s.y[i])) continue;
-        const double xa = a.X(s.x[i]), xb = a.X(s.x[i + 1]);
-        const double yt = a.Y(s.y[i]),
-                     yb = a.Y(a.logy ? std::pow(10.0, a.y0) : std::max(a.y0, 0.0));
-        o << "<rect x=\"" << xa << "\" y=\"" << std::min(yt, yb) << "\" width=\""
-          << std::max(0.0, xb - xa - 0.5) << "\" height=\"" << std::abs(yb - yt) << "\" fill=\""
-          << s.color << "\" fill-opacity=\"0.75\"/>\n";
-    }
+/// A dashed horizontal line across the plot.
+Json hline_mark(const HLine& h, const std::string& label) {
+    Json enc{{"x", {{"value", 0}}},
+             {"x2", {{"signal", "width"}}},
+             {"y", {{"scale", "y"}, {"value", h.y}}},
+             {"stroke", {{"value", h.color}}},
+             {"strokeDash", {{"value", {5, 4}}}},
+             {"tooltip", tooltip(label, {{"value", Json(h.y).dump()}})}};
+    return {{"type", "rule"}, {"clip", true}, {"encode", {{"update", enc}}}};
 }
 
-void draw_points(std::ostream& o, const Series& s, const PlotArea& a) {
-    o << "<g fill=\"" << s.color << "\">";
-    for (size_t i = 0; i < s.x.size(); ++i)
-        if (a.ok(s.x[i], s.y[i]))
-            o << "<circle cx=\"" << a.X(s.x[i]) << "\" cy=\"" << a.Y(s.y[i]) << "\" r=\"1.8\"/>";
-    o << "</g>\n";
-}
-
-/// A polyline, broken where a value cannot be drawn.
-void draw_line(std::ostream& o, const Series& s, const PlotArea& a) {
-    std::ostringstream pts;
-    size_t count = 0;
-    const auto flush = [&]() {
-        if (count >= 2)
-            o << "<polyline points=\"" << pts.str() << "\" fill=\"none\" stroke=\"" << s.color
-              << "\" stroke-width=\"1.6\"" << (s.dashed ? " stroke-dasharray=\"6,4\"" : "")
-              << "/>\n";
-        pts.str("");
-        count = 0;
+/// The legend: an entry per named series, band and line, top right, in the plot's colours.
+Json legend_parts(const Plot& p) {
+    Json names = Json::array(), colors = Json::array();
+    const auto add = [&](const std::string& label, const std::string& color) {
+        if (!label.empty()) names.push_back(label), colors.push_back(color);
     };
-    for (size_t i = 0; i < s.x.size(); ++i) {
-        if (!a.ok(s.x[i], s.y[i])) {
-            flush();
-            continue;
-        }
-        pts << a.X(s.x[i]) << ',' << a.Y(s.y[i]) << ' ';
-        ++count;
-    }
-    flush();
+    for (const auto& s : p.series) add(s.label, s.color);
+    for (const auto& b : p.bands) add(b.label, b.color);
+    for (const auto& h : p.hlines) add(h.label, h.color);
+    return {{"scale",
+             {{"name", "legend"}, {"type", "ordinal"}, {"domain", names}, {"range", colors}}},
+            {"legend",
+             {{"fill", "legend"},
+              {"orient", "top-right"},
+              {"symbolType", "square"},
+              {"fillColor", "rgba(255,255,255,0.85)"},
+              {"labelLimit", 320},
+              {"padding", 4}}},
+            {"entries", names.size()}};
 }
 
-/// Bands, reference lines, series.
-void draw_data(std::ostream& o, const Plot& p, const PlotArea& a) {
-    for (const auto& b : p.bands) draw_band(o, b, a);
-    for (const auto& h : p.hlines) {
-        if (p.logy && h.y <= 0) continue;
-        const double y = a.Y(h.y);
-        o << "<line x1=\"" << kL << "\" y1=\"" << y << "\" x2=\"" << kL + PlotArea::pw << "\" y2=\""
-          << y << "\" stroke=\"" << h.color << "\" stroke-dasharray=\"5,4\"/>\n";
-    }
-    for (const auto& s : p.series) {
-        if (s.kind == Series::Bars)
-            draw_bars(o, s, a);
-        else if (s.kind == Series::Points)
-            draw_points(o, s, a);
-        else
-            draw_line(o, s, a);
-    }
-}
-
-/// Legend, top right on a translucent panel sized to its longest label (~6.2 px a character).
-void draw_legend(std::ostream& o, const Plot& p) {
-    size_t longest = 0, entries = 0;
-    const auto measure = [&](const std::string& label) {
-        if (!label.empty()) longest = std::max(longest, label.size()), ++entries;
+/// A plot's Vega spec: its data inline, zoomable axes, marks with tooltips, a legend.
+Json vega_spec(const Plot& p) {
+    const auto domain = initial_domain(p);
+    Json data = Json::array(), marks = Json::array();
+    const auto add = [&](const Json& part) {
+        data.push_back(part["data"]);
+        marks.push_back(part["mark"]);
     };
-    for (const auto& s : p.series) measure(s.label);
-    for (const auto& b : p.bands) measure(b.label);
-    for (const auto& h : p.hlines) measure(h.label);
-    const double lw = 34 + 6.2 * double(longest);
-    const double lx = kL + PlotArea::pw - lw;
-    if (entries)
-        o << "<rect x=\"" << lx - 4 << "\" y=\"" << kT + 3 << "\" width=\"" << lw << "\" height=\""
-          << 15 * entries + 6 << "\" fill=\"#fff\" fill-opacity=\"0.85\"/>\n";
-    double ly = kT + 14;
-    const auto legend = [&](const std::string& label, const std::string& color, bool box) {
-        if (label.empty()) return;
-        if (box)
-            o << "<rect x=\"" << lx << "\" y=\"" << ly - 8 << "\" width=\"18\" height=\"9\" fill=\""
-              << color << "\" fill-opacity=\"0.3\"/>";
-        else
-            o << "<line x1=\"" << lx << "\" y1=\"" << ly - 4 << "\" x2=\"" << lx + 18 << "\" y2=\""
-              << ly - 4 << "\" stroke=\"" << color << "\" stroke-width=\"2.5\"/>";
-        o << "<text x=\"" << lx + 24 << "\" y=\"" << ly << "\" class=\"lg\">" << esc(label)
-          << "</text>\n";
-        ly += 15;
-    };
-    for (const auto& s : p.series) legend(s.label, s.color, s.kind == Series::Bars);
-    for (const auto& b : p.bands) legend(b.label, b.color, true);
-    for (const auto& h : p.hlines) legend(h.label, h.color, false);
+    for (size_t i = 0; i < p.bands.size(); ++i)
+        add(band_mark(p, p.bands[i], "band" + std::to_string(i)));
+    for (const auto& h : p.hlines)
+        if (!(p.logy && h.y <= 0) && std::isfinite(h.y))
+            marks.push_back(hline_mark(h, h.label.empty() ? "reference" : h.label));
+    for (size_t i = 0; i < p.series.size(); ++i)
+        add(series_mark(p, p.series[i], "series" + std::to_string(i)));
+    const Json legend = legend_parts(p);
+    Json spec{{"description", p.title},
+              {"title", {{"text", p.title}, {"fontSize", 13}}},
+              {"width", kW},
+              {"height", kH},
+              {"padding", 6},
+              {"autosize", "pad"},
+              {"signals", zoom_signals(domain, p.logx, p.logy, false)},
+              {"data", data},
+              {"scales", {axis_scale("x", p.logx), axis_scale("y", p.logy), legend["scale"]}},
+              {"axes", axes(p.xlabel, p.ylabel, p.logx, p.logy)},
+              {"marks", marks}};
+    if (legend["entries"].get<size_t>() > 0) spec["legends"] = {legend["legend"]};
+    return spec;
 }
 
-std::string svg_plot(const Plot& p) {
-    const PlotArea a = plot_area(p);
-    std::ostringstream o;
-    draw_axes(o, p, a);
-    draw_data(o, p, a);
-    draw_legend(o, p);
-    o << "</svg>\n";
-    return o.str();
-}
-
-/// Viridis-like colour ramp on [0, 1] (five anchors of matplotlib's viridis, linear between).
-std::string ramp(double t) {
-    static const double a[5][3] = {
-        {68, 1, 84}, {59, 82, 139}, {33, 145, 140}, {94, 201, 98}, {253, 231, 37}};
-    t = std::clamp(t, 0.0, 1.0) * 4.0;
-    const int i = std::min(3, int(t));
-    const double f = t - i;
-    char buf[16];
-    std::snprintf(buf, sizeof buf, "#%02x%02x%02x", int(a[i][0] + f * (a[i + 1][0] - a[i][0])),
-                  int(a[i][1] + f * (a[i + 1][1] - a[i][1])),
-                  int(a[i][2] + f * (a[i + 1][2] - a[i][2])));
-    return buf;
-}
-
-std::string svg_heatmap(const PeriodogramSummary& s, int w, int h) {
+/// The 2-D periodogram as a heat map of log10 power over (kx, ky), ky growing downwards as the
+/// image's rows do, 8 decades of colour below the largest cell.
+Json heatmap_spec(const PeriodogramSummary& s, int w, int h) {
     const std::string title = "2-D periodogram, log10 power (centred; window: " + s.window + ")";
     double hi = -INFINITY;
     for (double v : s.heat)
         if (std::isfinite(v)) hi = std::max(hi, v);
     const double lo = std::isfinite(hi) ? hi - 8.0 : 0.0;
-    const double side = 300, x0 = 150, y0 = 34;
-    const double cw = side / s.heat_width, ch = side / s.heat_height;
-    std::ostringstream o;
-    o << "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " << kW << " 380\" width=\"" << kW
-      << "\" height=\"380\" role=\"img\">\n<title>" << esc(title) << "</title>\n";
-    o << "<rect x=\"0\" y=\"0\" width=\"" << kW << "\" height=\"380\" fill=\"#fff\"/>\n";
-    o << "<text x=\"" << kW / 2 << "\" y=\"20\" text-anchor=\"middle\" class=\"pt\">" << esc(title)
-      << "</text>\n<g shape-rendering=\"crispEdges\">";
+    if (!std::isfinite(hi)) hi = 1.0;
+    // Cells as (column, row, value); their edges in cycles/pixel by a formula (a smaller page).
+    // Display row r holds ky index r - h/2 (analysis/analyze.cpp centres the power).
+    Json values = Json::array();
     for (int r = 0; r < s.heat_height; ++r)
         for (int c = 0; c < s.heat_width; ++c) {
             const double v = s.heat[size_t(r) * s.heat_width + c];
-            o << "<rect x=\"" << x0 + c * cw << "\" y=\"" << y0 + r * ch << "\" width=\""
-              << cw + 0.05 << "\" height=\"" << ch + 0.05 << "\" fill=\""
-              << (std::isfinite(v) ? ramp((v - lo) / (hi - lo)) : std::string("#000")) << "\"/>";
+            // 1e-4 decades (0.02 % in power) is far below a colour step.
+            values.push_back({{"c", c}, {"r", r},
+                              {"v", std::isfinite(v) ? Json(std::round(v * 1e4) / 1e4) : Json(nullptr)}});
         }
-    o << "</g>\n<g class=\"ax\">";
-    o << "<rect x=\"" << x0 << "\" y=\"" << y0 << "\" width=\"" << side << "\" height=\"" << side
-      << "\" fill=\"none\" stroke=\"#333\"/>";
-    // kx from -0.5 (left) to 0.5, ky from -0.5 (top) to 0.5: display row r holds ky index r - h/2.
-    for (double f : {-0.5, -0.25, 0.0, 0.25, 0.5}) {
-        const double x = x0 + (f + 0.5) * side, y = y0 + (f + 0.5) * side;
-        o << "<text x=\"" << x << "\" y=\"" << y0 + side + 16 << "\" text-anchor=\"middle\">" << f
-          << "</text><text x=\"" << x0 - 6 << "\" y=\"" << y + 4 << "\" text-anchor=\"end\">" << f
-          << "</text>";
-    }
-    o << "<text x=\"" << x0 + side / 2 << "\" y=\"" << y0 + side + 34
-      << "\" text-anchor=\"middle\">kx (cycles/pixel)</text>";
-    o << "<text transform=\"translate(" << x0 - 48 << "," << y0 + side / 2
-      << ") rotate(-90)\" text-anchor=\"middle\">ky (cycles/pixel)</text>";
-    // Colour bar.
-    const double bx = x0 + side + 40;
-    for (int i = 0; i < 50; ++i)
-        o << "<rect x=\"" << bx << "\" y=\"" << y0 + side - (i + 1) * side / 50
-          << "\" width=\"16\" height=\"" << side / 50 + 0.2 << "\" fill=\"" << ramp((i + 0.5) / 50)
-          << "\"/>";
-    for (int d = 0; d <= 8; d += 2)
-        o << "<text x=\"" << bx + 22 << "\" y=\"" << y0 + side - d / 8.0 * side + 4 << "\">"
-          << fmt(lo + d, 3) << "</text>";
-    o << "<text x=\"" << bx + 70 << "\" y=\"" << y0 + 12 << "\">" << w << "x" << h
-      << " bins</text></g>\n</svg>\n";
-    return o.str();
+    const std::string cw = std::to_string(s.heat_width), ch = std::to_string(s.heat_height);
+    Json transform = Json::array(
+        {{{"type", "formula"}, {"as", "kx0"}, {"expr", "-0.5 + datum.c / " + cw}},
+         {{"type", "formula"}, {"as", "kx1"}, {"expr", "-0.5 + (datum.c + 1) / " + cw}},
+         {{"type", "formula"}, {"as", "ky0"}, {"expr", "-0.5 + datum.r / " + ch}},
+         {{"type", "formula"}, {"as", "ky1"}, {"expr", "-0.5 + (datum.r + 1) / " + ch}}});
+    const Json colour = Json::array(
+        {{{"test", "datum.v === null"}, {"value", "#000"}}, {{"scale", "color"}, {"field", "v"}}});
+    Json enc{{"x", {{"scale", "x"}, {"field", "kx0"}}},
+             {"x2", {{"scale", "x"}, {"field", "kx1"}}},
+             {"y", {{"scale", "y"}, {"field", "ky0"}}},
+             {"y2", {{"scale", "y"}, {"field", "ky1"}}},
+             {"fill", colour},
+             // Stroked in its own colour: no hairline seams between neighbouring cells.
+             {"stroke", colour},
+             {"strokeWidth", {{"value", 0.5}}},
+             {"tooltip", {{"signal", "{'kx from': format(datum.kx0, '.4~g'), "
+                                     "'ky from': format(datum.ky0, '.4~g'), "
+                                     "'log10 power': datum.v === null ? 'none' : "
+                                     "format(datum.v, '.4~g')}"}}}};
+    const std::array<double, 4> domain{-0.5, 0.5, -0.5, 0.5};
+    return {{"description", title},
+            {"title", {{"text", title}, {"fontSize", 13},
+                       {"subtitle", std::to_string(s.heat_width) + "x" + std::to_string(s.heat_height) +
+                                        " cells over the " + std::to_string(w) + "x" +
+                                        std::to_string(h) + " frequencies"}}},
+            {"width", 300},
+            {"height", 300},
+            {"padding", 6},
+            {"autosize", "pad"},
+            {"signals", zoom_signals(domain, false, false, true)},
+            {"data", {{{"name", "cells"}, {"values", values}, {"transform", transform}}}},
+            {"scales", {axis_scale("x", false), axis_scale("y", false, true),
+                        {{"name", "color"}, {"type", "linear"}, {"scheme", "viridis"},
+                         {"domain", {lo, hi}}, {"clamp", true}, {"zero", false}}}},
+            {"axes", axes("kx (cycles/pixel)", "ky (cycles/pixel)", false, false)},
+            {"legends", {{{"fill", "color"}, {"type", "gradient"}, {"title", "log10 power"},
+                          {"gradientLength", 280}}}},
+            {"marks", {{{"type", "rect"}, {"from", {{"data", "cells"}}}, {"clip", true},
+                        {"encode", {{"update", enc}}}}}}};
 }
 
 std::vector<double> iota_from(size_t n, double first) {
@@ -457,7 +469,7 @@ const std::string kMeasured = "measured";
 const std::string kTheoryRed = "#d62728";
 
 /// The histogram against the Gaussian of the theory's mean and variance.
-std::string histogram_plot(const AnalysisResult& r) {
+Json histogram_plot(const AnalysisResult& r) {
     const auto& T = r.theory;
     Plot p = titled("Histogram of values (64 bins over mean +- 4 sd)", "value", "pixels per bin");
     Series s;
@@ -485,10 +497,10 @@ std::string histogram_plot(const AnalysisResult& r) {
         }
         p.series.push_back(g);
     }
-    return svg_plot(p);
+    return vega_spec(p);
 }
 
-std::string radial_spectrum_plot(const AnalysisResult& r) {
+Json radial_spectrum_plot(const AnalysisResult& r) {
     const auto& T = r.theory;
     Plot p = titled("Radially averaged power spectrum", "frequency |k| (cycles/pixel)",
                     "power (value^2 pixel^2)");
@@ -510,21 +522,21 @@ std::string radial_spectrum_plot(const AnalysisResult& r) {
                 t.x.push_back(r.spectrum.frequency[b]), t.y.push_back(T->spectrum->power[b]);
         p.series.push_back(t);
     }
-    return svg_plot(p);
+    return vega_spec(p);
 }
 
 /// z per annulus with the Bonferroni limits +-threshold; `title` and `ylabel` name the test.
-std::string z_plot(const std::string& title, const std::string& ylabel, Series s,
+Json z_plot(const std::string& title, const std::string& ylabel, Series s,
                    double threshold) {
     Plot p = titled(title, "frequency |k| (cycles/pixel)", ylabel);
     s.kind = Series::Points;
     p.series.push_back(s);
     p.hlines.push_back({threshold, "Bonferroni limit +-" + fixed(threshold, 2), "#777"});
     p.hlines.push_back({-threshold, "", "#777"});
-    return svg_plot(p);
+    return vega_spec(p);
 }
 
-std::string spectrum_z_plot(const AnalysisResult& r) {
+Json spectrum_z_plot(const AnalysisResult& r) {
     const SpectrumTheory& S = *r.theory->spectrum;
     Series s;
     s.label = "z";
@@ -533,7 +545,7 @@ std::string spectrum_z_plot(const AnalysisResult& r) {
     return z_plot("Spectrum against theory: z per annulus", "z (Wilson-Hilferty)", s, S.threshold);
 }
 
-std::string autocovariance_plot(const AnalysisResult& r) {
+Json autocovariance_plot(const AnalysisResult& r) {
     const auto& T = r.theory;
     Plot p = titled("Radial autocovariance", "lag (pixels)", "covariance (value^2)");
     Series s;
@@ -551,11 +563,11 @@ std::string autocovariance_plot(const AnalysisResult& r) {
         p.series.push_back(t);
     }
     p.hlines.push_back({0.0, "", "#aaa"});
-    return svg_plot(p);
+    return vega_spec(p);
 }
 
 /// One statistic per frame from frame `from` on, with the theory +- 2 sd of one frame.
-std::string per_frame_plot(const AnalysisResult& r, const std::string& title,
+Json per_frame_plot(const AnalysisResult& r, const std::string& title,
                            const std::string& ylabel, double (*get)(const FrameStats&),
                            double theory, double sd, size_t from) {
     const auto x = iota_from(size_t(r.frames), double(r.first_frame));
@@ -576,11 +588,11 @@ std::string per_frame_plot(const AnalysisResult& r, const std::string& title,
         }
         p.hlines.push_back({theory, "theory", kTheoryRed});
     }
-    return svg_plot(p);
+    return vega_spec(p);
 }
 
 /// The per-frame mean, variance and difference variance (a sequence of frames).
-void add_per_frame_plots(const AnalysisResult& r, std::vector<std::string>& out) {
+void add_per_frame_plots(const AnalysisResult& r, std::vector<Json>& out) {
     const auto& T = r.theory;
     out.push_back(per_frame_plot(
         r, "Per-frame mean", "mean", [](const FrameStats& f) { return f.mean; }, T ? T->mean : NAN,
@@ -595,7 +607,7 @@ void add_per_frame_plots(const AnalysisResult& r, std::vector<std::string>& out)
         T && T->diff_variance ? *T->diff_variance : NAN, 0.0, 1));
 }
 
-std::string drift_plot(const Stationarity& st) {
+Json drift_plot(const Stationarity& st) {
     Series s;
     s.label = "z, corrected";
     s.x = st.drift.frequency;
@@ -605,10 +617,10 @@ std::string drift_plot(const Stationarity& st) {
 }
 
 /// The report's plots, in order.
-std::vector<std::string> plots(const AnalysisResult& r) {
-    std::vector<std::string> out;
+std::vector<Json> plots(const AnalysisResult& r) {
+    std::vector<Json> out;
     out.push_back(histogram_plot(r));
-    out.push_back(svg_heatmap(r.periodogram, r.width, r.height));
+    out.push_back(heatmap_spec(r.periodogram, r.width, r.height));
     out.push_back(radial_spectrum_plot(r));
     if (r.theory && r.theory->spectrum) out.push_back(spectrum_z_plot(r));
     out.push_back(autocovariance_plot(r));
@@ -905,6 +917,42 @@ void put_frame_table(std::ostream& o, const AnalysisResult& r) {
     }
 }
 
+/// A spec as JSON text that can stand inside a <script> element: `</` is written `<\/`, the
+/// same string in JSON.
+std::string script_json(const Json& spec) {
+    std::string t = spec.dump(-1, ' ', false, Json::error_handler_t::replace);
+    for (size_t at = t.find("</"); at != std::string::npos; at = t.find("</", at + 3))
+        t.replace(at, 2, "<\\/");
+    return t;
+}
+
+/// The page's script: registers the transforms with the dataflow (what Vega's own bundle does
+/// on loading), draws each figure's spec as SVG with hover on (tooltips: Vega's own handler,
+/// the hovered item's values as the chart's title attribute), and says on <body> when all are
+/// drawn (data-ready) or what failed (data-error).
+constexpr const char* kDrawPlots = R"js((function () {
+  const body = document.body;
+  const fail = (e) => {
+    if (!body.dataset.error) body.dataset.error = String((e && e.message) || e);
+  };
+  try {
+    const V = window.impulseVega;
+    Object.assign(V['vega-dataflow'].transforms, V['vega-transforms'],
+                  V['vega-view-transforms'], V['vega-encode']);
+    const figures = Array.from(document.querySelectorAll('figure.plot'));
+    window.impulseViews = figures.map((f) => new V['vega-view'].View(
+        V['vega-parser'].parse(JSON.parse(f.querySelector('script.impulse-spec').textContent)),
+        {renderer: 'svg', container: f.querySelector('.chart'), hover: true}));
+    Promise.all(window.impulseViews.map((v) => v.runAsync())).then(() => {
+      body.dataset.plots = String(figures.length);
+      body.dataset.ready = '1';
+    }, fail);
+  } catch (e) {
+    fail(e);
+  }
+})();
+)js";
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -989,11 +1037,11 @@ int html_plot_count(const AnalysisResult& r) {
     return n;
 }
 
-std::string to_html(const AnalysisResult& r) {
-    const std::vector<std::string> svgs = plots(r);
+std::string to_html(const AnalysisResult& r, const std::string& chart_library) {
+    const std::vector<Json> specs = plots(r);
     std::ostringstream o;
     o << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-      << "<meta name=\"impulse-plots\" content=\"" << svgs.size() << "\">\n"
+      << "<meta name=\"impulse-plots\" content=\"" << specs.size() << "\">\n"
       << "<title>impulse analyze: " << esc(r.input) << "</title>\n<style>\n"
       << "body{font-family:system-ui,-apple-system,'DejaVu Sans',sans-serif;margin:24px auto;"
          "max-width:1400px;color:#222;background:#fafafa}\n"
@@ -1004,10 +1052,14 @@ std::string to_html(const AnalysisResult& r) {
          "600}"
          ".na{color:#777}\n"
       << ".plots{display:flex;flex-wrap:wrap;gap:12px}\n"
-      << "figure{margin:0;border:1px solid #ddd;background:#fff}\n"
-      << "svg text{font-size:11px;fill:#333} svg text.pt{font-size:13px;font-weight:600}"
-         " svg text.lg{font-size:11px} svg .grid{stroke:#eee}\n"
-      << "</style>\n</head>\n<body>\n";
+      << "figure{margin:0;border:1px solid #ddd;background:#fff;padding:4px}\n"
+      << ".hint{font-size:13px;color:#555}\n"
+      << "</style>\n"
+      // First, so an error in the library or the specs is on the page (data-error) too.
+      << "<script>window.addEventListener('error', (e) => { document.body && "
+         "!document.body.dataset.error && (document.body.dataset.error = String(e.message)); "
+         "});</script>\n"
+      << "</head>\n<body>\n";
     o << "<h1>impulse analyze: " << esc(r.input) << "</h1>\n";
 
     const auto row = [&](const std::string& k, const std::string& v) {
@@ -1071,9 +1123,15 @@ std::string to_html(const AnalysisResult& r) {
                                           ")");
     }
     for (const auto& n : r.notes) row("note", esc(n));
-    o << "</table>\n<h2>Plots</h2>\n<div class=\"plots\">\n";
-    for (const auto& s : svgs) o << "<figure>\n" << s << "</figure>\n";
-    o << "</div>\n</body>\n</html>\n";
+    o << "</table>\n<h2>Plots</h2>\n<p class=\"hint\">Hover over a point, bar or line for its "
+         "values; the wheel zooms about the pointer, a drag pans, a double click goes back.</p>\n"
+         "<div class=\"plots\">\n";
+    for (const auto& spec : specs)
+        o << "<figure class=\"plot\"><div class=\"chart\"></div>"
+          << "<script type=\"application/json\" class=\"impulse-spec\">\n"
+          << script_json(spec) << "\n</script></figure>\n";
+    o << "</div>\n<script>\n" << chart_library << "\n</script>\n<script>\n" << kDrawPlots
+      << "</script>\n</body>\n</html>\n";
     return o.str();
 }
 
