@@ -99,9 +99,8 @@ std::string stationarity_verdict(const Stationarity& st) {
 using Json = nlohmann::ordered_json;
 
 // ---------------------------------------------------------------------------------------------
-// ---------------------------------------------------------------------------------------------
-// Plots: data and Vega specs (docs/analysis.md "The report's plots"); the page's script draws
-// them with the Vega modules of Debian's libjs-vega (analysis/chart_library.cpp).
+// Plots: data and Vega specs (design.md §6, "The report's plots drawn by Vega"); the page's
+// script draws them with the Vega modules of Debian's libjs-vega (analysis/chart_library.cpp).
 
 std::string esc(const std::string& s) {
     std::string o;
@@ -245,13 +244,14 @@ Json axis_scale(const std::string& name, bool log, bool reverse = false) {
     return s;
 }
 
-/// The bottom and left axes with grid lines; a log axis labels its decades as 1e-3 ...
+/// The bottom and left axes with grid lines; a log axis labels its ticks as 1e-3, 2e-3 ...
 Json axes(const std::string& xlabel, const std::string& ylabel, bool logx, bool logy) {
     const auto axis = [](const char* orient, const char* scale, const std::string& title,
                          bool log) {
         Json a{{"orient", orient}, {"scale", scale}, {"title", title}, {"grid", true},
                {"gridColor", "#eee"}, {"labelOverlap", true}};
-        if (log) a["format"] = "~e";
+        // Five or more decades get a tick at each decade only; fewer get 2x and 5x ticks too.
+        if (log) a["format"] = "~e", a["tickCount"] = 5;
         return a;
     };
     return Json::array({axis("bottom", "x", xlabel, logx), axis("left", "y", ylabel, logy)});

@@ -9,6 +9,7 @@ import os
 import select
 import shutil
 import subprocess
+import sys
 import time
 
 import pytest
@@ -19,6 +20,15 @@ def no_chromium():
     if not (shutil.which("chromium") or shutil.which("chromium-browser")):
         return "chromium is not installed (scripts/setup.sh --tests installs it)"
     return None
+
+
+def main(test_file, reason):
+    """Runs a test module as a script (as CTest does): exit 77, skipped, with `reason` when it
+    is not None, else pytest's exit status."""
+    if reason:
+        print(f"skipped: {reason}")
+        sys.exit(77)
+    sys.exit(pytest.main([test_file, "-q", "-s", "-p", "no:cacheprovider", *sys.argv[1:]]))
 
 
 def impulse_cli():

@@ -12,11 +12,11 @@ import os
 import pathlib
 import shutil
 import subprocess
-import sys
 
 import pytest
 
-from devtools import Browser, impulse_cli, no_chromium  # tests/web/devtools.py
+import devtools  # tests/web/devtools.py
+from devtools import Browser, impulse_cli, no_chromium
 
 # The folder the tool reads Vega from unless the environment names another (analysis/
 # CMakeLists.txt: IMPULSE_VEGA_DIR).
@@ -180,6 +180,32 @@ def test_the_wheel_zooms_every_plot(work, browser):
     assert not errors(browser)
 
 
+def test_a_drag_pans_and_a_double_click_goes_back(work, browser):
+    browser.open((work / "report.html").as_uri())
+    box = browser.evaluate("""(() => {
+      const f = document.querySelectorAll('figure.plot')[0];
+      f.scrollIntoView();
+      const r = f.querySelector('.chart svg').getBoundingClientRect();
+      return [r.x + r.width / 2, r.y + r.height / 2];
+    })()""")
+    home, width = browser.evaluate("[window.impulseViews[0].signal('xdom'), window.impulseViews[0].width()]")
+    x, y = box
+    mouse = dict(button="left", clickCount=1)
+    browser.page("Input.dispatchMouseEvent", type="mousePressed", x=x, y=y, **mouse)
+    browser.page("Input.dispatchMouseEvent", type="mouseMoved", x=x + 100, y=y, buttons=1)
+    browser.page("Input.dispatchMouseEvent", type="mouseReleased", x=x + 100, y=y, **mouse)
+    moved = browser.evaluate("window.impulseViews[0].runAsync().then((v) => v.signal('xdom'))")
+    # 100 px to the right: the view shows what was 100 px to the left, 100 / width of the span.
+    shift = (moved[0] - home[0]) / (home[1] - home[0])
+    print(f"histogram: x from {home} to {moved} after a 100 px drag: {shift:.4f} of the span, plot {width} px")
+    assert abs(shift + 100 / width) < 1e-9 and abs((moved[1] - moved[0]) - (home[1] - home[0])) < 1e-9
+    for kind in ("mousePressed", "mouseReleased"):
+        browser.page("Input.dispatchMouseEvent", type=kind, x=x, y=y, button="left", clickCount=2)
+    back = browser.evaluate("window.impulseViews[0].runAsync().then((v) => v.signal('xdom'))")
+    assert back == home
+    assert not errors(browser)
+
+
 def test_a_broken_library_is_caught(work, browser):
     # The control: the same checks on the report whose vega-view was replaced.
     wrong = check_page(browser, (work / "broken.html").as_uri())
@@ -188,8 +214,4 @@ def test_a_broken_library_is_caught(work, browser):
 
 
 if __name__ == "__main__":
-    reason = prerequisites()
-    if reason:
-        print(f"skipped: {reason}")
-        sys.exit(77)
-    sys.exit(pytest.main([__file__, "-q", "-s", "-p", "no:cacheprovider", *sys.argv[1:]]))
+    devtools.main(__file__, prerequisites())

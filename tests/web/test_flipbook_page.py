@@ -13,7 +13,6 @@ import json
 import pathlib
 import struct
 import subprocess
-import sys
 import threading
 import time
 import urllib.parse
@@ -21,7 +20,8 @@ import zlib
 
 import pytest
 
-from devtools import Browser, impulse_cli, no_chromium  # tests/web/devtools.py
+import devtools  # tests/web/devtools.py
+from devtools import Browser, impulse_cli, no_chromium
 
 PAGE_DIR = pathlib.Path(__file__).resolve().parents[2] / "web" / "flipbook"
 THREE = PAGE_DIR / "node_modules" / "three" / "build" / "three.module.js"
@@ -335,8 +335,4 @@ def test_bad_input_is_one_line(work, server, browser):
 
 
 if __name__ == "__main__":
-    reason = prerequisites()
-    if reason:
-        print(f"skipped: {reason}")
-        sys.exit(77)
-    sys.exit(pytest.main([__file__, "-q", "-s", "-p", "no:cacheprovider", *sys.argv[1:]]))
+    devtools.main(__file__, prerequisites())
