@@ -5,6 +5,9 @@
 # drawn by Vega"), with marks in each, log axes on the radial spectrum, a value on hover and a
 # zoom with the wheel on each, and no JavaScript error. The control: the same report made with
 # a broken library (vega-view.min.js replaced by a comment) is caught by the same checks.
+# Shown able to fail, by hand: with an empty library inlined, linear scales for log ones, the
+# wheel's zoom factor held at 1, empty tooltips, or a drag's pan turned round, the test of that
+# mechanism fails. ~28 s on the 2-core machine (most of it chromium parsing the 0.6 MB page).
 # Run by CTest (analyze_report_page) with IMPULSE_CLI set; exits 77 (skipped, with the reason)
 # without chromium or Debian's libjs-vega.
 import math
