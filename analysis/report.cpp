@@ -139,6 +139,7 @@ struct HLine {
 struct Plot {
     std::string title, xlabel, ylabel;
     bool logx = false, logy = false;
+    bool whole_x = false;  ///< x counts (frames, lags): ticks on whole numbers only
     std::vector<Series> series;
     std::vector<Band> bands;
     std::vector<HLine> hlines;
@@ -152,7 +153,7 @@ bool drawable(const Plot& p, double x, double y) {
 }
 
 /// The axes' first view, [x0, x1, y0, y1] in data units: the range of everything drawn,
-/// padded by 4 % in y, at most 12 decades on a log y axis (a spectrum's zeros far below).
+/// padded, at most 12 decades on a log y axis (a spectrum's zeros far below).
 std::array<double, 4> initial_domain(const Plot& p) {
     double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
     const auto take = [&](double x, double y) {
@@ -173,8 +174,9 @@ std::array<double, 4> initial_domain(const Plot& p) {
     if (p.logy) b0 = std::max(b0, b1 - 12.0);
     if (a1 <= a0) a0 -= 0.5, a1 += 0.5;
     if (b1 <= b0) b0 -= 0.5 * std::max(1.0, std::abs(b0)), b1 += 0.5 * std::max(1.0, std::abs(b1));
-    const double pad = 0.04 * (b1 - b0);
-    return {ground(a0, p.logx), ground(a1, p.logx), ground(b0 - pad, p.logy),
+    // Padded: 2 % in x, 4 % in y, so no point at an edge is drawn half.
+    const double xpad = 0.02 * (a1 - a0), pad = 0.04 * (b1 - b0);
+    return {ground(a0 - xpad, p.logx), ground(a1 + xpad, p.logx), ground(b0 - pad, p.logy),
             ground(b1 + pad, p.logy)};
 }
 
@@ -245,7 +247,8 @@ Json axis_scale(const std::string& name, bool log, bool reverse = false) {
 }
 
 /// The bottom and left axes with grid lines; a log axis labels its ticks as 1e-3, 2e-3 ...
-Json axes(const std::string& xlabel, const std::string& ylabel, bool logx, bool logy) {
+Json axes(const std::string& xlabel, const std::string& ylabel, bool logx, bool logy,
+          bool whole_x = false) {
     const auto axis = [](const char* orient, const char* scale, const std::string& title,
                          bool log) {
         Json a{{"orient", orient}, {"scale", scale}, {"title", title}, {"grid", true},
@@ -254,7 +257,9 @@ Json axes(const std::string& xlabel, const std::string& ylabel, bool logx, bool 
         if (log) a["format"] = "~e", a["tickCount"] = 5;
         return a;
     };
-    return Json::array({axis("bottom", "x", xlabel, logx), axis("left", "y", ylabel, logy)});
+    Json x = axis("bottom", "x", xlabel, logx);
+    if (whole_x) x["tickMinStep"] = 1, x["format"] = "d";
+    return Json::array({x, axis("left", "y", ylabel, logy)});
 }
 
 /// A tooltip: the series' name and each (label, expression) pair, numbers to 6 digits.
@@ -383,7 +388,7 @@ Json vega_spec(const Plot& p) {
               {"signals", zoom_signals(domain, p.logx, p.logy, false)},
               {"data", data},
               {"scales", {axis_scale("x", p.logx), axis_scale("y", p.logy), legend["scale"]}},
-              {"axes", axes(p.xlabel, p.ylabel, p.logx, p.logy)},
+              {"axes", axes(p.xlabel, p.ylabel, p.logx, p.logy, p.whole_x)},
               {"marks", marks}};
     if (legend["entries"].get<size_t>() > 0) spec["legends"] = {legend["legend"]};
     return spec;
@@ -548,6 +553,7 @@ Json spectrum_z_plot(const AnalysisResult& r) {
 Json autocovariance_plot(const AnalysisResult& r) {
     const auto& T = r.theory;
     Plot p = titled("Radial autocovariance", "lag (pixels)", "covariance (value^2)");
+    p.whole_x = true;
     Series s;
     s.label = kMeasured;
     s.kind = Series::Points;
@@ -572,6 +578,7 @@ Json per_frame_plot(const AnalysisResult& r, const std::string& title,
                            double theory, double sd, size_t from) {
     const auto x = iota_from(size_t(r.frames), double(r.first_frame));
     Plot p = titled(title, "frame", ylabel);
+    p.whole_x = true;
     Series s;
     s.label = kMeasured;
     for (size_t j = from; j < r.frame_stats.size(); ++j)
