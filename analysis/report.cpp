@@ -274,7 +274,8 @@ Json tooltip(const std::string& series,
 /// The marks of one series: bars, points or a line broken where a value cannot be drawn.
 Json series_mark(const Plot& p, const Series& s, const std::string& data) {
     Json values = Json::array();
-    const size_t n = s.kind == Series::Bars ? s.x.size() - 1 : s.x.size();
+    // Bars: bar i spans [x[i], x[i + 1]], so x holds one more edge than there are bars.
+    const size_t n = s.kind == Series::Bars && !s.x.empty() ? s.x.size() - 1 : s.x.size();
     for (size_t i = 0; i < n; ++i) {
         const bool ok = drawable(p, s.x[i], s.y[i]);
         if (s.kind == Series::Line)
