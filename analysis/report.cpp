@@ -935,9 +935,10 @@ std::string script_json(const Json& spec) {
 }
 
 /// The page's script: registers the transforms with the dataflow (what Vega's own bundle does
-/// on loading), draws each figure's spec as SVG with hover on (tooltips: Vega's own handler,
-/// the hovered item's values as the chart's title attribute), and says on <body> when all are
-/// drawn (data-ready) or what failed (data-error).
+/// on loading), draws each figure's spec as SVG, shows a hovered item's tooltip at once beside
+/// the pointer (Vega's own handler sets the chart's title attribute, which the browser shows
+/// late and does not follow the pointer with), and says on <body> when all are drawn
+/// (data-ready) or what failed (data-error).
 constexpr const char* kDrawPlots = R"js((function () {
   const body = document.body;
   const fail = (e) => {
@@ -947,10 +948,22 @@ constexpr const char* kDrawPlots = R"js((function () {
     const V = window.impulseVega;
     Object.assign(V['vega-dataflow'].transforms, V['vega-transforms'],
                   V['vega-view-transforms'], V['vega-encode']);
+    const tip = document.body.appendChild(document.createElement('div'));
+    tip.className = 'tip';
+    const tooltip = (handler, event, item, value) => {
+      tip.style.display = value ? 'block' : 'none';
+      if (!value) return;
+      tip.textContent = Object.entries(value).map(([k, v]) => k + ': ' + v).join('\n');
+      // Right of and below the pointer, or left of and above it where the window ends.
+      const right = event.clientX + 14 + tip.offsetWidth <= window.innerWidth;
+      const below = event.clientY + 14 + tip.offsetHeight <= window.innerHeight;
+      tip.style.left = event.pageX + (right ? 14 : -14 - tip.offsetWidth) + 'px';
+      tip.style.top = event.pageY + (below ? 14 : -14 - tip.offsetHeight) + 'px';
+    };
     const figures = Array.from(document.querySelectorAll('figure.plot'));
     window.impulseViews = figures.map((f) => new V['vega-view'].View(
         V['vega-parser'].parse(JSON.parse(f.querySelector('script.impulse-spec').textContent)),
-        {renderer: 'svg', container: f.querySelector('.chart'), hover: true}));
+        {renderer: 'svg', container: f.querySelector('.chart'), hover: true, tooltip}));
     Promise.all(window.impulseViews.map((v) => v.runAsync())).then(() => {
       body.dataset.plots = String(figures.length);
       body.dataset.ready = '1';
@@ -1062,6 +1075,9 @@ std::string to_html(const AnalysisResult& r, const std::string& chart_library) {
       << ".plots{display:flex;flex-wrap:wrap;gap:12px}\n"
       << "figure{margin:0;border:1px solid #ddd;background:#fff;padding:4px}\n"
       << ".hint{font-size:13px;color:#555}\n"
+      << ".tip{position:absolute;display:none;white-space:pre;pointer-events:none;background:#fff;"
+         "border:1px solid #999;border-radius:3px;padding:4px 7px;font-size:12px;"
+         "box-shadow:0 1px 4px rgba(0,0,0,.2)}\n"
       << "</style>\n"
       // First, so an error in the library or the specs is on the page (data-error) too.
       << "<script>window.addEventListener('error', (e) => { document.body && "

@@ -142,20 +142,34 @@ def test_every_plot_is_drawn_with_log_axes_on_the_spectrum(work, browser):
 
 
 def test_hover_shows_the_values(work, browser):
-    browser.open((work / "report.html").as_uri())
-    # The first measured point of the radial spectrum, under the pointer.
-    box = browser.evaluate("""(() => {
-      const f = document.querySelectorAll('figure.plot')[%d];
-      f.scrollIntoView();
-      const s = f.querySelector('g.mark-symbol path').getBoundingClientRect();
-      return [s.x + s.width / 2, s.y + s.height / 2];
-    })()""" % SPECTRUM)
-    browser.page("Input.dispatchMouseEvent", type="mouseMoved", x=box[0], y=box[1])
-    title = browser.evaluate("document.querySelectorAll('figure.plot')[%d].querySelector('.chart')"
-                             ".getAttribute('title')" % SPECTRUM)
-    print(f"hover over the spectrum's first point: {title!r}")
-    assert title and title.startswith("series: measured")
-    assert "frequency |k| (cycles/pixel): " in title and "power (value^2 pixel^2): " in title
+    # A window a plot wide, so the tip of the last point has no room on its right.
+    browser.open((work / "report.html").as_uri(), size=(700, 900))
+    # The first and the last measured point of the radial spectrum, under the pointer: the tip
+    # shows the values beside it, inside the window (turned left at the right edge).
+    for which in ("first", "last"):
+        at = browser.evaluate("""(() => {
+          const f = document.querySelectorAll('figure.plot')[%d];
+          f.scrollIntoView();
+          const points = f.querySelectorAll('g.mark-symbol.role-mark path');  // not the legend's
+          const s = points[%s].getBoundingClientRect();
+          return [s.x + s.width / 2, s.y + s.height / 2];
+        })()""" % (SPECTRUM, "0" if which == "first" else "points.length - 1"))
+        browser.page("Input.dispatchMouseEvent", type="mouseMoved", x=at[0], y=at[1])
+        text, display, box, width = browser.evaluate(
+            "(() => { const t = document.querySelector('div.tip'); const r = t.getBoundingClientRect(); "
+            "return [t.textContent, getComputedStyle(t).display, [r.left, r.top, r.right, r.bottom], "
+            "window.innerWidth]; })()")
+        print(f"hover over the spectrum's {which} point at ({at[0]:.0f}, {at[1]:.0f}): {text!r} in {box}")
+        # The last point lies under the theory's line, drawn over it.
+        assert display == "block" and text.split("\n")[0] in ("series: measured (12 frames)", "series: theory")
+        assert "frequency |k| (cycles/pixel): " in text and "power (value^2 pixel^2): " in text
+        assert 0 <= box[0] and box[2] <= width
+        # 14 px from the pointer on each axis, on one side or the other.
+        assert min(abs(box[0] - at[0] - 14), abs(at[0] - box[2] - 14)) < 1
+        assert min(abs(box[1] - at[1] - 14), abs(at[1] - box[3] - 14)) < 1
+    # Off the marks, it goes.
+    browser.page("Input.dispatchMouseEvent", type="mouseMoved", x=5, y=5)
+    assert browser.evaluate("getComputedStyle(document.querySelector('div.tip')).display") == "none"
     assert not errors(browser)
 
 
