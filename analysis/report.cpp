@@ -1,15 +1,18 @@
 // SPDX-License-Identifier: Apache-2.0
 // `impulse analyze` output: the text report, JSON, and a self-contained HTML page whose plots
-// are SVG drawn here (no scripts, no network). JSON through nlohmann-json.
+// are Vega specs with their data (report_charts.cpp) drawn by the chart library the page
+// inlines (chart_library.cpp; design.md §6, "The report's plots drawn by Vega"); nothing is
+// fetched. JSON through nlohmann-json.
 
 #include "analysis/report.h"
+
+#include "analysis/detail/report_charts.h"
 
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <numbers>
 #include <sstream>
 #include <type_traits>
 
@@ -96,9 +99,7 @@ std::string stationarity_verdict(const Stationarity& st) {
 
 using Json = nlohmann::ordered_json;
 
-// ---------------------------------------------------------------------------------------------
-// SVG plots
-
+/// Text for HTML: & < > " escaped.
 std::string esc(const std::string& s) {
     std::string o;
     for (char c : s) {
@@ -114,507 +115,6 @@ std::string esc(const std::string& s) {
             o += c;
     }
     return o;
-}
-
-struct Series {
-    std::string label;
-    std::vector<double> x, y;
-    std::string color = "#1f77b4";
-    enum Kind { Line, Points, Bars } kind = Line;
-    bool dashed = false;
-};
-struct Band {
-    std::string label;
-    std::vector<double> x, lo, hi;
-    std::string color = "#d62728";
-};
-struct HLine {
-    double y = 0;
-    std::string label;
-    std::string color = "#777";
-};
-struct Plot {
-    std::string title, xlabel, ylabel;
-    bool logx = false, logy = false;
-    std::vector<Series> series;
-    std::vector<Band> bands;
-    std::vector<HLine> hlines;
-};
-
-constexpr double kW = 680, kH = 320, kL = 78, kR = 20, kT = 34, kB = 48;
-
-std::vector<double> linear_ticks(double lo, double hi) {
-    const double span = hi - lo;
-    const double raw = span / 6.0;
-    const double mag = std::pow(10.0, std::floor(std::log10(raw)));
-    double step = mag;
-    for (double m : {1.0, 2.0, 5.0, 10.0})
-        if (m * mag >= raw) {
-            step = m * mag;
-            break;
-        }
-    std::vector<double> t;
-    for (double v = std::ceil(lo / step) * step; v <= hi + 1e-9 * span; v += step)
-        t.push_back(std::abs(v) < 1e-12 * span ? 0.0 : v);
-    return t;
-}
-
-/// A plot's data range in axis units (log10 on a log axis), padded, and its map to SVG pixels.
-struct PlotArea {
-    static constexpr double pw = kW - kL - kR, ph = kH - kT - kB;  // the frame's size
-    bool logx = false, logy = false;
-    double x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
-
-    double X(double x) const { return kL + ((logx ? std::log10(x) : x) - x0) / (x1 - x0) * pw; }
-    double Y(double y) const {
-        double v = logy ? std::log10(y) : y;
-        v = std::clamp(v, y0, y1);
-        return kT + (y1 - v) / (y1 - y0) * ph;
-    }
-    /// Whether (x, y) can be drawn: finite, and positive on a log axis.
-    bool ok(double x, double y) const {
-        return std::isfinite(x) && std::isfinite(y) && !(logx && x <= 0) && !(logy && y <= 0);
-    }
-};
-
-/// The range of everything drawn (non-positive values are left out on log axes).
-PlotArea plot_area(const Plot& p) {
-    PlotArea a;
-    a.logx = p.logx, a.logy = p.logy;
-    double &x0 = a.x0, &x1 = a.x1, &y0 = a.y0, &y1 = a.y1;
-    const auto take = [&](double x, double y) {
-        if (!std::isfinite(x) || !std::isfinite(y)) return;
-        if (p.logx && x <= 0) return;
-        if (p.logy && y <= 0) return;
-        x0 = std::min(x0, x), x1 = std::max(x1, x), y0 = std::min(y0, y), y1 = std::max(y1, y);
-    };
-    for (const auto& s : p.series)
-        for (size_t i = 0; i < s.x.size(); ++i) take(s.x[i], s.y[i]);
-    for (const auto& b : p.bands)
-        for (size_t i = 0; i < b.x.size(); ++i) take(b.x[i], b.lo[i]), take(b.x[i], b.hi[i]);
-    for (const auto& h : p.hlines)
-        if (std::isfinite(x0)) take(x0, h.y);
-    if (!std::isfinite(x0)) x0 = 0, x1 = 1, y0 = 0, y1 = 1;
-    if (p.logx) x0 = std::log10(x0), x1 = std::log10(x1);
-    if (p.logy) {
-        y0 = std::log10(y0), y1 = std::log10(y1);
-        y0 = std::max(y0, y1 - 12.0);  // at most 12 decades
-    }
-    if (x1 <= x0) x0 -= 0.5, x1 += 0.5;
-    if (y1 <= y0) y0 -= 0.5 * std::max(1.0, std::abs(y0)), y1 += 0.5 * std::max(1.0, std::abs(y1));
-    const double pad = 0.04 * (y1 - y0);
-    y0 -= pad, y1 += pad;
-    return a;
-}
-
-/// Tick values and labels over [lo, hi] in axis units: decades on a log axis (at most about
-/// `decades` of them labelled), else round linear steps.
-std::vector<std::pair<double, std::string>> axis_ticks(double lo, double hi, bool log,
-                                                       int decades) {
-    std::vector<std::pair<double, std::string>> t;
-    if (log) {
-        const int step = std::max(1, int(std::ceil((hi - lo) / decades)));
-        for (int d = int(std::ceil(lo)); d <= int(std::floor(hi)); d += step)
-            t.push_back({std::pow(10.0, d), "1e" + std::to_string(d)});
-        if (t.size() < 2)
-            for (double v : linear_ticks(std::pow(10.0, lo), std::pow(10.0, hi)))
-                if (v > 0) t.push_back({v, fmt(v, 3)});
-    } else {
-        for (double v : linear_ticks(lo, hi)) t.push_back({v, fmt(v, 4)});
-    }
-    return t;
-}
-
-/// The SVG header, the title, the grid with its tick labels, the frame and the axis labels.
-void draw_axes(std::ostream& o, const Plot& p, const PlotArea& a) {
-    constexpr double pw = PlotArea::pw, ph = PlotArea::ph;
-    o << "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " << kW << ' ' << kH
-      << "\" width=\"" << kW << "\" height=\"" << kH << "\" role=\"img\">\n";
-    o << "<title>" << esc(p.title) << "</title>\n";
-    o << "<rect x=\"0\" y=\"0\" width=\"" << kW << "\" height=\"" << kH << "\" fill=\"#fff\"/>\n";
-    o << "<text x=\"" << kW / 2 << "\" y=\"20\" text-anchor=\"middle\" class=\"pt\">"
-      << esc(p.title) << "</text>\n";
-    o << "<g class=\"ax\">\n";
-    for (const auto& [v, label] : axis_ticks(a.x0, a.x1, p.logx, 8)) {
-        const double x = a.X(v);
-        if (x < kL - 0.5 || x > kW - kR + 0.5) continue;
-        o << "<line x1=\"" << x << "\" y1=\"" << kT << "\" x2=\"" << x << "\" y2=\"" << kT + ph
-          << "\" class=\"grid\"/><text x=\"" << x << "\" y=\"" << kT + ph + 16
-          << "\" text-anchor=\"middle\">" << esc(label) << "</text>\n";
-    }
-    for (const auto& [v, label] : axis_ticks(a.y0, a.y1, p.logy, 7)) {
-        const double y = a.Y(v);
-        if ((p.logy ? std::log10(v) : v) < a.y0 || (p.logy ? std::log10(v) : v) > a.y1) continue;
-        o << "<line x1=\"" << kL << "\" y1=\"" << y << "\" x2=\"" << kL + pw << "\" y2=\"" << y
-          << "\" class=\"grid\"/><text x=\"" << kL - 6 << "\" y=\"" << y + 4
-          << "\" text-anchor=\"end\">" << esc(label) << "</text>\n";
-    }
-    o << "<rect x=\"" << kL << "\" y=\"" << kT << "\" width=\"" << pw << "\" height=\"" << ph
-      << "\" fill=\"none\" stroke=\"#333\"/>\n";
-    o << "<text x=\"" << kL + pw / 2 << "\" y=\"" << kH - 8 << "\" text-anchor=\"middle\">"
-      << esc(p.xlabel) << "</text>\n";
-    o << "<text transform=\"translate(16," << kT + ph / 2
-      << ") rotate(-90)\" text-anchor=\"middle\">" << esc(p.ylabel) << "</text>\n</g>\n";
-}
-
-/// A shaded band between lo and hi (the hi edge left to right, the lo edge back).
-void draw_band(std::ostream& o, const Band& b, const PlotArea& a) {
-    std::ostringstream pts;
-    size_t used = 0;
-    for (size_t i = 0; i < b.x.size(); ++i)
-        if (a.ok(b.x[i], b.hi[i])) pts << a.X(b.x[i]) << ',' << a.Y(b.hi[i]) << ' ', ++used;
-    for (size_t i = b.x.size(); i-- > 0;)
-        if (a.ok(b.x[i], b.lo[i])) pts << a.X(b.x[i]) << ',' << a.Y(b.lo[i]) << ' ', ++used;
-    if (used >= 3)
-        o << "<polygon points=\"" << pts.str() << "\" fill=\"" << b.color
-          << "\" fill-opacity=\"0.15\" stroke=\"none\"/>\n";
-}
-
-/// Bars from the axis (or the bottom of a log axis) to y[i], over [x[i], x[i + 1]].
-void draw_bars(std::ostream& o, const Series& s, const PlotArea& a) {
-    for (size_t i = 0; i + 1 < s.x.size(); ++i) {
-        if (!a.ok(s.x[i], s.y[i])) continue;
-        const double xa = a.X(s.x[i]), xb = a.X(s.x[i + 1]);
-        const double yt = a.Y(s.y[i]),
-                     yb = a.Y(a.logy ? std::pow(10.0, a.y0) : std::max(a.y0, 0.0));
-        o << "<rect x=\"" << xa << "\" y=\"" << std::min(yt, yb) << "\" width=\""
-          << std::max(0.0, xb - xa - 0.5) << "\" height=\"" << std::abs(yb - yt) << "\" fill=\""
-          << s.color << "\" fill-opacity=\"0.75\"/>\n";
-    }
-}
-
-void draw_points(std::ostream& o, const Series& s, const PlotArea& a) {
-    o << "<g fill=\"" << s.color << "\">";
-    for (size_t i = 0; i < s.x.size(); ++i)
-        if (a.ok(s.x[i], s.y[i]))
-            o << "<circle cx=\"" << a.X(s.x[i]) << "\" cy=\"" << a.Y(s.y[i]) << "\" r=\"1.8\"/>";
-    o << "</g>\n";
-}
-
-/// A polyline, broken where a value cannot be drawn.
-void draw_line(std::ostream& o, const Series& s, const PlotArea& a) {
-    std::ostringstream pts;
-    size_t count = 0;
-    const auto flush = [&]() {
-        if (count >= 2)
-            o << "<polyline points=\"" << pts.str() << "\" fill=\"none\" stroke=\"" << s.color
-              << "\" stroke-width=\"1.6\"" << (s.dashed ? " stroke-dasharray=\"6,4\"" : "")
-              << "/>\n";
-        pts.str("");
-        count = 0;
-    };
-    for (size_t i = 0; i < s.x.size(); ++i) {
-        if (!a.ok(s.x[i], s.y[i])) {
-            flush();
-            continue;
-        }
-        pts << a.X(s.x[i]) << ',' << a.Y(s.y[i]) << ' ';
-        ++count;
-    }
-    flush();
-}
-
-/// Bands, reference lines, series.
-void draw_data(std::ostream& o, const Plot& p, const PlotArea& a) {
-    for (const auto& b : p.bands) draw_band(o, b, a);
-    for (const auto& h : p.hlines) {
-        if (p.logy && h.y <= 0) continue;
-        const double y = a.Y(h.y);
-        o << "<line x1=\"" << kL << "\" y1=\"" << y << "\" x2=\"" << kL + PlotArea::pw << "\" y2=\""
-          << y << "\" stroke=\"" << h.color << "\" stroke-dasharray=\"5,4\"/>\n";
-    }
-    for (const auto& s : p.series) {
-        if (s.kind == Series::Bars)
-            draw_bars(o, s, a);
-        else if (s.kind == Series::Points)
-            draw_points(o, s, a);
-        else
-            draw_line(o, s, a);
-    }
-}
-
-/// Legend, top right on a translucent panel sized to its longest label (~6.2 px a character).
-void draw_legend(std::ostream& o, const Plot& p) {
-    size_t longest = 0, entries = 0;
-    const auto measure = [&](const std::string& label) {
-        if (!label.empty()) longest = std::max(longest, label.size()), ++entries;
-    };
-    for (const auto& s : p.series) measure(s.label);
-    for (const auto& b : p.bands) measure(b.label);
-    for (const auto& h : p.hlines) measure(h.label);
-    const double lw = 34 + 6.2 * double(longest);
-    const double lx = kL + PlotArea::pw - lw;
-    if (entries)
-        o << "<rect x=\"" << lx - 4 << "\" y=\"" << kT + 3 << "\" width=\"" << lw << "\" height=\""
-          << 15 * entries + 6 << "\" fill=\"#fff\" fill-opacity=\"0.85\"/>\n";
-    double ly = kT + 14;
-    const auto legend = [&](const std::string& label, const std::string& color, bool box) {
-        if (label.empty()) return;
-        if (box)
-            o << "<rect x=\"" << lx << "\" y=\"" << ly - 8 << "\" width=\"18\" height=\"9\" fill=\""
-              << color << "\" fill-opacity=\"0.3\"/>";
-        else
-            o << "<line x1=\"" << lx << "\" y1=\"" << ly - 4 << "\" x2=\"" << lx + 18 << "\" y2=\""
-              << ly - 4 << "\" stroke=\"" << color << "\" stroke-width=\"2.5\"/>";
-        o << "<text x=\"" << lx + 24 << "\" y=\"" << ly << "\" class=\"lg\">" << esc(label)
-          << "</text>\n";
-        ly += 15;
-    };
-    for (const auto& s : p.series) legend(s.label, s.color, s.kind == Series::Bars);
-    for (const auto& b : p.bands) legend(b.label, b.color, true);
-    for (const auto& h : p.hlines) legend(h.label, h.color, false);
-}
-
-std::string svg_plot(const Plot& p) {
-    const PlotArea a = plot_area(p);
-    std::ostringstream o;
-    draw_axes(o, p, a);
-    draw_data(o, p, a);
-    draw_legend(o, p);
-    o << "</svg>\n";
-    return o.str();
-}
-
-/// Viridis-like colour ramp on [0, 1] (five anchors of matplotlib's viridis, linear between).
-std::string ramp(double t) {
-    static const double a[5][3] = {
-        {68, 1, 84}, {59, 82, 139}, {33, 145, 140}, {94, 201, 98}, {253, 231, 37}};
-    t = std::clamp(t, 0.0, 1.0) * 4.0;
-    const int i = std::min(3, int(t));
-    const double f = t - i;
-    char buf[16];
-    std::snprintf(buf, sizeof buf, "#%02x%02x%02x", int(a[i][0] + f * (a[i + 1][0] - a[i][0])),
-                  int(a[i][1] + f * (a[i + 1][1] - a[i][1])),
-                  int(a[i][2] + f * (a[i + 1][2] - a[i][2])));
-    return buf;
-}
-
-std::string svg_heatmap(const PeriodogramSummary& s, int w, int h) {
-    const std::string title = "2-D periodogram, log10 power (centred; window: " + s.window + ")";
-    double hi = -INFINITY;
-    for (double v : s.heat)
-        if (std::isfinite(v)) hi = std::max(hi, v);
-    const double lo = std::isfinite(hi) ? hi - 8.0 : 0.0;
-    const double side = 300, x0 = 150, y0 = 34;
-    const double cw = side / s.heat_width, ch = side / s.heat_height;
-    std::ostringstream o;
-    o << "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " << kW << " 380\" width=\"" << kW
-      << "\" height=\"380\" role=\"img\">\n<title>" << esc(title) << "</title>\n";
-    o << "<rect x=\"0\" y=\"0\" width=\"" << kW << "\" height=\"380\" fill=\"#fff\"/>\n";
-    o << "<text x=\"" << kW / 2 << "\" y=\"20\" text-anchor=\"middle\" class=\"pt\">" << esc(title)
-      << "</text>\n<g shape-rendering=\"crispEdges\">";
-    for (int r = 0; r < s.heat_height; ++r)
-        for (int c = 0; c < s.heat_width; ++c) {
-            const double v = s.heat[size_t(r) * s.heat_width + c];
-            o << "<rect x=\"" << x0 + c * cw << "\" y=\"" << y0 + r * ch << "\" width=\""
-              << cw + 0.05 << "\" height=\"" << ch + 0.05 << "\" fill=\""
-              << (std::isfinite(v) ? ramp((v - lo) / (hi - lo)) : std::string("#000")) << "\"/>";
-        }
-    o << "</g>\n<g class=\"ax\">";
-    o << "<rect x=\"" << x0 << "\" y=\"" << y0 << "\" width=\"" << side << "\" height=\"" << side
-      << "\" fill=\"none\" stroke=\"#333\"/>";
-    // kx from -0.5 (left) to 0.5, ky from -0.5 (top) to 0.5: display row r holds ky index r - h/2.
-    for (double f : {-0.5, -0.25, 0.0, 0.25, 0.5}) {
-        const double x = x0 + (f + 0.5) * side, y = y0 + (f + 0.5) * side;
-        o << "<text x=\"" << x << "\" y=\"" << y0 + side + 16 << "\" text-anchor=\"middle\">" << f
-          << "</text><text x=\"" << x0 - 6 << "\" y=\"" << y + 4 << "\" text-anchor=\"end\">" << f
-          << "</text>";
-    }
-    o << "<text x=\"" << x0 + side / 2 << "\" y=\"" << y0 + side + 34
-      << "\" text-anchor=\"middle\">kx (cycles/pixel)</text>";
-    o << "<text transform=\"translate(" << x0 - 48 << "," << y0 + side / 2
-      << ") rotate(-90)\" text-anchor=\"middle\">ky (cycles/pixel)</text>";
-    // Colour bar.
-    const double bx = x0 + side + 40;
-    for (int i = 0; i < 50; ++i)
-        o << "<rect x=\"" << bx << "\" y=\"" << y0 + side - (i + 1) * side / 50
-          << "\" width=\"16\" height=\"" << side / 50 + 0.2 << "\" fill=\"" << ramp((i + 0.5) / 50)
-          << "\"/>";
-    for (int d = 0; d <= 8; d += 2)
-        o << "<text x=\"" << bx + 22 << "\" y=\"" << y0 + side - d / 8.0 * side + 4 << "\">"
-          << fmt(lo + d, 3) << "</text>";
-    o << "<text x=\"" << bx + 70 << "\" y=\"" << y0 + 12 << "\">" << w << "x" << h
-      << " bins</text></g>\n</svg>\n";
-    return o.str();
-}
-
-std::vector<double> iota_from(size_t n, double first) {
-    std::vector<double> v(n);
-    for (size_t i = 0; i < n; ++i) v[i] = first + double(i);
-    return v;
-}
-
-/// A plot with its title and axis labels.
-Plot titled(const std::string& title, const std::string& xlabel, const std::string& ylabel) {
-    Plot p;
-    p.title = title;
-    p.xlabel = xlabel;
-    p.ylabel = ylabel;
-    return p;
-}
-
-const std::string kMeasured = "measured";
-const std::string kTheoryRed = "#d62728";
-
-/// The histogram against the Gaussian of the theory's mean and variance.
-std::string histogram_plot(const AnalysisResult& r) {
-    const auto& T = r.theory;
-    Plot p = titled("Histogram of values (64 bins over mean +- 4 sd)", "value", "pixels per bin");
-    Series s;
-    s.label = kMeasured;
-    s.kind = Series::Bars;
-    const auto& hg = r.histogram;
-    const double bw = (hg.hi - hg.lo) / double(hg.counts.size());
-    for (size_t i = 0; i <= hg.counts.size(); ++i) {
-        s.x.push_back(hg.lo + bw * double(i));
-        s.y.push_back(i < hg.counts.size() ? double(hg.counts[i]) : 0.0);
-    }
-    p.series.push_back(s);
-    if (T && T->variance > 0) {
-        Series g;
-        g.label = "Gaussian, theory mean and variance";
-        g.color = kTheoryRed;
-        const double total = double(r.frames) * r.width * r.height;
-        const double sd = std::sqrt(T->variance);
-        for (int i = 0; i <= 256; ++i) {
-            const double x = hg.lo + (hg.hi - hg.lo) * i / 256.0;
-            const double z = (x - T->mean) / sd;
-            g.x.push_back(x);
-            g.y.push_back(total * bw * std::exp(-0.5 * z * z) /
-                          (sd * std::sqrt(2 * std::numbers::pi)));
-        }
-        p.series.push_back(g);
-    }
-    return svg_plot(p);
-}
-
-std::string radial_spectrum_plot(const AnalysisResult& r) {
-    const auto& T = r.theory;
-    Plot p = titled("Radially averaged power spectrum", "frequency |k| (cycles/pixel)",
-                    "power (value^2 pixel^2)");
-    p.logx = p.logy = true;
-    Series s;
-    s.label =
-        kMeasured + " (" + std::to_string(r.frames) + (r.frames == 1 ? " frame)" : " frames)");
-    s.kind = Series::Points;
-    for (size_t b = 0; b < r.spectrum.power.size(); ++b)
-        if (r.spectrum.count[b] > 0)
-            s.x.push_back(r.spectrum.frequency[b]), s.y.push_back(r.spectrum.power[b]);
-    p.series.push_back(s);
-    if (T && T->spectrum) {
-        Series t;
-        t.label = "theory";
-        t.color = kTheoryRed;
-        for (size_t b = 0; b < r.spectrum.power.size(); ++b)
-            if (r.spectrum.count[b] > 0)
-                t.x.push_back(r.spectrum.frequency[b]), t.y.push_back(T->spectrum->power[b]);
-        p.series.push_back(t);
-    }
-    return svg_plot(p);
-}
-
-/// z per annulus with the Bonferroni limits +-threshold; `title` and `ylabel` name the test.
-std::string z_plot(const std::string& title, const std::string& ylabel, Series s,
-                   double threshold) {
-    Plot p = titled(title, "frequency |k| (cycles/pixel)", ylabel);
-    s.kind = Series::Points;
-    p.series.push_back(s);
-    p.hlines.push_back({threshold, "Bonferroni limit +-" + fixed(threshold, 2), "#777"});
-    p.hlines.push_back({-threshold, "", "#777"});
-    return svg_plot(p);
-}
-
-std::string spectrum_z_plot(const AnalysisResult& r) {
-    const SpectrumTheory& S = *r.theory->spectrum;
-    Series s;
-    s.label = "z";
-    for (size_t b = 0; b < S.z.size(); ++b)
-        if (std::isfinite(S.z[b])) s.x.push_back(r.spectrum.frequency[b]), s.y.push_back(S.z[b]);
-    return z_plot("Spectrum against theory: z per annulus", "z (Wilson-Hilferty)", s, S.threshold);
-}
-
-std::string autocovariance_plot(const AnalysisResult& r) {
-    const auto& T = r.theory;
-    Plot p = titled("Radial autocovariance", "lag (pixels)", "covariance (value^2)");
-    Series s;
-    s.label = kMeasured;
-    s.kind = Series::Points;
-    s.x = iota_from(r.autocovariance.size(), 0);
-    s.y = r.autocovariance;
-    p.series.push_back(s);
-    if (T && !T->autocovariance.empty()) {
-        Series t;
-        t.label = "theory";
-        t.color = kTheoryRed;
-        t.x = iota_from(T->autocovariance.size(), 0);
-        t.y = T->autocovariance;
-        p.series.push_back(t);
-    }
-    p.hlines.push_back({0.0, "", "#aaa"});
-    return svg_plot(p);
-}
-
-/// One statistic per frame from frame `from` on, with the theory +- 2 sd of one frame.
-std::string per_frame_plot(const AnalysisResult& r, const std::string& title,
-                           const std::string& ylabel, double (*get)(const FrameStats&),
-                           double theory, double sd, size_t from) {
-    const auto x = iota_from(size_t(r.frames), double(r.first_frame));
-    Plot p = titled(title, "frame", ylabel);
-    Series s;
-    s.label = kMeasured;
-    for (size_t j = from; j < r.frame_stats.size(); ++j)
-        s.x.push_back(x[j]), s.y.push_back(get(r.frame_stats[j]));
-    p.series.push_back(s);
-    if (std::isfinite(theory)) {
-        if (sd > 0) {
-            Band b;
-            b.label = "theory +- 2 sd (one frame)";
-            b.x = {x[from], x.back()};
-            b.lo = {theory - 2 * sd, theory - 2 * sd};
-            b.hi = {theory + 2 * sd, theory + 2 * sd};
-            p.bands.push_back(b);
-        }
-        p.hlines.push_back({theory, "theory", kTheoryRed});
-    }
-    return svg_plot(p);
-}
-
-/// The per-frame mean, variance and difference variance (a sequence of frames).
-void add_per_frame_plots(const AnalysisResult& r, std::vector<std::string>& out) {
-    const auto& T = r.theory;
-    out.push_back(per_frame_plot(
-        r, "Per-frame mean", "mean", [](const FrameStats& f) { return f.mean; }, T ? T->mean : NAN,
-        T ? T->sd_frame_mean : 0.0, 0));
-    out.push_back(per_frame_plot(
-        r, "Per-frame variance", "variance", [](const FrameStats& f) { return f.variance; },
-        T ? T->variance + T->sd_mean * T->sd_mean - T->sd_frame_mean * T->sd_frame_mean : NAN,
-        T ? T->sd_frame_variance : 0.0, 0));
-    out.push_back(per_frame_plot(
-        r, "Per-frame difference variance (frame - previous)", "variance of the difference",
-        [](const FrameStats& f) { return f.diff_variance; },
-        T && T->diff_variance ? *T->diff_variance : NAN, 0.0, 1));
-}
-
-std::string drift_plot(const Stationarity& st) {
-    Series s;
-    s.label = "z, corrected";
-    s.x = st.drift.frequency;
-    s.y = st.z_corrected;
-    return z_plot("Spectral drift, first quarter against last: z per annulus",
-                  "z (correlation-corrected)", s, st.z_threshold);
-}
-
-/// The report's plots, in order.
-std::vector<std::string> plots(const AnalysisResult& r) {
-    std::vector<std::string> out;
-    out.push_back(histogram_plot(r));
-    out.push_back(svg_heatmap(r.periodogram, r.width, r.height));
-    out.push_back(radial_spectrum_plot(r));
-    if (r.theory && r.theory->spectrum) out.push_back(spectrum_z_plot(r));
-    out.push_back(autocovariance_plot(r));
-    if (r.frames > 1) add_per_frame_plots(r, out);
-    if (r.stationarity.available) out.push_back(drift_plot(r.stationarity));
-    return out;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -989,11 +489,11 @@ int html_plot_count(const AnalysisResult& r) {
     return n;
 }
 
-std::string to_html(const AnalysisResult& r) {
-    const std::vector<std::string> svgs = plots(r);
+std::string to_html(const AnalysisResult& r, const std::string& chart_library) {
+    const std::vector<std::string> specs = plot_specs(r);
     std::ostringstream o;
     o << "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n"
-      << "<meta name=\"impulse-plots\" content=\"" << svgs.size() << "\">\n"
+      << "<meta name=\"impulse-plots\" content=\"" << specs.size() << "\">\n"
       << "<title>impulse analyze: " << esc(r.input) << "</title>\n<style>\n"
       << "body{font-family:system-ui,-apple-system,'DejaVu Sans',sans-serif;margin:24px auto;"
          "max-width:1400px;color:#222;background:#fafafa}\n"
@@ -1004,10 +504,17 @@ std::string to_html(const AnalysisResult& r) {
          "600}"
          ".na{color:#777}\n"
       << ".plots{display:flex;flex-wrap:wrap;gap:12px}\n"
-      << "figure{margin:0;border:1px solid #ddd;background:#fff}\n"
-      << "svg text{font-size:11px;fill:#333} svg text.pt{font-size:13px;font-weight:600}"
-         " svg text.lg{font-size:11px} svg .grid{stroke:#eee}\n"
-      << "</style>\n</head>\n<body>\n";
+      << "figure{margin:0;border:1px solid #ddd;background:#fff;padding:4px}\n"
+      << ".hint{font-size:13px;color:#555}\n"
+      << ".tip{position:absolute;display:none;white-space:pre;pointer-events:none;background:#fff;"
+         "border:1px solid #999;border-radius:3px;padding:4px 7px;font-size:12px;"
+         "box-shadow:0 1px 4px rgba(0,0,0,.2)}\n"
+      << "</style>\n"
+      // First, so an error in the library or the specs is on the page (data-error) too.
+      << "<script>window.addEventListener('error', (e) => { document.body && "
+         "!document.body.dataset.error && (document.body.dataset.error = String(e.message)); "
+         "});</script>\n"
+      << "</head>\n<body>\n";
     o << "<h1>impulse analyze: " << esc(r.input) << "</h1>\n";
 
     const auto row = [&](const std::string& k, const std::string& v) {
@@ -1071,9 +578,15 @@ std::string to_html(const AnalysisResult& r) {
                                           ")");
     }
     for (const auto& n : r.notes) row("note", esc(n));
-    o << "</table>\n<h2>Plots</h2>\n<div class=\"plots\">\n";
-    for (const auto& s : svgs) o << "<figure>\n" << s << "</figure>\n";
-    o << "</div>\n</body>\n</html>\n";
+    o << "</table>\n<h2>Plots</h2>\n<p class=\"hint\">Hover over a point, bar or line for its "
+         "values; the wheel zooms about the pointer, a drag pans, a double click goes back.</p>\n"
+         "<div class=\"plots\">\n";
+    for (const auto& spec : specs)
+        o << "<figure class=\"plot\"><div class=\"chart\"></div>"
+          << "<script type=\"application/json\" class=\"impulse-spec\">\n"
+          << spec << "\n</script></figure>\n";
+    o << "</div>\n<script>\n" << chart_library << "\n</script>\n<script>\n" << draw_plots_script()
+      << "</script>\n</body>\n</html>\n";
     return o.str();
 }
 

@@ -226,8 +226,10 @@ int run_analyze(const AnalyzeOptions& options) {
     if (!options.variance_map.empty() && !output::is_image_path(options.variance_map))
         throw ValueError("--variance-map " + options.variance_map + ": expected an image path "
                          "(.exr for the raw variances)");
+    // The chart library first: without it, fail before the analysis and write nothing.
+    const std::string charts = options.report.empty() ? "" : load_chart_library();
     const AnalysisResult r = analyze_input(options);
-    if (!options.report.empty()) write_atomically(options.report, to_html(r));
+    if (!options.report.empty()) write_atomically(options.report, to_html(r, charts));
     if (r.variance_map) {
         const auto& v = *r.variance_map;
         const auto [lo, hi] = std::minmax_element(v.data.begin(), v.data.end());

@@ -13,6 +13,7 @@ using analysis::AnalysisResult;
 using analysis::AnalyzeOptions;
 using analysis::analyze_frames;
 using analysis::html_plot_count;
+using analysis::load_chart_library;
 using analysis::PeriodogramSummary;
 using analysis::SpectrumTheory;
 using analysis::Stationarity;

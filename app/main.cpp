@@ -103,7 +103,7 @@ CLI::App* add_analyze(CLI::App& app, impulse::app::AnalyzeOptions& ao) {
                       "exponent H(s) (with its band over frames)");
     analyze->add_option("--variance-map", ao.variance_map,
                         "Write the per-pixel variance over the frames (realizations) as an image");
-    analyze->add_option("--report", ao.report, "Write a self-contained HTML report (plots as SVG)");
+    analyze->add_option("--report", ao.report, "Write a self-contained HTML report (plots drawn by Vega, from libjs-vega)");
     analyze->add_option("--frames", ao.frames, "Inclusive 0-based frame range A-B, or one frame A");
     analyze->add_option("--max-frames", ao.max_frames, "Analyse at most N frames")
         ->check(CLI::PositiveNumber);

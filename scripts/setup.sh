@@ -30,6 +30,8 @@ run_packages=(build-essential cmake pkg-config libeigen3-dev libtbb-dev libopeni
               libtomlplusplus-dev libcli11-dev librandom123-dev libfftw3-dev nlohmann-json3-dev
               # `impulse preview`'s server
               libcpp-httplib-dev
+              # the charts of `impulse analyze --report`: Vega's modules, read at run time
+              libjs-vega
               # volumes (output/) and the porous meshes (mesh/); meshes in and out
               libopenvdb-dev libboost-dev libassimp-dev
               # rebuilds of an unchanged tree (a fresh clone in CI) from the cache

@@ -464,7 +464,7 @@ TEST_CASE("analyze --scene on an animated sequence: theory and stationarity",
     }
 }
 
-TEST_CASE("analyze output: JSON parses, HTML has one titled <svg> per plot", "[app][analyze]") {
+TEST_CASE("analyze output: JSON parses, HTML has one Vega spec per plot", "[app][analyze]") {
     TempDir dir;
     const std::string pattern = dir / "f_####.exr";
     render_scene(kAnimated, {"output.frames=12"}, pattern, 0, 11);
@@ -514,16 +514,45 @@ TEST_CASE("analyze output: JSON parses, HTML has one titled <svg> per plot", "[a
     CHECK(count(json, "{") == count(json, "}"));
     CHECK(count(json, "[") == count(json, "]"));
 
-    const std::string html = impulse::app::to_html(r);
+    // The page with a stand-in for the chart library (the browser test, tests/web/
+    // test_analyze_report.py, draws it with Debian's): one figure and one Vega spec per plot,
+    // each spec valid JSON, zoomable, with tooltips; log axes on the radial spectrum only.
+    const std::string library = "/* the chart library */";
+    const std::string html = impulse::app::to_html(r, library);
     const int plots = impulse::app::html_plot_count(r);
     CHECK(plots == 9);  // histogram, 2-D periodogram, spectrum, spectrum z, autocovariance,
                         // mean, variance, difference variance, drift
-    CHECK(int(count(html, "<svg ")) == plots);
-    CHECK(int(count(html, "</svg>")) == plots);
-    CHECK(int(count(html, "\">\n<title>")) >= plots);
+    CHECK(int(count(html, "<figure class=\"plot\">")) == plots);
     CHECK_THAT(html, Contains("<meta name=\"impulse-plots\" content=\"9\">"));
-    CHECK(count(html, "<script") == 0);
-    CHECK(count(html, "http://") == count(html, "http://www.w3.org/2000/svg"));  // no network
+    CHECK(count(html, library) == 1);  // inlined once
+    const std::string open = "<script type=\"application/json\" class=\"impulse-spec\">\n";
+    std::vector<std::string> specs;
+    for (size_t at = html.find(open); at != std::string::npos; at = html.find(open, at + 1)) {
+        const size_t from = at + open.size();
+        specs.push_back(html.substr(from, html.find("\n</script>", from) - from));
+    }
+    REQUIRE(int(specs.size()) == plots);
+    int log_plots = 0;
+    for (const auto& spec : specs) {
+        CAPTURE(spec.substr(0, 200));
+        JsonChecker parsed(spec);
+        CHECK(parsed.valid());
+        CHECK_THAT(spec, Contains("\"description\":") && Contains("\"title\":") &&
+                             Contains("\"name\":\"zoom\"") &&
+                             Contains("\"tooltip\":"));
+        CHECK(spec.find("</") == std::string::npos);  // cannot end its <script> early
+        const bool logx = count(spec, "{\"name\":\"x\",\"type\":\"log\"") == 1,
+                   logy = count(spec, "{\"name\":\"y\",\"type\":\"log\"") == 1;
+        CHECK(logx == logy);
+        if (logx) {
+            ++log_plots;
+            CHECK_THAT(spec, Contains("Radially averaged power spectrum") && Contains("zoomLog") &&
+                                 Contains("panLog"));
+        }
+    }
+    CHECK(log_plots == 1);
+    // Nothing from the network: no address outside the (stand-in) library.
+    CHECK(count(html, "http://") == 0);
     CHECK(count(html, "https://") == 0);
 
     // A single image without a scene: histogram, 2-D periodogram, spectrum, autocovariance.
@@ -531,7 +560,7 @@ TEST_CASE("analyze output: JSON parses, HTML has one titled <svg> per plot", "[a
     one.input = impulse::app::expand_pattern(pattern, 0);
     const AnalysisResult single = impulse::app::analyze_input(one);
     CHECK(impulse::app::html_plot_count(single) == 4);
-    CHECK(int(count(impulse::app::to_html(single), "<svg ")) == 4);
+    CHECK(int(count(impulse::app::to_html(single, library), "<figure class=\"plot\">")) == 4);
     JsonChecker single_json(impulse::app::to_json(single));
     CHECK(single_json.valid());
 }
@@ -596,8 +625,8 @@ TEST_CASE("impulse analyze on the command line", "[app][analyze][cli]") {
     const std::string image = dir / "s.exr";
     render_scene(kStill, {"output.size=[64,64]", "layer.0.period=[64,64]"}, image, 0, 0);
     const std::string out = dir / "out.txt", err = dir / "err.txt", report = dir / "r.html";
-    const auto run = [&](const std::string& args) {
-        const std::string cmd = std::string("'") + IMPULSE_BINARY + "' analyze " + args + " > '" +
+    const auto run = [&](const std::string& args, const std::string& env = "") {
+        const std::string cmd = env + "'" + IMPULSE_BINARY + "' analyze " + args + " > '" +
                                 out + "' 2> '" + err + "' < /dev/null";
         const int raw = std::system(cmd.c_str());
         return WIFEXITED(raw) ? WEXITSTATUS(raw) : -1;
@@ -606,7 +635,8 @@ TEST_CASE("impulse analyze on the command line", "[app][analyze][cli]") {
     JsonChecker json(read_file(out));
     CHECK(json.valid());
     CHECK(fs::exists(report));
-    CHECK(count(read_file(report), "<svg ") == 4);
+    CHECK(count(read_file(report), "<figure class=\"plot\">") == 4);
+    CHECK(count(read_file(report), "impulseModule = 'vega-view';") == 1);  // Debian's, inlined
     // Only the report is left in the directory (no temporary file).
     int files = 0;
     for ([[maybe_unused]] const auto& e : fs::directory_iterator(fs::path(report).parent_path()))
@@ -623,6 +653,22 @@ TEST_CASE("impulse analyze on the command line", "[app][analyze][cli]") {
 
     CHECK(run("'" + image + "' --report '" + (dir / "no/such/dir/r.html") + "'") == 1);
     CHECK_THAT(read_file(err), Contains("does not exist"));
+
+    // Without the chart library: one line naming the file and the package, nothing written,
+    // before the analysis.
+    fs::create_directories(dir / "vega");
+    const std::string missing = dir / "missing.html";
+    CHECK(run("'" + image + "' --report '" + missing + "'", "IMPULSE_VEGA_DIR='" +
+              (dir / "no-vega") + "' ") == 1);
+    CHECK_THAT(read_file(err), Contains("no-vega/vega-util.min.js: cannot be read") &&
+                                   Contains("libjs-vega"));
+    CHECK(count(read_file(err), "\n") == 1);
+    CHECK(!fs::exists(missing));
+    std::ofstream(dir / "vega/vega-util.min.js").flush();  // an empty module
+    CHECK(run("'" + image + "' --report '" + missing + "'", "IMPULSE_VEGA_DIR='" +
+              (dir / "vega") + "' ") == 1);
+    CHECK_THAT(read_file(err), Contains("vega/vega-util.min.js: empty") && Contains("libjs-vega"));
+    CHECK(!fs::exists(missing));
 
     // A corrupt video: one line, ours (libav's own "moov atom not found" line came first).
     std::ofstream(dir / "broken.mp4") << "this is not an MP4 file, no moov atom here\n";
