@@ -218,7 +218,9 @@ CloudVolume::CloudVolume(CloudConfig config) : m_state(std::make_unique<State>()
         p.jacobian = S.c.jacobian;
         p.fps = S.c.fps;
         p.substeps = S.c.substeps;
-        p.orientation = S.c.orientation;
+        // A radial kernel (aspect 1) looks the same turned any way: its axes are not carried
+        // (nor the vorticity integrated), the field is the same.
+        p.orientation = S.c.aspect == 1.0 ? sim::OrientationMode::Fixed : S.c.orientation;
         S.lambda.push_back(p.intensity);
         // the support reaches aspect R along the axis (culling and the birth region's margin)
         S.octaves.emplace_back(p, S.c.flow, k.radius() * std::max(1.0, S.c.aspect));
