@@ -97,7 +97,8 @@ TEST_CASE("volume orientation: solid-body rotation turns each kernel by Omega t"
     CHECK(oldest > 1.5);  // some have turned by over 1.5 rad
 }
 
-TEST_CASE("volume orientation: zero vorticity keeps the identity; fixed and random axes",
+TEST_CASE("volume orientation: zero vorticity keeps the identity, fixed has no axes, random "
+          "ones are uniform",
           "[volume][orientation]") {
     // A uniform wind and a uniform divergence have curl 0: the axis stays x exactly (the Heun
     // increments are exact zeros).
