@@ -90,6 +90,11 @@ int print_volume_info(const scenes::Scene& scene) {
                 "sqrt(J) %s\n", v.cloud.octaves, v.cloud.octaves == 1 ? "" : "s",
                 v.cloud.kernel.radius, v.cloud.density, v.cloud.lifetime_s,
                 v.cloud.jacobian ? "on" : "off");
+    if (v.cloud.aspect != 1.0 || v.cloud.orientation != sim::OrientationMode::Fixed)
+        std::printf("kernel     aspect %g (int h^2 and the variance x %g), orientation %s%s\n",
+                    v.cloud.aspect, v.cloud.aspect,
+                    std::string(sim::kOrientationModeNames[size_t(v.cloud.orientation)]).c_str(),
+                    v.cloud.aspect == 1.0 ? " (a radial kernel: no effect)" : "");
     std::printf("variance   %.6g (Campbell's theorem, the field before shaping)\n", t.variance);
     for (size_t o = 0; o < t.octave_variance.size(); ++o)
         std::printf("octave[%zu]  variance=%.6g\n", o, t.octave_variance[o]);

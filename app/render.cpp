@@ -551,3 +551,4 @@ int run_render(const RenderOptions& opt) {
     return report_render(output, written, skipped, redone, width, height);
 }
 
+}  // namespace impulse::app

@@ -605,6 +605,17 @@ output::VdbIndexBox slice_slab(const SequenceFiles& s) {
     return box;
 }
 
+/// With outside = "zero", a field that moves at the grid's edge jumps to 0 beyond it: say so.
+void warn_outside_zero(Reader& f, sim::Outside outside, double edge_max, double vmax, const char* unit) {
+    if (outside == sim::Outside::Zero && edge_max > 1e-3 * vmax)
+        // docs/scenes.md "A Blender cache": the jump at the edge is a surface of divergence the
+        // interpolant does not hold, so sqrt(J) misses it and impulses pile up along it
+        f.warn("outside", "\"zero\" (the default) makes the field jump from up to " + num(edge_max) +
+                              " " + unit + " at the grid's edge to 0 beyond it, a divergence sqrt(J) "
+                              "does not see (the variance grows along the edge): \"clamp\" or "
+                              "\"nearest\" keeps the field continuous there");
+}
+
 /// The largest sample speed of every frame, each read once (its checks fail here, before
 /// anything renders).
 template <class Speed>
@@ -694,13 +705,7 @@ void read_sequence_flow(Reader& f, const sim::ProcessConfig& process, Reader& la
         }
         return m;
     });
-    if (cfg.outside == sim::Outside::Zero && edge_max > 1e-3 * vmax)
-        // docs/scenes.md "A Blender cache": the jump at the edge is a line of divergence the
-        // interpolant does not hold, so sqrt(J) misses it and impulses pile up along it
-        f.warn("outside", "\"zero\" (the default) makes the field jump from up to " + num(edge_max) +
-                              " texture units/s at the grid's edge to 0 beyond it, a divergence sqrt(J) "
-                              "does not see (the variance grows along the edge): \"clamp\" or "
-                              "\"nearest\" keeps the field continuous there");
+    warn_outside_zero(f, cfg.outside, edge_max, vmax, "texture units/s");
     if (s->vdb && mode == PlaneMode::Slice) s->slab = slice_slab(*s);
     cfg.source = std::make_shared<FileFrames>(s);
     cfg.first = frames.front(), cfg.last = frames.back();
@@ -761,14 +766,22 @@ void read_volume_sequence_flow(Reader& f, double lifetime_s, bool jacobian, Read
     cfg.time = static_cast<sim::TimeInterpolation>(f.choice("interpolation", sim::kTimeInterpolationNames, 0));
     cfg.outside = static_cast<sim::Outside>(f.choice("outside", sim::kOutsideNames, 0));
     f.finish();
+    double edge_max = 0.0;  // the largest speed on the grid's outer samples (as for a layer)
     cfg.max_sample_speed = scan_frames(frames, [&](int64_t n) {
         const volume::VolumeFrame fr = s->load_volume(n);
+        const size_t W = size_t(fr.size[0]), H = size_t(fr.size[1]), D = size_t(fr.size[2]);
         double m = 0.0;
-        for (size_t k = 0; k < fr.v.size(); k += 3)
-            m = std::max(m, std::sqrt(double(fr.v[k]) * fr.v[k] + double(fr.v[k + 1]) * fr.v[k + 1] +
-                                      double(fr.v[k + 2]) * fr.v[k + 2]));
+        for (size_t k = 0; k < fr.v.size(); k += 3) {
+            const double speed = std::sqrt(double(fr.v[k]) * fr.v[k] + double(fr.v[k + 1]) * fr.v[k + 1] +
+                                           double(fr.v[k + 2]) * fr.v[k + 2]);
+            m = std::max(m, speed);
+            const size_t i = k / 3 % W, j = k / 3 / W % H, l = k / 3 / (W * H);
+            if (i == 0 || j == 0 || l == 0 || i + 1 == W || j + 1 == H || l + 1 == D)
+                edge_max = std::max(edge_max, speed);
+        }
         return m;
     });
+    warn_outside_zero(f, cfg.outside, edge_max, cfg.max_sample_speed, "voxels/s");
     cfg.load = [s](int64_t n) { return s->load_volume(n); };
     cfg.first = frames.front(), cfg.last = frames.back();
     cfg.start = time.start, cfg.rate = time.rate;

@@ -51,9 +51,28 @@ void read_cloud_kernel(std::optional<Reader> k, volume::CloudConfig& c) {
                                                          : kernels::KernelType::Gaussian;
         c.kernel.radius = k->number("radius", 32.0, [](double r) { return r >= 0.5 && r <= 1024; },
                                     "a radius in voxels in [0.5, 1024]");
+        c.aspect = k->number("aspect", 1.0, [](double a) { return a > 0.0 && a <= 16.0; },
+                             "a length along the kernel's axis over its width in (0, 16]");
         k->finish();
     }
     c.kernel.sigma = c.kernel.radius / 3.0;
+}
+
+/// [volume] orientation: one of sim::kOrientationModeNames (the 2-D layer's names and meanings;
+/// docs/volume.md "Orientation"), a near miss named.
+sim::OrientationMode read_orientation(Reader& v) {
+    const toml::node* n = v.node("orientation");
+    if (!n) return sim::OrientationMode::Fixed;
+    const std::string name = v.string("orientation", "");
+    std::vector<std::string> names;
+    for (size_t i = 0; i < sim::kOrientationModeNames.size(); ++i) {
+        if (sim::kOrientationModeNames[i] == name) return sim::OrientationMode(i);
+        names.emplace_back(sim::kOrientationModeNames[i]);
+    }
+    std::string what = "expected one of ";
+    for (size_t i = 0; i < names.size(); ++i) what += (i ? ", " : "") + names[i];
+    if (const auto near = nearest(name, names)) what += " (did you mean \"" + *near + "\"?)";
+    v.fail(n, "orientation", what);
 }
 
 void read_shape(std::optional<Reader> r, volume::CloudShape& s) {
@@ -164,6 +183,7 @@ std::shared_ptr<const VolumeSceneConfig> read_volume_scene(Reader& top, uint64_t
     c.envelope = sim::Envelope(v.choice("envelope", sim::kEnvelopeNames, 0));
     c.jacobian = v.boolean("jacobian", true);
     c.substeps = int(v.integer("substeps", 1, 1, 64));
+    c.orientation = read_orientation(v);
     read_cloud_kernel(v.table("kernel"), c);
     read_shape(v.table("shape"), c.shape);
     c.flow = read_volume_flows(v, global_seed, c, base);

@@ -31,6 +31,11 @@ struct CloudConfig {
     uint64_t seed = 1;
     std::array<int, 3> size = {128, 128, 128};  ///< grid W x H x D, voxel (i, j, k) centred at (i + 1/2, j + 1/2, k + 1/2)
     kernels::KernelParams kernel;  ///< first octave's radial shape and radius R (voxels)
+    /// The kernel stretched along its own axis: h(x) = k(|S^-1 R^T x|), S = diag(aspect, 1, 1)
+    /// (aspect R along the axis, R across it), in (0, 16]; 1: the radial kernel.
+    double aspect = 1.0;
+    /// How each impulse's axis turns (Process3::orientation; docs/volume.md "Orientation").
+    sim::OrientationMode orientation = sim::OrientationMode::Fixed;
     double density = 8.0;          ///< expected live impulses per kernel volume 4/3 pi R^3, > 0
     int octaves = 3;               ///< octave o: radius R / lacunarity^o, amplitude gain^o, 1..6
     double lacunarity = 2.0;       ///< > 1
@@ -46,7 +51,8 @@ struct CloudConfig {
 };
 
 /// Second-order theory of the unshaped field f (Campbell's theorem per octave, summed: the
-/// octaves are independent). Per octave: lambda E[a^2] (int w^2 dt / T) int h^2 d^3x.
+/// octaves are independent). Per octave: lambda E[a^2] (int w^2 dt / T) int h^2 d^3x, where
+/// int h^2 d^3x = det S int k^2 d^3x = aspect int k^2 d^3x for any rotation.
 struct CloudTheory {
     double variance = 0.0;
     std::vector<double> octave_variance;
@@ -83,9 +89,12 @@ private:
     std::unique_ptr<State> m_state;
 };
 
-/// Adds sum_k weight_k h(|x - x_k|) into `grid` (voxel (i, j, k) at (i + 1/2, j + 1/2, k + 1/2)),
+/// Adds sum_k weight_k h(x - x_k) into `grid` (voxel (i, j, k) at (i + 1/2, j + 1/2, k + 1/2)),
 /// the grid cut into 16^3 bricks, each brick summing its impulses in their order: the same bits
-/// for any thread count. Kernels with a carrier (gabor) are refused by CloudVolume.
-void splat(const synth::SolidKernel& kernel, const Impulses3& impulses, DensityGrid& grid);
+/// for any thread count. Kernels with a carrier (gabor) are refused by CloudVolume. aspect = 1:
+/// h(d) = k(|d|) (the axes are not read); else h(d) = k(|S^-1 R^T d|) with S = diag(aspect, 1,
+/// 1) and R e_x the impulse's axis (x where the impulses carry none).
+void splat(const synth::SolidKernel& kernel, const Impulses3& impulses, DensityGrid& grid,
+           double aspect = 1.0);
 
 }  // namespace impulse::volume

@@ -20,14 +20,23 @@ struct Box3 {
     double volume() const { return (x1 - x0) * (y1 - y0) * (z1 - z0); }
 };
 
-/// A velocity field v(x, t) in units per second with its divergence. `add` accumulates (+=)
-/// into the outputs so a sum of flows is a loop over its terms; `div` may be null. Deterministic
-/// and thread-safe.
+/// Where a flow writes its curl (the vorticity omega = curl v, radians per second): three arrays
+/// of n values each. Every array non-null.
+struct CurlOut3 {
+    double *x = nullptr, *y = nullptr, *z = nullptr;
+};
+
+/// A velocity field v(x, t) in units per second with its divergence and curl. `add` accumulates
+/// (+=) into the outputs so a sum of flows is a loop over its terms; `div` and `curl` may be null
+/// (not wanted; asking for them never changes the velocity's bits). Each flow's curl is that of
+/// its own field (analytic flows: exact; a sequence: of its interpolant), for the vorticity
+/// orientation (docs/volume.md "Orientation"). Deterministic and thread-safe.
 class Flow3 {
 public:
     virtual ~Flow3() = default;
     virtual void add(double t_s, size_t n, const double* x, const double* y, const double* z,
-                     double* vx, double* vy, double* vz, double* div) const = 0;
+                     double* vx, double* vy, double* vz, double* div,
+                     const CurlOut3* curl = nullptr) const = 0;
     /// True when div v = 0 everywhere (ln J then stays exactly 0).
     virtual bool divergence_free() const { return false; }
     /// Upper bound of |v| over `region` at all times.
@@ -46,7 +55,7 @@ public:
     void push(std::unique_ptr<Flow3> f) { m_terms.push_back(std::move(f)); }
     bool empty() const { return m_terms.empty(); }
     void add(double t_s, size_t n, const double* x, const double* y, const double* z, double* vx,
-             double* vy, double* vz, double* div) const override;
+             double* vy, double* vz, double* div, const CurlOut3* curl = nullptr) const override;
     bool divergence_free() const override;
     double max_speed(const Box3& region) const override;
     void prepare(const Box3& region) override;
@@ -56,18 +65,19 @@ private:
     std::vector<std::unique_ptr<Flow3>> m_terms;
 };
 
-/// Uniform wind v (units per second).
+/// Uniform wind v (units per second); curl 0.
 std::unique_ptr<Flow3> make_uniform_flow3(const std::array<double, 3>& v);
 /// Uniform divergence: v = r(t) (x - c), div v = 3 r(t) (per second), so J = exp(3 int r dt)
 /// along a path; r(t) = rate + pulse sin(2 pi t / period) (pulse = 0: a steady source or sink;
-/// period > 0 when pulse != 0).
+/// period > 0 when pulse != 0); curl 0.
 std::unique_ptr<Flow3> make_divergent_flow3(const std::array<double, 3>& center, double rate,
                                             double pulse = 0.0, double period_s = 0.0);
 /// Curl noise (Bridson et al. 2007): v = curl psi of a vector potential psi whose three
 /// components are independent sparse-convolution solid noises with the compact kernel
 /// (1 - r^2/s^2)^3 of radius `scale` (Poisson impulses, 4 per cell of side s, keyed by the counter
 /// RNG from `seed`); divergence-free exactly (the curl is taken analytically). `speed` is the RMS
-/// speed (Campbell's theorem on the potential's gradient). Throws ValueError for scale <= 0.
+/// speed (Campbell's theorem on the potential's gradient); its curl, grad(div psi) - lap psi, from
+/// the kernel's exact second derivatives. Throws ValueError for scale <= 0.
 std::unique_ptr<Flow3> make_curl_flow3(uint64_t seed, double scale, double speed);
 
 /// One frame of a 3-D velocity sequence: 3 floats a sample (vx, vy, vz in voxels per second),
@@ -91,8 +101,8 @@ struct Sequence3Config {
     double span_s = 0.0;            ///< the lifetime (frames held: docs/scenes.md)
     bool read_ahead = true;
 };
-/// Trilinear in space, linear or cubic in time, with the exact divergence of that interpolant
-/// (for sqrt(J), design.md §1). Throws ValueError for a malformed config.
+/// Trilinear in space, linear or cubic in time, with the exact divergence and curl of that
+/// interpolant (for sqrt(J), design.md §1, and the vorticity orientation). Throws ValueError for a malformed config.
 std::unique_ptr<Flow3> make_sequence_flow3(Sequence3Config config);
 /// The largest |div v| of the trilinear interpolant of `frame` with index scales `scale` (exact:
 /// on each cell div v is multilinear, so its extremes sit on the corners).

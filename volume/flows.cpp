@@ -14,8 +14,8 @@
 namespace impulse::volume {
 
 void FlowSum3::add(double t_s, size_t n, const double* x, const double* y, const double* z,
-                   double* vx, double* vy, double* vz, double* div) const {
-    for (const auto& f : m_terms) f->add(t_s, n, x, y, z, vx, vy, vz, div);
+                   double* vx, double* vy, double* vz, double* div, const CurlOut3* curl) const {
+    for (const auto& f : m_terms) f->add(t_s, n, x, y, z, vx, vy, vz, div, curl);
 }
 bool FlowSum3::divergence_free() const {
     return std::all_of(m_terms.begin(), m_terms.end(),
@@ -39,9 +39,9 @@ class Uniform3 final : public Flow3 {
 public:
     explicit Uniform3(const std::array<double, 3>& v) : m_v(v) {}
     void add(double, size_t n, const double*, const double*, const double*, double* vx,
-             double* vy, double* vz, double*) const override {
+             double* vy, double* vz, double*, const CurlOut3*) const override {
         for (size_t i = 0; i < n; ++i) vx[i] += m_v[0], vy[i] += m_v[1], vz[i] += m_v[2];
-    }
+    }  // curl 0: nothing to add
     bool divergence_free() const override { return true; }
     double max_speed(const Box3&) const override {
         return std::sqrt(m_v[0] * m_v[0] + m_v[1] * m_v[1] + m_v[2] * m_v[2]);
@@ -59,8 +59,9 @@ public:
         return m_pulse == 0.0 ? m_rate
                               : m_rate + m_pulse * std::sin(2.0 * std::numbers::pi * t / m_period);
     }
+    // v = r (x - c) is a gradient (of r |x - c|^2 / 2): curl 0, nothing to add.
     void add(double t, size_t n, const double* x, const double* y, const double* z, double* vx,
-             double* vy, double* vz, double* div) const override {
+             double* vy, double* vz, double* div, const CurlOut3*) const override {
         const double r = rate(t);
         for (size_t i = 0; i < n; ++i) {
             vx[i] += r * (x[i] - m_c[0]);
@@ -117,7 +118,7 @@ public:
     double max_speed(const Box3&) const override { return kSpeedBound * m_speed; }
     void prepare(const Box3& region) override;
     void add(double t_s, size_t n, const double* x, const double* y, const double* z, double* vx,
-             double* vy, double* vz, double* div) const override;
+             double* vy, double* vz, double* div, const CurlOut3* curl) const override;
 
 private:
     CurlCell make_cell(int64_t cx, int64_t cy, int64_t cz) const;
@@ -174,7 +175,7 @@ const CurlCell& Curl3::cell(int64_t cx, int64_t cy, int64_t cz, CurlCell& scratc
 }
 
 void Curl3::add(double, size_t n, const double* x, const double* y, const double* z, double* vx,
-                double* vy, double* vz, double*) const {
+                double* vy, double* vz, double*, const CurlOut3* curl) const {
     CurlCell scratch;
     for (size_t i = 0; i < n; ++i) {
         // grad psi_c = sum_k a_kc phi'(q) 2 d / s^2 with phi'(q) = -3 (1 - q)^2, in cell units
@@ -183,6 +184,9 @@ void Curl3::add(double, size_t n, const double* x, const double* y, const double
         const int64_t c[3] = {int64_t(std::floor(u[0])), int64_t(std::floor(u[1])),
                               int64_t(std::floor(u[2]))};
         double G[3][3] = {};
+        // With the curl wanted: the Laplacian of each psi_c and the gradient of div psi, from
+        // d2 phi / dd_j dd_l = 24 (1 - q) d_j d_l - 6 (1 - q)^2 delta_jl (cell units, times s^2).
+        double lap[3] = {}, grad_div[3] = {};
         for (int64_t dz = -1; dz <= 1; ++dz)
             for (int64_t dy = -1; dy <= 1; ++dy)
                 for (int64_t dx = -1; dx <= 1; ++dx) {
@@ -196,12 +200,26 @@ void Curl3::add(double, size_t n, const double* x, const double* y, const double
                         const double f = -6.0 * (1.0 - q) * (1.0 - q);
                         for (int cmp = 0; cmp < 3; ++cmp)
                             for (int j = 0; j < 3; ++j) G[cmp][j] += cc.a[3 * k + cmp] * f * d[j];
+                        if (!curl) continue;
+                        const double f2 = 24.0 * (1.0 - q);
+                        const float* a = cc.a.data() + 3 * k;  // widened below
+                        const double ad = double(a[0]) * d[0] + double(a[1]) * d[1] + double(a[2]) * d[2];
+                        for (int j = 0; j < 3; ++j) {
+                            lap[j] += double(a[j]) * (f2 * q + 3.0 * f);  // trace of the Hessian
+                            grad_div[j] += f2 * ad * d[j] + f * double(a[j]);
+                        }
                     }
                 }
         const double g = m_gain / m_s;
         vx[i] += g * (G[2][1] - G[1][2]);  // d psi_z/dy - d psi_y/dz
         vy[i] += g * (G[0][2] - G[2][0]);  // d psi_x/dz - d psi_z/dx
         vz[i] += g * (G[1][0] - G[0][1]);  // d psi_y/dx - d psi_x/dy
+        if (curl) {  // curl curl psi = grad(div psi) - lap psi, two derivatives: 1/s^2
+            const double g2 = m_gain / (m_s * m_s);
+            curl->x[i] += g2 * (grad_div[0] - lap[0]);
+            curl->y[i] += g2 * (grad_div[1] - lap[1]);
+            curl->z[i] += g2 * (grad_div[2] - lap[2]);
+        }
     }
 }
 

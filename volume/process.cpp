@@ -1,13 +1,15 @@
 // SPDX-License-Identifier: Apache-2.0
 // One 3-D process as a particle system: cell-seeded Poisson births in space and time (Lewis 1986
 // §3.1 "numbered cells", design.md §3), Heun integration on a global time grid, ln J carried
-// along the path (d ln J / dt = div v), weights a w(age) sqrt(J) (design.md §1).
+// along the path (d ln J / dt = div v), weights a w(age) sqrt(J) (design.md §1), and the kernel
+// axis each impulse carries (docs/volume.md "Orientation").
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <tuple>
 
 #include "numeric/rng.h"
@@ -29,16 +31,19 @@ struct Block {
     size_t start = 0, count = 0;
 };
 
-/// Particle state (structure of arrays). (x, y, z, lnj) hold at grid step `step` when `stepped`,
-/// else at the birth time, which lies `frac` of a step after grid step `step`.
+/// Particle state (structure of arrays). (x, y, z, lnj, u) hold at grid step `step` when
+/// `stepped`, else at the birth time, which lies `frac` of a step after grid step `step`. u =
+/// (ux, uy, uz) is the kernel axis R e_x (Random, Vorticity; empty for the other modes).
 struct Particles {
-    std::vector<double> x, y, z, lnj, frac;
+    std::vector<double> x, y, z, lnj, frac, ux, uy, uz;
     std::vector<int64_t> step, birth_step;
     std::vector<uint8_t> stepped;
     std::vector<float> amp;
+    bool axes = false;
     void resize(size_t n) {
         x.resize(n), y.resize(n), z.resize(n), lnj.resize(n), frac.resize(n), step.resize(n);
         birth_step.resize(n), stepped.resize(n), amp.resize(n);
+        if (axes) ux.resize(n), uy.resize(n), uz.resize(n);
     }
     void copy(const Particles& o, size_t from, size_t n, size_t to) {
         for (size_t k = 0; k < n; ++k) {
@@ -46,6 +51,7 @@ struct Particles {
             x[j] = o.x[i], y[j] = o.y[i], z[j] = o.z[i], lnj[j] = o.lnj[i], frac[j] = o.frac[i];
             step[j] = o.step[i], birth_step[j] = o.birth_step[i], stepped[j] = o.stepped[i];
             amp[j] = o.amp[i];
+            if (axes) ux[j] = o.ux[i], uy[j] = o.uy[i], uz[j] = o.uz[i];
         }
     }
 };
@@ -76,6 +82,8 @@ struct Simulator3::State {
 
     State(Process3 pr, std::shared_ptr<Flow3> f, double r)
         : p(pr), flow(std::move(f)), radius(r) {
+        live.axes = next.axes = p.orientation == sim::OrientationMode::Random ||
+                                p.orientation == sim::OrientationMode::Vorticity;
         dt = 1.0 / (p.fps * p.substeps);
         // Four time cells per lifetime (as the 2-D layout): births per unit volume per second
         // beta = lambda / T, so a space-time cell expects lambda s^3 (T/4) / T.
@@ -105,13 +113,15 @@ struct Simulator3::State {
     /// The live particles of `next` that can touch `view`, weighted a w(age) sqrt(J).
     void emit(const std::vector<uint8_t>& alive, int64_t target, const Box3& view,
               Impulses3& out) const;
+    /// OrientationMode::Flow: each impulse's axis along v at its position at time t_s.
+    void flow_axes(double t_s, Impulses3& out) const;
 };
 
 void Simulator3::State::generate(const CellKey& k, Particles& P, size_t i, size_t n) const {
     const numeric::CounterRng r = rng(k.ct);
     const double s = p.cell_size;
     for (size_t q = 0; q < n; ++q, ++i) {
-        // r0 = (x, y, z, birth time), r1 = (amplitude, normal's angle, unused, unused).
+        // r0 = (x, y, z, birth time), r1 = (amplitude, normal's angle, axis z, axis azimuth).
         const auto r0 = r.uniforms(k.cx, k.cy, k.cz, 2u * uint32_t(q));
         const auto r1 = r.uniforms(k.cx, k.cy, k.cz, 2u * uint32_t(q) + 1u);
         P.x[i] = (double(k.cx) + r0[0]) * s;
@@ -124,6 +134,17 @@ void Simulator3::State::generate(const CellKey& k, Particles& P, size_t i, size_
         P.stepped[i] = 0;
         P.lnj[i] = 0.0;
         P.amp[i] = amplitude_of(p.amplitude, r1[0], r1[1]);
+        if (!P.axes) continue;
+        if (p.orientation == sim::OrientationMode::Random) {
+            // R e_x of a uniform rotation is uniform on the sphere (Archimedes: z uniform in
+            // [-1, 1], azimuth uniform); the kernel is symmetric about its axis, so the axis is
+            // all of R the field sees (docs/volume.md "Orientation").
+            const double uz = 2.0 * r1[2] - 1.0, phi = 2.0 * std::numbers::pi * r1[3];
+            const double rho = std::sqrt(std::max(0.0, 1.0 - uz * uz));
+            P.ux[i] = rho * std::cos(phi), P.uy[i] = rho * std::sin(phi), P.uz[i] = uz;
+        } else {  // Vorticity: the identity at birth
+            P.ux[i] = 1.0, P.uy[i] = 0.0, P.uz[i] = 0.0;
+        }
     }
 }
 
@@ -141,12 +162,15 @@ void Simulator3::State::integrate(Particles& P, const std::vector<size_t>& order
     constexpr size_t kChunk = 256;
     const size_t n = order.size(), chunks = (n + kChunk - 1) / kChunk;
     const bool want_div = p.jacobian && !flow->divergence_free();
+    const bool want_curl = p.orientation == sim::OrientationMode::Vorticity;
     tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
         const size_t i0 = c * kChunk, m = std::min(n, i0 + kChunk) - i0;
-        std::vector<double> x[2], h(m), lj(m), k0[4], k1[4];
+        // k[0..2] velocity, k[3] divergence, k[4..6] curl (the vorticity orientation's omega)
+        std::vector<double> x[2], h(m), lj(m), k0[7], k1[7], U, UT, a0;
         for (int a = 0; a < 3; ++a) x[0].resize(3 * m), x[1].resize(3 * m);
         for (auto* k : {k0, k1})
-            for (int a = 0; a < 4; ++a) k[a].resize(m);
+            for (int a = 0; a < (want_curl ? 7 : 4); ++a) k[a].resize(m);
+        if (want_curl) U.resize(3 * m), UT.resize(3 * m), a0.resize(3 * m);
         std::vector<int64_t> first(m);
         std::vector<uint8_t> stepped(m);
         std::vector<double> frac(m);
@@ -156,11 +180,21 @@ void Simulator3::State::integrate(Particles& P, const std::vector<size_t>& order
             const size_t i = order[i0 + j];
             X[j] = P.x[i], X[m + j] = P.y[i], X[2 * m + j] = P.z[i], lj[j] = P.lnj[i];
             stepped[j] = P.stepped[i], first[j] = P.step[i], frac[j] = P.frac[i];
+            if (want_curl) U[j] = P.ux[i], U[m + j] = P.uy[i], U[2 * m + j] = P.uz[i];
         }
         auto eval = [&](double t, size_t na, const double* px, std::vector<double>* k) {
-            for (int a = 0; a < 4; ++a) std::fill(k[a].begin(), k[a].begin() + na, 0.0);
+            const int outputs = want_curl ? 7 : 4;
+            for (int a = 0; a < outputs; ++a) std::fill(k[a].begin(), k[a].begin() + na, 0.0);
+            const CurlOut3 curl{k[4].data(), k[5].data(), k[6].data()};
             flow->add(t, na, px, px + m, px + 2 * m, k[0].data(), k[1].data(), k[2].data(),
-                      want_div ? k[3].data() : nullptr);
+                      want_div ? k[3].data() : nullptr, want_curl ? &curl : nullptr);
+        };
+        // du/dt = (omega / 2) x u: the first column of dR/dt = [omega/2]_x R (R's other columns
+        // do not reach the field: the kernel is symmetric about its axis).
+        auto spin = [&](const std::vector<double>* k, const double* u, size_t j, int a) {
+            const double w[3] = {0.5 * k[4][j], 0.5 * k[5][j], 0.5 * k[6][j]};
+            const double v[3] = {u[j], u[m + j], u[2 * m + j]};
+            return w[(a + 1) % 3] * v[(a + 2) % 3] - w[(a + 2) % 3] * v[(a + 1) % 3];
         };
         size_t active = 0;
         for (int64_t g = m ? first[0] : target; g < target; ++g) {
@@ -178,10 +212,21 @@ void Simulator3::State::integrate(Particles& P, const std::vector<size_t>& order
                 for (size_t j = 0; j < active; ++j) X[a * m + j] += 0.5 * h[j] * (k0[a][j] + k1[a][j]);
             if (want_div)  // d ln J / dt = div v
                 for (size_t j = 0; j < active; ++j) lj[j] += 0.5 * h[j] * (k0[3][j] + k1[3][j]);
+            if (want_curl) {  // the same Heun step for the axis, omega where v was evaluated
+                for (int a = 0; a < 3; ++a)
+                    for (size_t j = 0; j < active; ++j) {
+                        a0[a * m + j] = spin(k0, U.data(), j, a);
+                        UT[a * m + j] = U[a * m + j] + h[j] * a0[a * m + j];
+                    }
+                for (int a = 0; a < 3; ++a)
+                    for (size_t j = 0; j < active; ++j)
+                        U[a * m + j] += 0.5 * h[j] * (a0[a * m + j] + spin(k1, UT.data(), j, a));
+            }
         }
         for (size_t j = 0; j < m; ++j) {
             const size_t i = order[i0 + j];
             P.x[i] = X[j], P.y[i] = X[m + j], P.z[i] = X[2 * m + j], P.lnj[i] = lj[j];
+            if (want_curl) P.ux[i] = U[j], P.uy[i] = U[m + j], P.uz[i] = U[2 * m + j];
             if (first[j] < target) P.stepped[i] = 1, P.step[i] = target;
         }
     });
@@ -257,20 +302,53 @@ void Simulator3::State::gather(const std::vector<CellKey>& keys, int64_t target)
 void Simulator3::State::emit(const std::vector<uint8_t>& alive, int64_t target, const Box3& view,
                              Impulses3& out) const {
     const Particles& P = next;
-    out.x.clear(), out.y.clear(), out.z.clear(), out.weight.clear();
+    out.x.clear(), out.y.clear(), out.z.clear(), out.weight.clear(), out.age_s.clear();
+    out.ax.clear(), out.ay.clear(), out.az.clear();
     const Box3 keep = view.expanded(radius);
     for (size_t i = 0; i < P.x.size(); ++i) {
         if (!alive[i]) continue;
         if (P.x[i] < keep.x0 || P.x[i] > keep.x1 || P.y[i] < keep.y0 || P.y[i] > keep.y1 ||
             P.z[i] < keep.z0 || P.z[i] > keep.z1)
             continue;
-        double w = P.amp[i] * sim::envelope_weight(p.envelope, age_s(i, target), p.lifetime_s);
+        const double age = age_s(i, target);
+        double w = P.amp[i] * sim::envelope_weight(p.envelope, age, p.lifetime_s);
         if (p.jacobian) w *= std::exp(0.5 * P.lnj[i]);  // s_k = sqrt(J_k)
         out.x.push_back(P.x[i]);
         out.y.push_back(P.y[i]);
         out.z.push_back(P.z[i]);
         out.weight.push_back(float(w));
+        out.age_s.push_back(age);
+        if (P.axes) {  // Random, Vorticity: the carried axis (Heun keeps |u| = 1 to O(h^4))
+            const double len = std::sqrt(P.ux[i] * P.ux[i] + P.uy[i] * P.uy[i] + P.uz[i] * P.uz[i]);
+            out.ax.push_back(float(P.ux[i] / len));
+            out.ay.push_back(float(P.uy[i] / len));
+            out.az.push_back(float(P.uz[i] / len));
+        }
     }
+    if (p.orientation == sim::OrientationMode::Flow) flow_axes(double(target) * dt, out);
+}
+
+void Simulator3::State::flow_axes(double t_s, Impulses3& out) const {
+    // Along v at the impulse at the frame time; where v = 0 (or with no flow) there is no
+    // direction: the kernel keeps its own axis, x (docs/volume.md "Orientation").
+    const size_t n = out.size();
+    out.ax.assign(n, 1.0f), out.ay.assign(n, 0.0f), out.az.assign(n, 0.0f);
+    if (!flow) return;
+    constexpr size_t kChunk = 1024;
+    tbb::parallel_for(size_t(0), (n + kChunk - 1) / kChunk, [&](size_t c) {
+        const size_t i0 = c * kChunk, m = std::min(n, i0 + kChunk) - i0;
+        std::vector<double> v[3];
+        for (auto& a : v) a.assign(m, 0.0);
+        flow->add(t_s, m, &out.x[i0], &out.y[i0], &out.z[i0], v[0].data(), v[1].data(),
+                  v[2].data(), nullptr);
+        for (size_t j = 0; j < m; ++j) {
+            const double len = std::sqrt(v[0][j] * v[0][j] + v[1][j] * v[1][j] + v[2][j] * v[2][j]);
+            if (!(len > 0.0)) continue;
+            out.ax[i0 + j] = float(v[0][j] / len);
+            out.ay[i0 + j] = float(v[1][j] / len);
+            out.az[i0 + j] = float(v[2][j] / len);
+        }
+    });
 }
 
 void Simulator3::impulses_at(int64_t frame, const Box3& view, Impulses3& out) {

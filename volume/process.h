@@ -24,13 +24,21 @@ struct Process3 {
     bool jacobian = true;          ///< scale amplitudes by sqrt(J) (design.md §1)
     double fps = 24.0;             ///< frame f is at time f / fps
     int substeps = 1;              ///< Heun (RK2) steps per frame on the global time grid, >= 1
+    /// How each impulse's kernel axis R e_x turns (docs/volume.md "Orientation"): Fixed (along
+    /// x), Random (uniform on the sphere, from the impulse's identity), Flow (along v at the
+    /// impulse at the frame time; x where v = 0), Vorticity (dR/dt = [omega/2]_x R from the
+    /// identity at birth, on the position's Heun steps). Field is not a volume mode.
+    sim::OrientationMode orientation = sim::OrientationMode::Fixed;
 };
 
 /// The live impulses at one frame in canonical order (time cell, z, y, x cell, index):
-/// weight = a w(age) sqrt(J).
+/// weight = a w(age) sqrt(J); the kernel axis (a unit vector) unless the orientation is Fixed
+/// (then ax, ay, az are empty: the axis is x); the age at the frame in seconds.
 struct Impulses3 {
     std::vector<double> x, y, z;
     std::vector<float> weight;
+    std::vector<float> ax, ay, az;
+    std::vector<double> age_s;
     size_t size() const { return x.size(); }
 };
 

@@ -1,7 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 // A 3-D velocity sequence as a flow (volume/flow.h; docs/scenes.md "Velocity sequences"):
-// trilinear in space, linear or Catmull-Rom cubic in time, with the divergence of that
-// interpolant, so d ln J/dt = div v (design.md §1) integrates the field the impulses move in.
+// trilinear in space, linear or Catmull-Rom cubic in time, with the divergence and curl of that
+// interpolant, so d ln J/dt = div v (design.md §1) and the vorticity orientation integrate the
+// field the impulses move in.
 
 #include <algorithm>
 #include <cmath>
@@ -28,7 +29,7 @@ public:
         : m_c(c), m_window({c.first, c.last, c.start, c.rate, c.time}, checked(c), c.read_ahead) {}
 
     void add(double t, size_t n, const double* x, const double* y, const double* z, double* vx,
-             double* vy, double* vz, double* div) const override {
+             double* vy, double* vz, double* div, const CurlOut3* curl) const override {
         const sim::TimeWeights tw = m_window.timing().weights_at(t);
         std::shared_ptr<const VolumeFrame> frames[4];
         for (int q = 0; q < tw.count; ++q) frames[q] = m_window.get(tw.frame[q]);
@@ -38,6 +39,7 @@ public:
             const CellPoint g = locate({x[p], y[p], z[p]});
             if (g.zero) continue;
             double u[3] = {0, 0, 0}, dudi[3] = {0, 0, 0};  // dudi[c]: d v_c / d index_c
+            double grad[3][3] = {};  // with the curl wanted: grad[c][e] = d v_c / d index_e
             for (int corner = 0; corner < 8; ++corner) {
                 const int b[3] = {corner & 1, (corner >> 1) & 1, (corner >> 2) & 1};
                 double w = 1.0, dw[3];
@@ -53,12 +55,20 @@ public:
                         const double v = frames[q]->v[3 * k + size_t(c)];
                         u[c] += tw.weight[q] * w * v;
                         dudi[c] += tw.weight[q] * dw[c] * v;
+                        if (curl)
+                            for (int e = 0; e < 3; ++e) grad[c][e] += tw.weight[q] * dw[e] * v;
                     }
             }
             for (int c = 0; c < 3; ++c) out[c][p] += u[c];
             if (div)
                 for (int c = 0; c < 3; ++c)  // d/dx_c = scale_c d/d index_c
                     if (g.d[c]) div[p] += m_c.scale[size_t(c)] * dudi[c];
+            if (curl) {  // the same derivatives of the same interpolant as the divergence
+                auto d = [&](int c, int e) { return g.d[e] ? m_c.scale[size_t(e)] * grad[c][e] : 0.0; };
+                curl->x[p] += d(2, 1) - d(1, 2);
+                curl->y[p] += d(0, 2) - d(2, 0);
+                curl->z[p] += d(1, 0) - d(0, 1);
+            }
         }
     }
     double max_speed(const Box3&) const override {
