@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "analysis/analysis.h"
+#include "numeric/check.h"
 #include "numeric/errors.h"
 #include "numeric/fft.h"
 
@@ -128,6 +129,9 @@ Periodogram average(std::span<const Periodogram> periodograms) {
     mean.height = first.height;
     mean.power.assign(first.power.size(), 0.0);
     for (size_t j = 0; j < periodograms.size(); ++j) {
+        // analyze_frames refuses frames of different sizes before any periodogram is taken
+        IMPULSE_DCHECK(periodograms[j].width == first.width && periodograms[j].height == first.height &&
+                       periodograms[j].power.size() == first.power.size());
         const Periodogram& p = periodograms[j];
         if (p.power.size() != static_cast<size_t>(p.width) * p.height) {
             throw ValueError("average: periodogram " + std::to_string(j) + " has " +

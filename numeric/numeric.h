@@ -4,6 +4,7 @@
 // written once. Knows nothing of scenes, particles or images.
 
 #include "numeric/box.h"       // texture-space boxes and regions
+#include "numeric/check.h"     // IMPULSE_CHECK, IMPULSE_DCHECK: invariants, not input errors
 #include "numeric/cpu.h"       // run-time choice of the AVX2 loops
 #include "numeric/errors.h"    // impulse::Error and its kinds
 #include "numeric/fft.h"       // real 2-D FFTs on FFTW, one planner lock

@@ -8,6 +8,7 @@
 #include <numbers>
 
 #include "output/output.h"
+#include "numeric/check.h"
 
 namespace impulse::output {
 namespace {
@@ -97,6 +98,7 @@ void Shader::background_row(int y, int h, float bg[3]) const {
 
 void Shader::rows(const Frame& field, int y0, int y1, float* rgb) const {
     const int w = field.width, h = field.height;
+    IMPULSE_DCHECK(field.data.size() == size_t(w) * size_t(h) && 0 <= y0 && y0 <= y1 && y1 <= h);
     const float lo = m_lo, scale = m_scale, relief = m_relief, ambient = m_ambient;
     const float lx = m_lx, ly = m_ly, lz = m_lz;
     for (int y = y0; y < y1; ++y) {

@@ -10,6 +10,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "numeric/check.h"
 #include "numeric/cpu.h"
 #include "render/detail/eval.h"
 #include "render/render.h"
@@ -93,6 +94,8 @@ Prepared prepare(const kernels::Kernel& k, const sim::Impulses& imp, const View&
                  const char* api) {
     Prepared p;
     const size_t n = imp.size();
+    IMPULSE_DCHECK(imp.y.size() == n && imp.weight.size() == n && imp.theta.size() == n);
+    IMPULSE_DCHECK(imp.scale.empty() || imp.scale.size() == n);
     p.px.resize(n), p.py.resize(n), p.w.resize(n), p.c.resize(n), p.s.resize(n);
     const double inv = 1.0 / view.scale;
     const double o = k.params().orientation;

@@ -13,6 +13,7 @@
 #include <numbers>
 #include <sstream>
 
+#include "numeric/check.h"
 namespace impulse::render {
 namespace {
 
@@ -348,6 +349,11 @@ void add_reconstruction(Frame& nodes, const LatticeRule& rule, const View& view,
     }
     // Along x on the node rows the pixels need (m - 1 .. (H - 1) / h + m + 2), then along y.
     const int r0 = m - 1, rows = (H - 1) / h + 4;
+    // The node frame covers the taps: 4 rows and columns from m - 1 around every pixel's node
+    // (lattice_view's margin), and the output is the view.
+    IMPULSE_DCHECK(m >= 1 && h >= 1);
+    IMPULSE_DCHECK(nodes.height >= r0 + rows && nodes.width >= m - 1 + (W - 1) / h + 4);
+    IMPULSE_DCHECK(out.width == W && out.height == H && out.data.size() == size_t(W) * H);
     std::vector<float> across(static_cast<size_t>(rows) * W);
     tbb::parallel_for(0, rows, [&](int r) {
         const float* c = nodes.data.data() + size_t(r0 + r) * wn + (m - 1);
