@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <numbers>
 
 #include "output/output.h"
@@ -156,8 +157,22 @@ void Shader::build_levels(const std::vector<float>& subpixel_sd) {
         if (v >= kMinLevelSd) first = std::min(first, v);
     const int count = 1 + std::max(0, int(std::ceil(8.0 * std::log2(*hi_it / first) - 1e-9)));
     for (int j = 0; j < count; ++j) m_level_sd.push_back(float(first * std::exp2(j / 8.0)));
-    m_levels.resize(size_t(count));
-    tbb::parallel_for(0, count, [&](int j) { m_levels[size_t(j)] = averaged_table(m_lut, m_level_sd[size_t(j)]); });
+    // The frames of a video share the ramp, the mapping and (a camera without keys) the rows'
+    // sds, and each builds a Shader: the last tables built are kept and reused when both match.
+    static std::mutex cache_mutex;
+    static std::vector<float> cached_base, cached_sd;
+    static std::shared_ptr<const Levels> cached;
+    {
+        const std::lock_guard lock(cache_mutex);
+        if (cached && cached_base == m_lut && cached_sd == m_level_sd) {
+            m_levels = cached;
+            return;
+        }
+    }
+    auto levels = std::make_shared<Levels>();
+    auto& tables = levels->tables;
+    tables.resize(size_t(count));
+    tbb::parallel_for(0, count, [&](int j) { tables[size_t(j)] = averaged_table(m_lut, m_level_sd[size_t(j)]); });
     // A row below kMinLevelSd, shaded with m_lut, errs by at most that sd's table's difference
     // from it.
     const auto premultiplied = [](const float* c, int k) { return k < 3 ? c[3] * c[k] : c[3]; };
@@ -168,24 +183,28 @@ void Shader::build_levels(const std::vector<float>& subpixel_sd) {
                 d = std::max(d, double(std::abs(premultiplied(&a[i], k) - premultiplied(&b[i], k))));
         return d;
     };
-    m_level_error = largest_difference(m_lut, averaged_table(m_lut, kMinLevelSd));
+    double& error = levels->error;
+    error = largest_difference(m_lut, averaged_table(m_lut, kMinLevelSd));
     // Linear interpolation between neighbours errs by about an eighth of the second difference
     // of three neighbours (f'' h^2 / 8 against the second difference f'' h^2); a pair alone, by
     // at most half its difference.
-    if (m_levels.size() == 2) m_level_error = std::max(m_level_error, 0.5 * largest_difference(m_levels[0], m_levels[1]));
-    for (size_t j = 1; j + 1 < m_levels.size(); ++j) {
+    if (tables.size() == 2) error = std::max(error, 0.5 * largest_difference(tables[0], tables[1]));
+    for (size_t j = 1; j + 1 < tables.size(); ++j) {
         double d2 = 0.0;
         for (size_t i = 0; i < m_lut.size(); i += 4)
             for (int k = 0; k < 4; ++k)
-                d2 = std::max(d2, double(std::abs(premultiplied(&m_levels[j + 1][i], k) -
-                                                  2.0f * premultiplied(&m_levels[j][i], k) +
-                                                  premultiplied(&m_levels[j - 1][i], k))));
-        m_level_error = std::max(m_level_error, d2 / 8.0);
+                d2 = std::max(d2, double(std::abs(premultiplied(&tables[j + 1][i], k) -
+                                                  2.0f * premultiplied(&tables[j][i], k) +
+                                                  premultiplied(&tables[j - 1][i], k))));
+        error = std::max(error, d2 / 8.0);
     }
+    m_levels = levels;
+    const std::lock_guard lock(cache_mutex);
+    cached_base = m_lut, cached_sd = m_level_sd, cached = std::move(levels);
 }
 
 Shader::RowTables Shader::row_tables(int y, int h) const {
-    if (m_levels.empty()) return {m_lut.data(), nullptr, 0.0f};
+    if (!m_levels) return {m_lut.data(), nullptr, 0.0f};
     const size_t n = m_row_sd.size();
     float sd = m_row_sd.front();
     if (n > 1) {
@@ -195,11 +214,12 @@ Shader::RowTables Shader::row_tables(int y, int h) const {
     }
     if (sd < kMinLevelSd) return {m_lut.data(), nullptr, 0.0f};
     // The two tables bracketing sd, weighted linearly in log sd.
-    const int last = int(m_levels.size()) - 1;
+    const auto& tables = m_levels->tables;
+    const int last = int(tables.size()) - 1;
     const double u = std::clamp(8.0 * std::log2(sd / m_level_sd.front()), 0.0, double(last));
     const int j = std::min(last - 1, int(u));
-    if (j < 0) return {m_levels.front().data(), nullptr, 0.0f};
-    return {m_levels[size_t(j)].data(), m_levels[size_t(j) + 1].data(), float(u - j)};
+    if (j < 0) return {tables.front().data(), nullptr, 0.0f};
+    return {tables[size_t(j)].data(), tables[size_t(j) + 1].data(), float(u - j)};
 }
 
 void Shader::background_row(int y, int h, float bg[3]) const {

@@ -5,6 +5,7 @@
 // gradient. Part of impulse::output; included by output/output.h.
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "numeric/frame.h"
@@ -114,9 +115,9 @@ public:
     /// row by interpolating the averaged ramp's tables bracketing its sub-pixel sd instead of the
     /// table at that sd: an eighth of the largest second difference of neighbouring tables
     /// (docs/shading.md "The averaged ramp"). 0 with one table (one sub-pixel sd per frame).
-    double level_error() const { return m_level_error; }
-    /// The number of averaged ramp tables (0 without sub-pixel sd).
-    int levels() const { return int(m_level_sd.size()); }
+    double level_error() const { return m_levels ? m_levels->error : 0.0; }
+    /// The number of averaged ramp tables (0 without sub-pixel sd, or with one sd).
+    int levels() const { return m_levels ? int(m_levels->tables.size()) : 0; }
 
 private:
     void rows_yuv420_table(const Frame& field, int y, const Yuv420Planes& planes) const;
@@ -138,9 +139,13 @@ private:
     /// the table averaged over N(0, sd^2) for the sd in m_level_sd (table entries, rising by
     /// 2^(1/8)); m_row_sd the sub-pixel sd in table entries at m_row_sd.size() heights. One
     /// table: it is m_lut itself (m_levels empty).
-    std::vector<std::vector<float>> m_levels;
+    struct Levels {
+        std::vector<std::vector<float>> tables;
+        double error = 0.0;  ///< level_error
+    };
+    /// Shared with the Shaders of other frames built from the same table and sds (a cache).
+    std::shared_ptr<const Levels> m_levels;
     std::vector<float> m_level_sd, m_row_sd;
-    double m_level_error = 0.0;
     /// The RGBA tables of row y of h: m_lut, or the averaged tables bracketing the row's sd and
     /// the upper one's weight (hi null: lo alone).
     struct RowTables {
