@@ -117,7 +117,8 @@ void run(const Options& o) {
         test::shaded_bias(path, o.sets, o.width, o.height, o.frame, ref, false, o.bands);
     std::printf("%s frame %lld at %dx%d against %dx%d samples per pixel shaded and filtered "
                 "(Gaussian, camera.filter %.2f px); luma, in units of the band's reference sd; "
-                "averaged ramp: %d tables, nearest-table error <= %.2g\n",
+                "averaged ramp: %d tables by row (0: one for the frame, or none), their interpolation "
+                "error <= %.2g\n",
                 o.scene.c_str(), static_cast<long long>(o.frame), o.width, o.height, o.samples,
                 o.samples, coarse.scene().camera.filter, after.levels, after.level_error);
     for (const std::string& s : o.sets) std::printf("  --set %s\n", s.c_str());

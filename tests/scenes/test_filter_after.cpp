@@ -94,7 +94,8 @@ TEST_CASE("the averaged ramp is the ramp's mean over the sub-pixel distribution 
         }
     INFO("largest error " << worst << " (predicted " << predicted << "), unaveraged " << worst_unaveraged);
     CHECK(worst <= predicted);
-    // Control: shading each pixel at its value misses the mean by far more.
+    // Control: shading each pixel at its value misses the mean by far more (checked by hand:
+    // with the Shader not building the averaged tables, the first check fails, 0.23 > 9e-4).
     CHECK(worst_unaveraged > 10.0 * predicted);
 }
 
@@ -105,12 +106,12 @@ TEST_CASE("a shaded frame has no bias against its supersampled shaded reference 
     // rendered unfiltered at 8 x 8 samples per pixel, every sample shaded and filtered with the
     // camera's Gaussian pixel filter (tests/shaded_bias.h). The relief is off: its lighting
     // scales with the pixel (docs/scenes.md "[shading]"), which no filtering makes consistent.
-    // Bands: the bias over the frame in units of the reference's sd, its standard error from
-    // the scatter of 4 x 4-pixel block means (9 x 144 blocks: 144 blocks, each 4 filter sds
-    // wide, nearly independent). Measured (frame 0): "before" -0.045 (se 0.005), "after"
-    // -0.006. With the remedy the bias is within 4 se and 0.10 of the sd (the issue's bound);
-    // without it (the control) it is beyond 4 se. Checked by hand: with build_levels returning
-    // at once (no averaged table) the first assertion fails.
+    // The bias over the frame in units of the reference's sd, its standard error from the
+    // scatter of 4 x 4-pixel block means (16 x 9 = 144 blocks, each 8 filter sds wide, nearly
+    // independent). Measured (frame 0): "before" -0.062, "after" -0.007 (se 0.007); rms 0.170
+    // -> 0.125. With the remedy the bias is within 4 se and 0.10 of the sd (the issue's bound);
+    // without it (the control) it is beyond 4 se. Checked by hand: with Scene::shading_at not
+    // filling subpixel_sd, the first assertion fails (0.062 > 4 se = 0.033).
     const std::vector<std::string> sets = {"shading.relief=0"};
     const int W = 64, H = 36, n = 8;
     const scenes::Renderer coarse(scenes::load_scene(scenes::resolve_scene("ridges"), sets, {W, H}));
@@ -146,4 +147,34 @@ TEST_CASE("[shading] filter chooses the averaged ramp; \"before\" and unfiltered
     CHECK_THROWS_WITH(scenes::load_scene_string(base + "filter = \"later\"\n", "bad.toml"),
                       Catch::Contains("bad.toml:10:10:") && Catch::Contains("shading.filter = \"later\"") &&
                           Catch::Contains("after, before"));
+}
+
+TEST_CASE("clouds' sky has no bias beyond 0.10 of its bands' sd against its supersampled shaded "
+          "reference with filter = \"after\"", "[scenes][shading][slow]") {
+    // clouds (a perspective sky: the sub-pixel sd per row, docs/shading.md "The sub-pixel sd")
+    // at 128 x 72 against 8 x 8 samples per pixel, frame 0, eight bands of rows from the top;
+    // rows 54-72 are the sea (bands 6 and 7), which the remedy does not reach (docs/shading.md
+    // "What it leaves"). Measured, bias / band sd before -> after: 0.008 -> -0.007,
+    // 0.020 -> 0.005, 0.012 -> 0.004, -0.050 -> -0.043, -0.055 -> -0.019 and, in the band above
+    // the horizon, -0.248 -> 0.072 (se 0.020, from 4 x 4-pixel block means). The bound is the
+    // issue's, 0.10 of the band's sd, in every sky band; the rms falls in every sky band. The
+    // control: without the remedy the band above the horizon is off by more than 0.10 (and by
+    // 12 se). Checked by hand: with Scene::shading_at not filling subpixel_sd, the band above
+    // the horizon fails the bound.
+    const std::string path = scenes::resolve_scene("clouds");
+    const int W = 128, H = 72, n = 8;
+    const scenes::Renderer coarse(scenes::load_scene(path, {}, {W, H}));
+    const std::vector<double> ref = test::shaded_reference(path, {}, W, H, n, 0, coarse.mapping());
+    const test::ShadedBias after = test::shaded_bias(path, {}, W, H, 0, ref, true);
+    const test::ShadedBias before = test::shaded_bias(path, {}, W, H, 0, ref, false);
+    REQUIRE(after.bands.size() == 8);
+    CHECK(after.levels > 1);
+    for (size_t b = 0; b < 6; ++b) {
+        const test::ShadedBand &a = after.bands[b], &z = before.bands[b];
+        INFO("band " << b << " rows " << a.row0 << "-" << a.row1 << ": bias " << z.bias << " -> "
+                     << a.bias << " (se " << a.bias_se << "), rms " << z.rms << " -> " << a.rms);
+        CHECK(std::abs(a.bias) <= 0.10);
+        CHECK(a.rms < z.rms);
+    }
+    CHECK(std::abs(before.bands[5].bias) > 0.10);  // the control
 }
