@@ -284,6 +284,20 @@ void Shader::rows(const Frame& field, int y0, int y1, float* rgb) const {
     }
 }
 
+void Shader::alpha_rows(const Frame& field, int y0, int y1, float* alpha) const {
+    const int w = field.width;
+    for (int y = y0; y < y1; ++y) {
+        const RowTables lut = row_tables(y, field.height);
+        const float* row = field.data.data() + size_t(y) * w;
+        float* o = alpha + size_t(y - y0) * w;
+        for (int x = 0; x < w; ++x) {
+            const size_t i = size_t(std::clamp((row[x] - m_lo) * m_scale, 0.0f, m_last) + 0.5f) * 4 + 3;
+            const float a = lut.hi ? lut.lo[i] + lut.weight * (lut.hi[i] - lut.lo[i]) : lut.lo[i];
+            o[x] = std::clamp(a, 0.0f, 1.0f);
+        }
+    }
+}
+
 void shade(const Frame& field, const ValueMapping& mapping, const Shading& sh,
            std::vector<float>& rgb) {
     const int w = field.width, h = field.height;
@@ -296,6 +310,10 @@ void shading_alpha(const Frame& field, const ValueMapping& mapping, const Shadin
                    std::vector<float>& alpha) {
     alpha.assign(field.data.size(), 1.0f);
     if (sh.ramp.empty()) return;
+    if (!sh.subpixel_sd.empty()) {  // the averaged ramp's coverage (docs/shading.md)
+        Shader(mapping, sh).alpha_rows(field, 0, field.height, alpha.data());
+        return;
+    }
     const double inv = 1.0 / (mapping.hi - mapping.lo);
     for (size_t i = 0; i < alpha.size(); ++i) {
         float c[4];

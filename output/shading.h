@@ -73,6 +73,7 @@ void shade(const Frame& field, const ValueMapping& mapping, const Shading& shadi
 
 /// The coverage of each pixel of `field` under `shading`: the ramp's alpha at the pixel's
 /// display value (through the tone curve), 1 without a ramp; one float per pixel into `alpha`.
+/// With `subpixel_sd`, the averaged ramp's alpha (Shader::alpha_rows), as `shade` composites.
 /// `shade` with a black background gives the matching premultiplied colour.
 void shading_alpha(const Frame& field, const ValueMapping& mapping, const Shading& shading,
                    std::vector<float>& alpha);
@@ -111,6 +112,9 @@ public:
     /// lookup and a multiply-add per sample. With relief (lighting is not linear in the colour)
     /// two rows at a time go through `rows` and rgb_rows_to_yuv420. Deterministic; thread-safe.
     void rows_yuv420(const Frame& field, int y0, int y1, const Yuv420Planes& planes) const;
+    /// Rows [y0, y1) of `field` as the coverage `rows` composites with: the ramp's alpha (the
+    /// averaged ramp's, with sub-pixel sd), one float per pixel into `alpha`.
+    void alpha_rows(const Frame& field, int y0, int y1, float* alpha) const;
     /// The predicted largest error, in display units (per channel, premultiplied), of shading a
     /// row by interpolating the averaged ramp's tables bracketing its sub-pixel sd instead of the
     /// table at that sd: an eighth of the largest second difference of neighbouring tables

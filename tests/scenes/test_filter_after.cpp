@@ -178,3 +178,39 @@ TEST_CASE("clouds' sky has no bias beyond 0.10 of its bands' sd against its supe
     }
     CHECK(std::abs(before.bands[5].bias) > 0.10);  // the control
 }
+
+TEST_CASE("the coverage of an averaged ramp is the alpha its colours are composited with",
+          "[scenes][shading]") {
+    // The RGBA channels output writes shade() over black with shading_alpha() as A: with a
+    // sub-pixel sd both come from the averaged ramp. Over black a pixel is E[a c], over white
+    // E[a c] + 1 - E[a]; their difference gives E[a], which shading_alpha must return (float
+    // rounding: 1e-5). Control: the ramp's own alpha (without the sub-pixel sd) misses by far
+    // more.
+    output::Shading sh;
+    sh.ramp = {{0.0, 1, 1, 1, 0}, {0.45, 1, 1, 1, 0}, {0.62, 0.9f, 0.9f, 0.95f, 0.85f}, {1.0, 1, 1, 1, 1}};
+    const int W = 41, H = 6;
+    for (int j = 0; j < H; ++j) sh.subpixel_sd.push_back(float(0.05 * (j + 1)));
+    render::Frame f;
+    f.resize(W, H);
+    for (int j = 0; j < H; ++j)
+        for (int i = 0; i < W; ++i) f.data[size_t(j) * W + i] = float(-1.2 + 2.4 * i / (W - 1));
+    std::vector<float> black, white, alpha;
+    for (int k = 0; k < 3; ++k) sh.top[k] = sh.bottom[k] = 0.0f;
+    output::shade(f, {-1.0, 1.0}, sh, black);
+    for (int k = 0; k < 3; ++k) sh.top[k] = sh.bottom[k] = 1.0f;
+    output::shade(f, {-1.0, 1.0}, sh, white);
+    output::shading_alpha(f, {-1.0, 1.0}, sh, alpha);
+    double worst = 0.0;
+    for (size_t p = 0; p < alpha.size(); ++p)
+        worst = std::max(worst, std::abs(double(alpha[p]) - (1.0 - (white[3 * p] - black[3 * p]))));
+    CHECK(worst < 1e-5);
+    std::vector<float> unaveraged;
+    output::Shading plain = sh;
+    plain.subpixel_sd.clear();
+    output::shading_alpha(f, {-1.0, 1.0}, plain, unaveraged);
+    double miss = 0.0;
+    for (size_t p = 0; p < alpha.size(); ++p)
+        miss = std::max(miss, std::abs(double(unaveraged[p]) - (1.0 - (white[3 * p] - black[3 * p]))));
+    INFO("unaveraged alpha misses by " << miss);
+    CHECK(miss > 0.1);
+}
