@@ -80,7 +80,7 @@ void cost(const Options& o, const std::string& path) {
     const int W = sc.output.width & ~1, H = sc.output.height & ~1;
     std::vector<uint8_t> y(size_t(W) * H), cb(size_t(W / 2) * (H / 2)), cr(cb.size());
     const output::Yuv420Planes planes{y.data(), cb.data(), cr.data(), W, W / 2, W / 2};
-    std::vector<double> render_s, after_s, before_s;
+    std::vector<double> render_s, after_s, before_s, sd_s, tables_s;
     render::Frame f;
     for (int k = 0; k < o.cost; ++k) {
         auto t0 = bench::Clock::now();
@@ -91,7 +91,9 @@ void cost(const Options& o, const std::string& path) {
             scenes::Scene switched = sc;
             switched.shading.filter_after = after;
             const output::Shading s = switched.shading_at(sc.frame_time(o.frame));
+            if (after) sd_s.push_back(seconds_since(t0));
             const output::Shader shader(r.mapping(), s);
+            if (after) tables_s.push_back(seconds_since(t0) - sd_s.back());
             shader.rows_yuv420(f, 0, H, planes);
             (after ? after_s : before_s).push_back(seconds_since(t0));
         }
@@ -103,6 +105,10 @@ void cost(const Options& o, const std::string& path) {
                 "(render + before) = %.3f\n",
                 o.scene.c_str(), static_cast<long long>(o.frame), sc.output.width,
                 sc.output.height, o.cost, rm, am, bm, (rm + am) / (rm + bm));
+    std::printf("  of \"after\": Scene::shading_at (the sub-pixel sd) %.4f s, the Shader's tables "
+                "%.4f s, the rows %.4f s (medians)\n",
+                bench::summarise(sd_s).med, bench::summarise(tables_s).med,
+                am - bench::summarise(sd_s).med - bench::summarise(tables_s).med);
 }
 
 void run(const Options& o) {
