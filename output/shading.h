@@ -5,6 +5,7 @@
 // gradient. Part of impulse::output; included by output/output.h.
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 #include "numeric/frame.h"
@@ -42,6 +43,17 @@ struct Shading {
     /// spaced heights from the top row (0) to the bottom row (1), linear between (a scene's
     /// horizon and sea: scenes/sea.cpp). Resolution-independent, like the gradient.
     std::vector<float> background;
+    /// Filtering after shading (docs/shading.md "Filtering after shading"): a scene's
+    /// `[shading] filter = "after"` (true, the default) has Scene::shading_at fill
+    /// `subpixel_sd`; "before" (false) leaves it empty, so the filtered field is shaded as is.
+    bool filter_after = true;
+    /// The standard deviation, in field units, of the field within a pixel's filter that the
+    /// filtered field does not show (var = int S(f) (1 - |G(f)|^2) df for the pixel filter G at
+    /// the footprint), at n evenly spaced heights from the top row (0) to the bottom row (1),
+    /// linear between (one value: every row). The ramp, after the tone curve, is averaged over
+    /// N(value, sd^2), so the shaded pixel is the mean of the shading over the pixel's filter
+    /// (docs/shading.md "The averaged ramp"). Empty or all 0: each pixel shaded at its value.
+    std::vector<float> subpixel_sd;
 };
 
 /// The filmic tone curve from a linear display value x (any real; 0 and 1 where the value
@@ -61,6 +73,7 @@ void shade(const Frame& field, const ValueMapping& mapping, const Shading& shadi
 
 /// The coverage of each pixel of `field` under `shading`: the ramp's alpha at the pixel's
 /// display value (through the tone curve), 1 without a ramp; one float per pixel into `alpha`.
+/// With `subpixel_sd`, the averaged ramp's alpha (Shader::alpha_rows), as `shade` composites.
 /// `shade` with a black background gives the matching premultiplied colour.
 void shading_alpha(const Frame& field, const ValueMapping& mapping, const Shading& shading,
                    std::vector<float>& alpha);
@@ -99,10 +112,21 @@ public:
     /// lookup and a multiply-add per sample. With relief (lighting is not linear in the colour)
     /// two rows at a time go through `rows` and rgb_rows_to_yuv420. Deterministic; thread-safe.
     void rows_yuv420(const Frame& field, int y0, int y1, const Yuv420Planes& planes) const;
+    /// Rows [y0, y1) of `field` as the coverage `rows` composites with: the ramp's alpha (the
+    /// averaged ramp's, with sub-pixel sd), one float per pixel into `alpha`.
+    void alpha_rows(const Frame& field, int y0, int y1, float* alpha) const;
+    /// The predicted largest error, in display units (per channel, premultiplied), of shading a
+    /// row by interpolating the averaged ramp's tables bracketing its sub-pixel sd instead of the
+    /// table at that sd: an eighth of the largest second difference of neighbouring tables
+    /// (docs/shading.md "The averaged ramp"). 0 with one table (one sub-pixel sd per frame).
+    double level_error() const { return m_levels ? m_levels->error : 0.0; }
+    /// The number of averaged ramp tables (0 without sub-pixel sd, or with one sd).
+    int levels() const { return m_levels ? int(m_levels->tables.size()) : 0; }
 
 private:
     void rows_yuv420_table(const Frame& field, int y, const Yuv420Planes& planes) const;
     void build_yuv_tables();
+    void build_levels(const std::vector<float>& subpixel_sd);
 
     static constexpr int kLut = 4096;  ///< entries per unit of linear display value
     std::vector<float> m_lut;  ///< RGBA over the linear display values [x0, x1] the curve needs
@@ -115,6 +139,25 @@ private:
     float m_top[3] = {}, m_bottom[3] = {};
     std::vector<float> m_background;
     bool m_plain_grey = true;
+    /// The averaged ramp (docs/shading.md "The averaged ramp"): tables of m_lut's layout, each
+    /// the table averaged over N(0, sd^2) for the sd in m_level_sd (table entries, rising by
+    /// 2^(1/8)); m_row_sd the sub-pixel sd in table entries at m_row_sd.size() heights. One
+    /// table: it is m_lut itself (m_levels empty).
+    struct Levels {
+        std::vector<std::vector<float>> tables;
+        double error = 0.0;  ///< level_error
+    };
+    /// Shared with the Shaders of other frames built from the same table and sds (a cache).
+    std::shared_ptr<const Levels> m_levels;
+    std::vector<float> m_level_sd, m_row_sd;
+    /// The RGBA tables of row y of h: m_lut, or the averaged tables bracketing the row's sd and
+    /// the upper one's weight (hi null: lo alone).
+    struct RowTables {
+        const float* lo;
+        const float* hi;
+        float weight;
+    };
+    RowTables row_tables(int y, int h) const;
     /// The background of row y of h (the gradient, or the table).
     void background_row(int y, int h, float bg[3]) const;
 };

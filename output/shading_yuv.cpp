@@ -142,9 +142,10 @@ void Shader::rows_yuv420_table(const Frame& field, int y, const Yuv420Planes& p)
 }
 
 void Shader::rows_yuv420(const Frame& field, int y0, int y1, const Yuv420Planes& planes) const {
-    if (m_relief != 0.0f) {
+    if (m_relief != 0.0f || m_levels) {
         // Lighting multiplies the colour and goes through the shoulder per channel: not linear
         // in the colour, so two rows at a time through rows() (the exact RGB) and the matrix.
+        // So do rows whose averaged ramp differs by row (docs/shading.md "The averaged ramp").
         thread_local std::vector<float> pair;
         pair.resize(size_t(field.width) * 6);
         for (int y = y0; y + 1 < y1; y += 2) {

@@ -53,6 +53,7 @@ output::Shading Scene::shading_at(double t) const {
     s.light_elevation_deg = shading_keys.light_elevation.value(t);
     s.ambient = shading_keys.ambient.value(t);
     if (camera.sea.enabled) s.background = detail::sea_background(camera, s, t);
+    if (s.filter_after) s.subpixel_sd = detail::subpixel_sd(*this, t);
     return s;
 }
 

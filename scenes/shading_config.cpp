@@ -2,6 +2,7 @@
 // The [shading] table: colour ramps (named or explicit), height-field relief, background.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -163,6 +164,10 @@ output::Shading read_shading(std::optional<Reader> r, const std::filesystem::pat
     s.light_azimuth_deg = keys.light_azimuth.value(0.0);
     s.light_elevation_deg = keys.light_elevation.value(0.0);
     s.ambient = keys.ambient.value(0.0);
+    // Filtering after shading (docs/shading.md): "after" averages the ramp over the field's
+    // sub-pixel distribution where the frame is filtered, "before" shades the filtered value.
+    static constexpr std::array<std::string_view, 2> kFilterNames = {"after", "before"};
+    s.filter_after = r->choice("filter", kFilterNames, 0) == 0;
     for (const char* key : {"top", "bottom"}) {
         if (const toml::node* n = r->node(key)) {
             float c[4];

@@ -58,6 +58,13 @@ void apply_sea(const render::PerspectiveCamera& camera, const SeaConfig& sea, do
 std::vector<float> sea_background(const CameraConfig& camera, const output::Shading& shading,
                                   double t_s);
 
+/// Filtering after shading (scenes/subpixel.cpp, docs/shading.md "The sub-pixel sd"): the sd of
+/// the field within each row's pixel filter that the filtered frame does not show, one value per
+/// row of the scene's output size at frame time t_s (output::Shading::subpixel_sd); one value
+/// for an orthographic camera. Empty where the remedy does not apply (filter = "before", a frame
+/// that is not filtered, or one whose field is not a plain sum of impulse layers).
+std::vector<float> subpixel_sd(const Scene& scene, double t_s);
+
 /// Per-layer kernel pyramids and the per-frame perspective geometry, used by Renderer::render.
 class CameraPipeline {
 public:
