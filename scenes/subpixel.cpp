@@ -12,7 +12,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "scenes/camera_detail.h"
+#include "scenes/detail/camera.h"
 
 namespace impulse::scenes::detail {
 namespace {
