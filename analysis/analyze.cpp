@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // The analysis of frames behind `impulse analyze`: measure them with the estimators and compare
 // the measurements with the closed-form theory of a scene (Campbell's theorem, design.md §1;
-// stated by scenes/closed_form.cpp, passed in as an analysis::ClosedForm) with tolerances
+// stated by scenes/theory/closed_form.cpp, passed in as an analysis::ClosedForm) with tolerances
 // derived from each estimator's sampling error (design.md §5).
 
 #include "analysis/analysis.h"

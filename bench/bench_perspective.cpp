@@ -121,8 +121,8 @@ struct Scene {
     }();
 };
 
-/// What a renderer keeps from frame to frame for a layer (scenes/renderer.cpp: the impulses and
-/// the frame; scenes/camera_render.cpp: the perspective workspace), one per row so every row's
+/// What a renderer keeps from frame to frame for a layer (scenes/frame/renderer.cpp: the impulses and
+/// the frame; scenes/frame/camera_render.cpp: the perspective workspace), one per row so every row's
 /// frames are timed as frames of a sequence.
 struct Buffers {
     render::Frame f;

@@ -6,7 +6,7 @@
 // Tight budget: a scene asks for its own size and limits, so the target overrides them as
 // `--size` and `--set` do (kBudget): every scene renders frames 0 and 1 at 64x48, and one whose
 // estimated impulses, memory or perspective pixel evaluations exceed the small limits below is
-// refused with BudgetError by the Renderer before any work (scenes/renderer.cpp), so an input
+// refused with BudgetError by the Renderer before any work (scenes/frame/renderer.cpp), so an input
 // cannot buy a long run with a large size or density. The memory limit also bounds what is made
 // at load, before the Renderer's estimate: the source layers' tiles together (an fbm or
 // subdivision field, made as its layer is read: 2 MiB holds one 256^2 incremental fbm surface

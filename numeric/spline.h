@@ -2,7 +2,7 @@
 #pragma once
 // Catmull-Rom cubic interpolation weights: the C1 interpolant of lattice values used for the
 // stream-function flows (sim/detail/lattice.h) and for resampling and differentiating frames in the
-// composition of layers (scenes/compose_render.cpp).
+// composition of layers (scenes/frame/compose_render.cpp).
 
 namespace impulse::numeric {
 

@@ -41,7 +41,7 @@ struct Shading {
     float bottom[3] = {0.70f, 0.82f, 0.95f};
     /// Non-empty: the background instead of the top-bottom gradient, RGB triples at n evenly
     /// spaced heights from the top row (0) to the bottom row (1), linear between (a scene's
-    /// horizon and sea: scenes/sea.cpp). Resolution-independent, like the gradient.
+    /// horizon and sea: scenes/frame/sea.cpp). Resolution-independent, like the gradient.
     std::vector<float> background;
     /// Filtering after shading (docs/shading.md "Filtering after shading"): a scene's
     /// `[shading] filter = "after"` (true, the default) has Scene::shading_at fill

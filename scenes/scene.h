@@ -64,7 +64,7 @@ struct CameraConfig {
     // orthographic
     numeric::Keyframed center_x, center_y;  ///< texture point at the frame centre (default: size/2)
     numeric::Keyframed zoom = 1.0;          ///< pixels per texture unit, > 0
-    // perspective (scenes/camera_config.cpp)
+    // perspective (scenes/language/camera_config.cpp)
     numeric::Keyframed position_x, position_y;  ///< the camera's foot on the plane (default: size/2)
     numeric::Keyframed altitude = 100.0;    ///< key `height`: distance from the plane, texture units, > 0
     numeric::Keyframed pitch = 20.0;        ///< degrees below (ground) / above (sky) the horizon, [-90, 90]
@@ -212,7 +212,7 @@ struct LayerConfig {
     Composition compose;  ///< blend, opacity, visibility, warp, orientation source
     /// [layer.scale]: each impulse's kernel scaled by s(x, t); null: the kernel's own size.
     std::shared_ptr<const ScaleField> scale;
-    /// [layer.dispersion] (scenes/dispersion_config.cpp): Omega, the rate in rad/s at which the
+    /// [layer.dispersion] (scenes/language/dispersion_config.cpp): Omega, the rate in rad/s at which the
     /// Gabor carrier advances on its envelope; the layer's weights are multiplied by
     /// cos(Omega t), its quadrature twin's (carrier_quadrature, kernel phase + pi/2) by
     /// -sin(Omega t). 0: no dispersion.

@@ -44,7 +44,7 @@ struct PixelFootprints {
 };
 
 /// The pixel lattice of an orthographic view, where the closed form of a scene samples a source
-/// (scenes/closed_form.cpp).
+/// (scenes/theory/closed_form.cpp).
 struct PixelLattice {
     double scale = 1.0;       ///< texture units per pixel (1 / zoom)
     double x = 0.5, y = 0.5;  ///< the texture point of pixel (0, 0)'s centre

@@ -9,7 +9,7 @@
 namespace impulse::scenes {
 
 /// A volume scene ([volume] instead of [[layer]], docs/volume.md): impulses in 3-D, written as
-/// an OpenVDB sequence or as a ray-marched preview (scenes/volume_config.cpp).
+/// an OpenVDB sequence or as a ray-marched preview (scenes/language/volume_config.cpp).
 struct VolumeSceneConfig {
     volume::CloudConfig cloud;    ///< [volume], its kernel, shape and flows (fps from [output])
     volume::MarchOptions march;   ///< [preview] (width and height from [output].size)

@@ -29,7 +29,7 @@ void read_orientation(Reader& layer, sim::ProcessConfig& process,
                       const std::filesystem::path& base,
                       const std::function<void(Reader&)>& layer_source);
 
-/// [camera.sea] of a perspective sky camera `c` (scenes/sea.cpp): depth, roughness, wavelength,
+/// [camera.sea] of a perspective sky camera `c` (scenes/frame/sea.cpp): depth, roughness, wavelength,
 /// wind, color. Fails on a sea under an orthographic or ground camera, or one whose horizon is
 /// above the frame at some key (nothing of the sea would show).
 void read_sea(Reader& sea, CameraConfig& c, int width, int height);
@@ -58,7 +58,7 @@ void apply_sea(const render::PerspectiveCamera& camera, const SeaConfig& sea, do
 std::vector<float> sea_background(const CameraConfig& camera, const output::Shading& shading,
                                   double t_s);
 
-/// Filtering after shading (scenes/subpixel.cpp, docs/shading.md "The sub-pixel sd"): the sd of
+/// Filtering after shading (scenes/frame/subpixel.cpp, docs/shading.md "The sub-pixel sd"): the sd of
 /// the field within each row's pixel filter that the filtered frame does not show, one value per
 /// row of the scene's output size at frame time t_s (output::Shading::subpixel_sd); one value
 /// for an orthographic camera. Empty where the remedy does not apply (filter = "before", a frame

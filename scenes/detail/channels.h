@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
-// Internal to impulse::scenes: what Renderer::render_channels asks of scenes/channels.cpp.
+// Internal to impulse::scenes: what Renderer::render_channels asks of scenes/frame/channels.cpp.
 
 #include <array>
 #include <cstdint>

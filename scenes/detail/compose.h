@@ -1,8 +1,8 @@
 // SPDX-License-Identifier: Apache-2.0
 #pragma once
 // Composition of layers (docs/scenes.md "Composition"): reading the keys that refer to other
-// layers (scenes/compose_config.cpp) and the per-pixel operations of the renderer
-// (scenes/compose_render.cpp). Internal to impulse::scenes.
+// layers (scenes/language/compose_config.cpp) and the per-pixel operations of the renderer
+// (scenes/frame/compose_render.cpp). Internal to impulse::scenes.
 
 #include <map>
 #include <memory>

@@ -54,11 +54,11 @@ std::shared_ptr<sim::Flow> read_flows(
     Reader& layer, const sim::ProcessConfig& process, const std::filesystem::path& base,
     CompositionReader& compose, size_t index,
     std::vector<std::pair<numeric::Keyframed, numeric::Keyframed>>* uniform = nullptr);
-/// A `type = "sequence"` flow table `f` of `layer` (scenes/sequence_config.cpp): finds and checks
+/// A `type = "sequence"` flow table `f` of `layer` (scenes/language/sequence_config.cpp): finds and checks
 /// every frame, then pushes the sampled flow onto `sum`.
 void read_sequence_flow(Reader& f, const sim::ProcessConfig& process, Reader& layer,
                         const std::filesystem::path& base, sim::FlowSum& sum);
-/// A `type = "sequence"` table `f` of [[volume.flow]] (scenes/sequence_config.cpp): the same
+/// A `type = "sequence"` table `f` of [[volume.flow]] (scenes/language/sequence_config.cpp): the same
 /// keys in 3-D (`scale` and `offset` per axis, no plane), OpenVDB files only.
 void read_volume_sequence_flow(Reader& f, double lifetime_s, bool jacobian, Reader& volume,
                                const std::filesystem::path& base, volume::FlowSum3& sum);
@@ -71,12 +71,12 @@ std::pair<numeric::Keyframed, numeric::Keyframed> read_uniform_velocity(Reader& 
 void read_source_layer(Reader& r, size_t i, uint64_t global_seed, const std::filesystem::path& base,
                        const TileBudget& budget, double zoom, bool perspective,
                        CompositionReader& compose, LayerConfig& L);
-/// A volume scene's [volume] and [preview] tables (scenes/volume_config.cpp); `fps` and the
+/// A volume scene's [volume] and [preview] tables (scenes/language/volume_config.cpp); `fps` and the
 /// preview size come from [output]; `base` resolves a sequence's path.
 std::shared_ptr<const VolumeSceneConfig> read_volume_scene(Reader& top, uint64_t global_seed,
                                                           const OutputConfig& output,
                                                           const std::filesystem::path& base);
-/// layer.scale (scenes/scale_config.cpp): a kernel scale field, a number or a table with a
+/// layer.scale (scenes/language/scale_config.cpp): a kernel scale field, a number or a table with a
 /// type; refused with a marginal (read it after the marginal).
 void read_scale(Reader& layer, const std::filesystem::path& base, LayerConfig& L);
 /// The [camera] table (absent: the orthographic default framing a width x height output).

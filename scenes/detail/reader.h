@@ -107,7 +107,7 @@ private:
     std::set<std::string, std::less<>> m_known;
 };
 
-/// The [shading] table (scenes/shading_config.cpp); `base` resolves relative paths. Keyframed
+/// The [shading] table (scenes/language/shading_config.cpp); `base` resolves relative paths. Keyframed
 /// numbers go to `keys` (their values at t = 0 into the result).
 output::Shading read_shading(std::optional<Reader> r, const std::filesystem::path& base,
                              ShadingKeys& keys);
@@ -127,15 +127,15 @@ std::string structural_reason(std::string_view path);
 std::filesystem::path resolve_path(const toml::node* n, const std::string& rel,
                                    const std::filesystem::path& base);
 
-/// [shading.transform] (scenes/transform_config.cpp): marble or wood; refused for perspective
+/// [shading.transform] (scenes/language/transform_config.cpp): marble or wood; refused for perspective
 /// cameras. `width`, `height`: the output size (wood's default centre).
 output::FieldTransform read_transform(std::optional<Reader> r, const CameraConfig& camera,
                                       int width, int height, uint64_t scene_seed);
 
-/// layer.region: the birth region of a layer (scenes/region_config.cpp); `base` resolves a mask
+/// layer.region: the birth region of a layer (scenes/language/region_config.cpp); `base` resolves a mask
 /// image's path.
 void read_region(Reader& layer, sim::ProcessConfig& process, const std::filesystem::path& base);
-/// [layer.dispersion] of a Gabor layer (scenes/dispersion_config.cpp): adds the group
+/// [layer.dispersion] of a Gabor layer (scenes/language/dispersion_config.cpp): adds the group
 /// velocity to its flow (`flows` reads the layer's own flows afresh), sets its carrier rate
 /// and appends its quadrature twin to `twins`.
 void read_dispersion(Reader& layer, LayerConfig& L, std::vector<LayerConfig>& twins,

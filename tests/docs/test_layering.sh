@@ -17,7 +17,7 @@ done
 # folder, a header the facade does not list, an unlisted header at a library's top level
 echo '#include "render/render.h"' >> "$tmp/kernels/kernel.cpp"
 echo '#include "scenes/detail/reader.h"' >> "$tmp/app/main.cpp"
-echo '#include "volume/unlisted.h"' >> "$tmp/scenes/renderer.cpp"
+echo '#include "volume/unlisted.h"' >> "$tmp/scenes/frame/renderer.cpp"
 printf '#pragma once\n' > "$tmp/volume/unlisted.h"
 out=$("$python" "$root/tests/docs/check_layering.py" "$tmp")
 status=$?
@@ -26,7 +26,7 @@ fail=0
 for expected in \
     "kernels/ uses render/, which docs/design.md §2 does not allow it" \
     "app/main.cpp: includes scenes/detail/reader.h, internal to scenes/ (its detail/)" \
-    "scenes/renderer.cpp: includes volume/unlisted.h, which volume/volume.h does not list" \
+    "scenes/frame/renderer.cpp: includes volume/unlisted.h, which volume/volume.h does not list" \
     "volume/unlisted.h: at volume/'s top level but not listed in volume/volume.h (move it to volume/detail/)"; do
     grep -qF "$expected" <<<"$out" || { echo "missing: $expected"; fail=1; }
 done

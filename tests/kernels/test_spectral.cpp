@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // Kernels designed from a spectrum or an autocorrelation (kernels/spectral.h): the round trip
 // spectrum -> kernel -> rendered field -> periodogram, the non-negative-definiteness check, the
-// expression parser, CSV tables, and the scene keys (scenes/loader.cpp). Fixed seeds; every band
+// expression parser, CSV tables, and the scene keys (scenes/language/loader.cpp). Fixed seeds; every band
 // is derived in the comment next to it (design.md §5).
 
 #include <algorithm>

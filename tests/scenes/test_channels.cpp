@@ -4,7 +4,7 @@
 // against each impulse's measured displacement between frames, and what is refused.
 // Checked by hand once: with the layers' opacity left out of the composite, the rotation back
 // from the kernel's frame turned the wrong way (render/gradient.cpp) and the camera's next view
-// taken at the frame's own time (scenes/channels.cpp), the first two cases fail (779 pixels
+// taken at the frame's own time (scenes/frame/channels.cpp), the first two cases fail (779 pixels
 // over the difference bound, 636 normals, every composite pixel; every matched impulse's
 // vector and the pan).
 

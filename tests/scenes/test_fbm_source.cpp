@@ -1,5 +1,5 @@
 // SPDX-License-Identifier: Apache-2.0
-// [[layer]] source = "fbm": a fractional Brownian surface as a layer (scenes/source_fbm.cpp on the
+// [[layer]] source = "fbm": a fractional Brownian surface as a layer (scenes/sources/source_fbm.cpp on the
 // layer-source seam): its measured variance against the stated theory, and its bad input.
 #include <catch2/catch.hpp>
 

@@ -623,7 +623,7 @@ TEST_CASE("sequence: a volume's sampled solid-body rotation turns and aligns ker
     // The grid's edge moves (|v| up to sqrt((0.5 * 48 sqrt 2)^2 + 1) = 33.9559 voxels/s):
     // outside = "zero" jumps to 0 beyond it, a divergence sqrt(J) does not see, and the loader
     // says so once, as for a layer; "clamp" is continuous and quiet. Shown able to fail: without
-    // the volume's call to warn_outside_zero (scenes/sequence_config.cpp) nothing is said.
+    // the volume's call to warn_outside_zero (scenes/language/sequence_config.cpp) nothing is said.
     auto warned = [](const scenes::Scene& scene) {
         return std::count_if(scene.warnings.begin(), scene.warnings.end(), [](const std::string& w) {
             return w.find("volume.flow[0].outside: \"zero\" (the default) makes the field jump from up to "

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // [[layer]] source = "solid": a slice z = z0 + velocity t through solid noise as a layer
-// (scenes/source_solid.cpp on the layer-source seam): the slice's variance against Campbell's
+// (scenes/sources/source_solid.cpp on the layer-source seam): the slice's variance against Campbell's
 // 3-D variance, moving through the noise, and bad input.
 #include <catch2/catch.hpp>
 

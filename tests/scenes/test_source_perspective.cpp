@@ -1,9 +1,9 @@
 // SPDX-License-Identifier: Apache-2.0
 // Source layers under a perspective camera (issue 13): an fbm layer seen straight down is its
 // orthographic render; in a grazing view the near pixels are the tile sampled at their plane
-// points, the far ones fade to the tile's mean, and nothing is NaN (scenes/source_grid.cpp); the
+// points, the far ones fade to the tile's mean, and nothing is NaN (scenes/sources/source_grid.cpp); the
 // tile and its pyramid count in the memory budget. A gaussian solid layer likewise, through the
-// impulse layers' pipeline (scenes/source_solid.cpp).
+// impulse layers' pipeline (scenes/sources/source_solid.cpp).
 #include <catch2/catch.hpp>
 
 #include <cmath>

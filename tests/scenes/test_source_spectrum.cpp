@@ -1,7 +1,7 @@
 // SPDX-License-Identifier: Apache-2.0
 // `impulse analyze --scene` on frames of source layers (issue 13, deliverable 4): an fbm layer
 // drawn by Fourier synthesis and a solid-noise layer state their spectra and variances
-// (LayerSource::power_spectrum, theory), scenes/closed_form.cpp sums them like impulse layers,
+// (LayerSource::power_spectrum, theory), scenes/theory/closed_form.cpp sums them like impulse layers,
 // and a rendered frame's radial periodogram and variance agree with them within their sampling
 // errors; the same frames judged against another Hurst exponent's spectrum disagree; layers
 // that state no spectrum (fbm incremental, subdivision) are not compared and say why.

@@ -1,6 +1,6 @@
 // SPDX-License-Identifier: Apache-2.0
 // [[layer]] source = "subdivision": generalized stochastic subdivision (Lewis 1987) as a layer
-// (scenes/source_subdivision.cpp on the layer-source seam): the field read at its samples has
+// (scenes/sources/source_subdivision.cpp on the layer-source seam): the field read at its samples has
 // the stated variance and the stated autocorrelation in texture units; the frame is the same in
 // any tiling; bad input is one line at the key.
 #include <catch2/catch.hpp>

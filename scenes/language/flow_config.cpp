@@ -136,7 +136,7 @@ std::shared_ptr<sim::Flow> read_flows(
                 }
                 break;
             }
-            case 6:  // another layer's field as stream function (scenes/compose_config.cpp)
+            case 6:  // another layer's field as stream function (scenes/language/compose_config.cpp)
                 compose.read_flow(f, index, *sum);
                 break;
             case 7:  // a velocity sequence from files (scenes/sequence_config.cpp)

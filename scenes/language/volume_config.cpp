@@ -116,7 +116,7 @@ std::shared_ptr<volume::Flow3> read_volume_flows(Reader& v, uint64_t global_seed
                 sum->push(volume::make_divergent_flow3(*center, rate, pulse, period));
                 break;
             }
-            case 3:  // a velocity sequence (scenes/sequence_config.cpp)
+            case 3:  // a velocity sequence (scenes/language/sequence_config.cpp)
                 read_volume_sequence_flow(f, c.lifetime_s, c.jacobian, v, base, *sum);
                 break;
             default: {
