@@ -41,7 +41,6 @@ fuzz() {
     ls "$corpus" | awk -v k="$shard" -v n="$shards" 'NR % n == k % n' | sed "s#^#$corpus/#" |
         xargs -r cp -t "$part"
     if [ "$name" = scene ]; then
-        max_len=8192
         if [ "$shard" -eq 0 ]; then
             # the built-in scenes (only the .toml files of scenes/, not the library's sources)
             # and the error corpus

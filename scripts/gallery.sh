@@ -133,8 +133,8 @@ and, for the moving ones, the first 1.6 s as a looping animation at a quarter of
 MD
 for name in $("$impulse" scenes | awk '{print $1}'); do
     desc=$("$impulse" scenes | awk -v n="$name" '$1 == n { $1 = ""; sub(/^ /, ""); print }')
-    read -r sw sh frames < <("$impulse" info "$name" 2>/dev/null |
-        awk '/^output/ { split($2, s, "x"); sub(",", "", s[2]); print s[1], s[2], $3 }')
+    output_line=$("$impulse" info "$name" 2>/dev/null | grep '^output' || true)
+    read -r sw sh frames < <(awk '{ split($2, s, "x"); sub(",", "", s[2]); print s[1], s[2], $3 }' <<<"$output_line")
     [ -n "${frames:-}" ] || { echo "gallery.sh: impulse info $name gave no output line" >&2; exit 1; }
     still_frame=$(( frames > 60 ? 60 : 0 ))
     extra=()
@@ -142,7 +142,7 @@ for name in $("$impulse" scenes | awk '{print $1}'); do
         still_frame=0
         # a volume scene's grid a quarter of its size along each axis: the voxels, not the
         # picture's pixels, are its cost (cloudvolume's 256x128x112 took 21 of the 63 CPU-s)
-        "$impulse" info "$name" 2>/dev/null | grep -q '^output .* voxels)' && extra=(--set "volume.size=[64,32,28]")
+        [[ $output_line == *" voxels)" ]] && extra=(--set "volume.size=[64,32,28]")
     fi
     echo "gallery: $name"
     "$impulse" render "$name" -q -o "$tmp/$name.png" --frames "$still_frame" "${extra[@]}" \

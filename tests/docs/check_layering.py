@@ -42,14 +42,20 @@ def sources(folder):
             yield p
 
 
-def facade_list(lib):
-    facade = root / lib / f"{lib}.h"
-    return {f"{a}/{b}" for a, b in INCLUDE.findall(facade.read_text())} if facade.exists() else set()
+def facade_lists(libraries):
+    """{library: the headers its facade lists}, each facade read once."""
+    lists = {}
+    for lib in libraries:
+        facade = root / lib / f"{lib}.h"
+        lists[lib] = ({f"{a}/{b}" for a, b in INCLUDE.findall(facade.read_text())}
+                      if facade.exists() else set())
+    return lists
 
 
 def main():
     table = levels_table()
     libraries = [lib for lib in table if lib not in ("app", "python")]
+    listed_by = facade_lists(libraries)
     errors = []
     used = {lib: set() for lib in table}
     for folder in table:
@@ -64,7 +70,7 @@ def main():
                     errors.append(f"{rel}: includes {header}: app/ and python/ are programs, not libraries")
                 elif "detail/" in rest:
                     errors.append(f"{rel}: includes {header}, internal to {target}/ (its detail/)")
-                elif header != f"{target}/{target}.h" and header not in facade_list(target):
+                elif header != f"{target}/{target}.h" and header not in listed_by[target]:
                     errors.append(f"{rel}: includes {header}, which {target}/{target}.h does not list")
     for lib, expected in table.items():
         for extra in sorted(used[lib] - expected):
@@ -72,7 +78,7 @@ def main():
         for stale in sorted(expected - used[lib]):
             errors.append(f"docs/design.md §2 says {lib}/ uses {stale}/, but nothing of {lib}/ includes it")
     for lib in libraries:
-        listed = facade_list(lib)
+        listed = listed_by[lib]
         if not listed:
             errors.append(f"{lib}/{lib}.h: missing, or lists no header")
         for header in sorted((root / lib).glob("*.h")):
